@@ -1,0 +1,141 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrDisplacementFieldRasterizer_h
+#define bmrDisplacementFieldRasterizer_h
+
+#include "bmrGridGeometry.h"
+#include "bmrTetrahedralMesh.h"
+
+namespace bmr
+{
+
+/** Which map of the finite-element deformation a field represents.
+ *
+ * The FE map is phi(X) = X + u(X), piecewise linear on the undeformed mesh.
+ * Push: d(X) = u(X) on a moving-space grid (moving -> fixed).
+ * PullBack: d(x) = phi^{-1}(x) - x on a fixed-space grid (fixed -> moving, the
+ * ITK convention of DisplacementFieldTransform): x is located in the deformed
+ * element, and its barycentric coordinates combine the undeformed positions,
+ * which is the exact inverse of the piecewise-linear map. */
+enum class FieldKind
+{
+  Push,
+  PullBack
+};
+
+/** \brief Evaluates the FE displacement on the voxels of a grid covered by the mesh.
+ *
+ * Each element's bounding box is scanned and every voxel centre inside the
+ * element (barycentric coordinates >= -1e-10) gets the barycentric
+ * interpolation. A voxel on a shared face belongs to the element of lowest
+ * index, so a region gives the same values whatever the split of the grid into
+ * regions (threads). Elements inverted by the deformation have no unique
+ * inverse and are skipped for PullBack (counted in GetNumberOfInvertedElements()).
+ * \ingroup BiomechanicalRegistration
+ */
+class BiomechanicalRegistration_EXPORT DisplacementFieldRasterizer
+{
+public:
+  /** \a displacement is 3N [mm]; \a grid is 0-based (region start at index 0). */
+  DisplacementFieldRasterizer(const TetrahedralMesh &     mesh,
+                              const std::vector<double> & displacement,
+                              const GridGeometry &        grid,
+                              FieldKind                   kind);
+
+  /** Writes the voxels of the region [start, start+size) of whole-grid buffers:
+   * \a field (3 doubles per voxel, LPS mm) and \a inside (1 where covered, else
+   * left untouched: clear it to 0 first). Thread safe for disjoint regions. */
+  void
+  RasterizeRegion(const std::array<std::size_t, 3> & start,
+                  const std::array<std::size_t, 3> & size,
+                  double *                           field,
+                  unsigned char *                    inside) const;
+
+  std::size_t
+  GetNumberOfInvertedElements() const
+  {
+    return m_Inverted;
+  }
+
+private:
+  struct Element
+  {
+    double                       v0[3];    // first vertex, continuous index
+    double                       inv[9];   // inverse of [v1-v0, v2-v0, v3-v0] (row-major)
+    std::int64_t                 lo[3], hi[3]; // voxel bounding box (inclusive)
+    std::int32_t                 nodes[4];
+  };
+  const TetrahedralMesh &     m_Mesh;
+  const std::vector<double> & m_Displacement;
+  GridGeometry                m_Grid;
+  FieldKind                   m_Kind;
+  std::vector<Element>        m_Elements;
+  std::size_t                 m_Inverted{ 0 };
+};
+
+/** \brief Fills the voxels not covered by the mesh with a continuous extension.
+ *
+ * Solves Laplace's equation (anisotropic 7-point stencil, physical spacing) on a
+ * grid coarsened by \a coarsening, with the covered voxels' mean as Dirichlet
+ * value at each coarse node whose neighbourhood touches the mesh and 0 on the
+ * border of the grid, then interpolates the coarse solution trilinearly into
+ * every uncovered fine voxel. Hollow organs (lumens) thus get the harmonic
+ * interpolation of their wall motion, bone interiors (enclosed by u = 0) get
+ * ~0, and the field decays to zero towards the image border. Continuous up to
+ * the coarse interpolation error at the mesh boundary; deterministic. */
+BiomechanicalRegistration_EXPORT void
+FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned char * inside, unsigned int coarsening);
+
+/** \brief Finds the element containing a point of a tetrahedral mesh (bucket grid).
+ * \ingroup BiomechanicalRegistration */
+class BiomechanicalRegistration_EXPORT PointLocator
+{
+public:
+  /** \a points is 3N (positions the elements are located in, e.g. deformed), \a tetrahedra 4M. */
+  PointLocator(const std::vector<double> & points, const std::vector<std::int32_t> & tetrahedra);
+
+  /** Returns the lowest-index element containing \a p (tolerance \a tolerance in
+   * barycentric coordinates) with its barycentric coordinates, or -1. */
+  std::int64_t
+  Locate(const std::array<double, 3> & p, std::array<double, 4> & barycentric, double tolerance = 1e-10) const;
+
+private:
+  bool
+  Barycentric(std::size_t e, const std::array<double, 3> & p, std::array<double, 4> & b) const;
+
+  const std::vector<double> &       m_Points;
+  const std::vector<std::int32_t> & m_Tetrahedra;
+  std::array<double, 3>             m_Lower{};
+  std::array<double, 3>             m_CellSize{};
+  std::array<std::size_t, 3>        m_Cells{};
+  std::vector<std::size_t>          m_CellStart;
+  std::vector<std::int32_t>         m_CellElements;
+};
+
+/** FE displacement u(X) [mm] at an undeformed point X (PullBack-free helper):
+ * returns false when X is outside the mesh. */
+BiomechanicalRegistration_EXPORT bool
+InterpolateDisplacement(const PointLocator &        undeformedLocator,
+                        const TetrahedralMesh &     mesh,
+                        const std::vector<double> & displacement,
+                        const std::array<double, 3> & X,
+                        std::array<double, 3> &       u);
+
+} // namespace bmr
+
+#endif

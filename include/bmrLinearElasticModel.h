@@ -1,0 +1,129 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrLinearElasticModel_h
+#define bmrLinearElasticModel_h
+
+#include "bmrTetrahedralMesh.h"
+
+#include <map>
+#include <memory>
+
+namespace bmr
+{
+
+/** Isotropic linear-elastic material: Young's modulus E [kPa] and Poisson's ratio nu. */
+struct BiomechanicalRegistration_EXPORT MaterialParameters
+{
+  double youngsModulus{ 10.0 };
+  double poissonRatio{ 0.35 };
+};
+
+/** Wall times [s] of the stages of the last Factorize()/Solve(). */
+struct BiomechanicalRegistration_EXPORT SolverTimings
+{
+  double assemble{ 0.0 };
+  double analyse{ 0.0 };
+  double factorise{ 0.0 };
+  double solve{ 0.0 };
+};
+
+/** \brief Linear-elastic finite element model on P1 tetrahedra.
+ *
+ * Solves K(E) u = f with K(E) = sum_m E_m Khat_m, where Khat_m is the stiffness
+ * of the elements of material m with unit modulus:
+ * \f[ K^e_{ai,bj} = V_e \left( \lambda\, g_{a,i} g_{b,j} + \mu\, g_{a,j} g_{b,i}
+ *     + \mu\, \delta_{ij}\, g_a \cdot g_b \right), \f]
+ * g_a the gradient of the barycentric coordinate of node a, V_e the element
+ * volume, lambda = E nu / ((1+nu)(1-2nu)) and mu = E / (2(1+nu)).
+ * Units: u in mm, E in kPa, forces in mN (kPa mm^2).
+ *
+ * Dirichlet conditions u_p = g are eliminated: K_ff u_f = f_f - K_fp g. The
+ * sparse Cholesky factorisation of K_ff (CHOLMOD supernodal) is computed once
+ * by Factorize() and reused by every Solve(); changing a modulus or the
+ * Dirichlet set invalidates it (the symbolic analysis is kept when only a
+ * modulus changes). Reaction forces are r = K u - f at the constrained nodes.
+ *
+ * Errors (itk::ExceptionObject): an element label without material, E <= 0 or
+ * not finite, nu outside (-1, 0.5), a degenerate or inverted element (named),
+ * a connected component of the mesh that no Dirichlet condition holds against
+ * rigid-body motion (named by its labels), and a factorisation that fails.
+ * \ingroup BiomechanicalRegistration
+ */
+class BiomechanicalRegistration_EXPORT LinearElasticModel
+{
+public:
+  LinearElasticModel(const TetrahedralMesh & mesh, const std::map<std::int32_t, MaterialParameters> & materials);
+  ~LinearElasticModel();
+  LinearElasticModel(const LinearElasticModel &) = delete;
+  LinearElasticModel &
+  operator=(const LinearElasticModel &) = delete;
+
+  /** Prescribes u at \a nodes; \a values holds 3 per node [mm] or is empty for u = 0. */
+  void
+  SetDirichletConditions(const std::vector<std::int32_t> & nodes, const std::vector<double> & values);
+
+  /** Changes the modulus of every element of \a label [kPa]. */
+  void
+  SetYoungsModulus(std::int32_t label, double youngsModulus);
+  double
+  GetYoungsModulus(std::int32_t label) const;
+
+  /** Assembles K_ff and factorises it; checks the model first. */
+  void
+  Factorize();
+  bool
+  IsFactorized() const;
+
+  /** Displacements [mm] of all nodes (3N) for nodal forces \a forces [mN] (3N or
+   * empty); forces on constrained dofs are ignored (they become reactions). */
+  std::vector<double>
+  Solve(const std::vector<double> & forces);
+
+  /** K u at every dof [mN]: with Solve()'s u this is f on free dofs and f + reaction on constrained ones. */
+  std::vector<double>
+  ComputeInternalForces(const std::vector<double> & u) const;
+
+  /** Reaction forces [mN] (3N, zero on free dofs): K u - f on constrained dofs. */
+  std::vector<double>
+  ComputeReactionForces(const std::vector<double> & u, const std::vector<double> & forces) const;
+
+  /** Von Mises stress of every element [kPa]. */
+  std::vector<double>
+  ComputeVonMisesStress(const std::vector<double> & u) const;
+
+  /** Per-element modulus [kPa] and Poisson's ratio. */
+  std::vector<double>
+  GetElementYoungsModuli() const;
+  std::vector<double>
+  GetElementPoissonRatios() const;
+
+  std::size_t
+  GetNumberOfFreeDegreesOfFreedom() const;
+  const std::vector<char> &
+  GetConstrainedDegreesOfFreedom() const;
+  const SolverTimings &
+  GetTimings() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m_Impl;
+};
+
+} // namespace bmr
+
+#endif

@@ -1,0 +1,77 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrMesher_h
+#define bmrMesher_h
+
+#include "bmrGridGeometry.h"
+#include "bmrTetrahedralMesh.h"
+
+#include <functional>
+#include <map>
+
+namespace bmr
+{
+
+/** \brief Sizing and quality criteria for CGAL Mesh_3 (all lengths in mm).
+ *
+ * cellSize bounds the circumradius of the tetrahedra, facetSize the
+ * circumradius of the surface triangles, facetDistance the distance between a
+ * surface triangle and the true surface (the surface approximation error),
+ * facetAngle (degrees) is the lower bound of surface triangle angles,
+ * cellRadiusEdgeRatio the upper bound of circumradius / shortest edge.
+ * cellSizePerLabel overrides cellSize inside given labels. optimize runs CGAL's
+ * sliver perturbation and exudation (no time limit, so deterministic).
+ * \ingroup BiomechanicalRegistration
+ */
+struct BiomechanicalRegistration_EXPORT MeshingParameters
+{
+  double                        cellSize{ 4.0 };
+  double                        facetSize{ 4.0 };
+  double                        facetDistance{ 0.75 };
+  double                        facetAngle{ 25.0 };
+  double                        cellRadiusEdgeRatio{ 3.0 };
+  std::map<std::int32_t, double> cellSizePerLabel;
+  bool                          optimize{ true };
+  unsigned int                  randomSeed{ 0 };
+};
+
+/** Meshes every non-zero label of a label volume with CGAL Mesh_3
+ * (sequentially, fixed random seed: the same input gives the same mesh).
+ * \a labels holds grid.GetNumberOfVoxels() values, index 0 fastest. The result
+ * is in physical LPS mm (origin, spacing and direction cosines of \a grid
+ * applied), every element carries its label, and interfaces between labels
+ * share nodes. No element is excluded here; see ExtractSubmesh().
+ * Throws itk::ExceptionObject when the volume holds no non-zero label or
+ * CGAL produces no element. */
+BiomechanicalRegistration_EXPORT TetrahedralMesh
+MeshLabelVolume(const std::int32_t * labels, const GridGeometry & grid, const MeshingParameters & parameters);
+
+/** Meshes the labelled domain given by \a labelAt (physical mm -> label, 0
+ * outside) inside the ball (\a center, \a boundingRadius), with CGAL's exact
+ * implicit-function domain. Used for analytic test geometries such as the
+ * concentric spheres, where a voxelised surface would hide the convergence
+ * order of the finite elements. */
+BiomechanicalRegistration_EXPORT TetrahedralMesh
+MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & labelAt,
+                   const std::array<double, 3> &                                center,
+                   double                                                       boundingRadius,
+                   const MeshingParameters &                                    parameters);
+
+} // namespace bmr
+
+#endif

@@ -1,0 +1,126 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrPhantom_h
+#define bmrPhantom_h
+
+#include "bmrGridGeometry.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace bmr
+{
+
+/** Label values of the pelvis phantom (0 is air, outside the body). */
+enum PelvisLabel : std::int32_t
+{
+  PelvisAir = 0,
+  PelvisSoftTissue = 1,
+  PelvisProstate = 2,
+  PelvisBladder = 3,
+  PelvisRectum = 4,
+  PelvisBone = 5
+};
+
+/** Label values of the concentric-spheres phantom. */
+enum SphereLabel : std::int32_t
+{
+  SphereOutside = 0,
+  SphereOuterShell = 1,
+  SphereInnerCore = 2
+};
+
+/** An implanted seed: a cylinder of the given length and diameter [mm] centred
+ * at \c center (LPS mm) along the unit vector \c axis. */
+struct BiomechanicalRegistration_EXPORT Seed
+{
+  std::array<double, 3> center{ { 0, 0, 0 } };
+  std::array<double, 3> axis{ { 0, 0, 1 } };
+  double                length{ 8.0 };
+  double                diameter{ 1.5 };
+};
+
+/** A synthetic CT volume [HU, float] with its label map (int32) on one grid,
+ * and the implanted seeds. */
+struct BiomechanicalRegistration_EXPORT PhantomVolume
+{
+  GridGeometry              grid;
+  std::vector<std::int32_t> labels;
+  std::vector<float>        ct;
+  std::vector<Seed>         seeds;
+};
+
+/** \brief Parameters of the pelvis phantom.
+ *
+ * The anatomy is defined in patient LPS coordinates (x towards the patient's
+ * left, y posterior, z superior) around \c center (by default the physical
+ * centre of \c grid), so an oblique or anisotropic grid samples the same
+ * physical anatomy. All lengths in mm, intensities in HU.
+ */
+struct BiomechanicalRegistration_EXPORT PelvisPhantomParameters
+{
+  GridGeometry          grid;
+  bool                  useGridCenter{ true };
+  std::array<double, 3> center{ { 0, 0, 0 } };
+  std::uint64_t         seedPlacementSeed{ 1 }; ///< random seed for the implant positions
+  unsigned int          numberOfSeeds{ 3 };
+  double                noiseSigmaHU{ 0.0 };    ///< Gaussian noise added to the CT (0: none)
+  std::uint64_t         noiseSeed{ 7 };
+
+  PelvisPhantomParameters();
+};
+
+/** Parameters of the two concentric spheres of dissertation section 3.2.2:
+ * an inner core (label 2) of radius \c innerRadius inside a shell (label 1)
+ * of outer radius \c outerRadius, centred on the grid by default [mm]. */
+struct BiomechanicalRegistration_EXPORT SpherePhantomParameters
+{
+  GridGeometry          grid;
+  bool                  useGridCenter{ true };
+  std::array<double, 3> center{ { 0, 0, 0 } };
+  double                innerRadius{ 30.0 };
+  double                outerRadius{ 37.5 };
+
+  SpherePhantomParameters();
+};
+
+/** Builds the pelvis phantom: soft tissue (40 HU) in an elliptic body outline,
+ * prostate (45 HU), a urine-filled bladder (10 HU) and a gas-filled rectum
+ * (-700 HU) that the scene treats as hollow, pelvic bones (700 HU), air
+ * (-1000 HU) and bright seeds (2500 HU, CT only, inside the prostate).
+ * Deterministic for given parameters. */
+BiomechanicalRegistration_EXPORT PhantomVolume
+MakePelvisPhantom(const PelvisPhantomParameters & parameters);
+
+/** Builds the concentric-spheres phantom (core 60 HU, shell 20 HU, air -1000 HU). */
+BiomechanicalRegistration_EXPORT PhantomVolume
+MakeSpherePhantom(const SpherePhantomParameters & parameters);
+
+/** Physical centre of the grid (centre of the voxel box). */
+BiomechanicalRegistration_EXPORT std::array<double, 3>
+GridCenter(const GridGeometry & grid);
+
+/** Adds zero-mean Gaussian noise of standard deviation \a sigma to \a values,
+ * from a self-contained generator so that the result is the same on every
+ * platform and standard library for a given \a seed. */
+BiomechanicalRegistration_EXPORT void
+AddGaussianNoise(std::vector<float> & values, double sigma, std::uint64_t seed);
+
+} // namespace bmr
+
+#endif

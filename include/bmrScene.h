@@ -1,0 +1,133 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrScene_h
+#define bmrScene_h
+
+#include "bmrMesher.h"
+
+#include <set>
+#include <string>
+#include <vector>
+
+namespace bmr
+{
+
+/** What a label of the moving label map is in the simulation. */
+enum class LabelRole
+{
+  Material,        ///< simulated, known E [kPa] and nu
+  UnknownMaterial, ///< simulated, E estimated within bounds [kPa], known nu
+  Fixed,           ///< bone: interior left out, surface nodes get u = 0
+  Hollow,          ///< lumen (bladder, rectum): left out, its wall may carry loads
+  Outside          ///< air / background: left out
+};
+
+struct BiomechanicalRegistration_EXPORT SceneLabel
+{
+  std::string  name;
+  std::int32_t value{ 0 };
+  LabelRole    role{ LabelRole::Material };
+  double       youngsModulus{ 0.0 }; ///< kPa (initial value for an unknown material)
+  double       poissonRatio{ 0.0 };
+  double       lowerBound{ 0.0 };    ///< kPa, unknown materials only
+  double       upperBound{ 0.0 };    ///< kPa, unknown materials only
+};
+
+struct BiomechanicalRegistration_EXPORT ObjectiveTerm
+{
+  std::string label;
+  double      weight{ 1.0 };
+};
+
+/** A boundary condition applied by a forward simulation to the wall of an
+ * excluded label (hollow organ) or to the outer boundary ("outside").
+ * RadialDisplacement: every wall node moves by magnitude [mm] along the unit
+ * vector from \c center [LPS mm] (positive = expansion, bladder filling).
+ * Pressure: a uniform pressure [kPa] on the wall, pushing into the tissue,
+ * lumped to nodal forces [mN] (one third of each face's area per node). */
+struct BiomechanicalRegistration_EXPORT SceneLoad
+{
+  enum class Type
+  {
+    RadialDisplacement,
+    Pressure
+  };
+  std::string           surface;
+  Type                  type{ Type::RadialDisplacement };
+  std::array<double, 3> center{ { 0, 0, 0 } };
+  double                magnitude{ 0.0 }; ///< mm for RadialDisplacement, kPa for Pressure
+};
+
+/** \brief A scene: what each label is, what carries loads, what is matched.
+ *
+ * Read from JSON (see README, "Scene files"). Every key is checked: an unknown
+ * key, a wrong type, nu >= 0.5, E <= 0, a reference to an undefined label, or a
+ * scene with nothing to hold it against rigid-body motion is rejected with an
+ * itk::ExceptionObject naming the entry.
+ * \ingroup BiomechanicalRegistration
+ */
+struct BiomechanicalRegistration_EXPORT Scene
+{
+  std::string                name;
+  std::vector<SceneLabel>    labels;
+  std::string                gauge; ///< label whose modulus anchors the scale (default: first known material)
+  std::vector<std::string>   forceSurfaces;
+  std::vector<ObjectiveTerm> objective;
+  std::vector<SceneLoad>     loads;
+  std::string                movingLandmarks; ///< CSV file (LPS mm), relative to the scene file, optional
+  std::string                fixedLandmarks;
+  double                     roiMargin{ -1.0 }; ///< mm around the non-outside labels; < 0: whole image
+  bool                       roiBoundaryFixed{ false };
+  MeshingParameters          mesh;
+
+  const SceneLabel *
+  FindLabel(const std::string & name) const;
+  const SceneLabel *
+  FindLabelValue(std::int32_t value) const;
+  /** Labels whose elements are left out of the FEM mesh (fixed, hollow, outside). */
+  std::vector<std::int32_t>
+  ExcludedLabels() const;
+  /** Labels with the role Outside, which are not meshed at all (mapped to 0). */
+  std::vector<std::int32_t>
+  OutsideLabels() const;
+  /** Checks the scene on its own; throws naming the offending entry. */
+  void
+  Validate() const;
+  /** Checks the scene against the set of labels found in a label image \a what. */
+  void
+  ValidateAgainstLabels(const std::set<std::int32_t> & present, const std::string & what) const;
+};
+
+/** Parses a scene from JSON text; \a source names it in error messages. */
+BiomechanicalRegistration_EXPORT Scene
+ParseScene(const std::string & json, const std::string & source);
+
+/** Reads and parses a scene file. */
+BiomechanicalRegistration_EXPORT Scene
+ReadScene(const std::string & fileName);
+
+/** Serialises a scene to JSON text (the format ParseScene reads). */
+BiomechanicalRegistration_EXPORT std::string
+SceneToJson(const Scene & scene);
+
+BiomechanicalRegistration_EXPORT const char *
+LabelRoleName(LabelRole role);
+
+} // namespace bmr
+
+#endif

@@ -1,0 +1,78 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrSimulation_h
+#define bmrSimulation_h
+
+#include "bmrLinearElasticModel.h"
+#include "bmrScene.h"
+
+namespace bmr
+{
+
+/** \brief Builds the FEM mesh a scene needs from a moving label volume.
+ *
+ * Labels with the role outside are mapped to background; when the scene sets a
+ * region-of-interest margin the volume is cropped to the bounding box of the
+ * non-material labels (hollow, fixed, unknown material) grown by the margin, so
+ * that tissue far from the organs is not meshed. The volume is meshed with CGAL
+ * (every non-zero label, excluded ones with a coarse size since only their
+ * surface matters), then the excluded elements (fixed, hollow) are removed and
+ * their walls recorded as boundary faces carrying their label.
+ * Throws when a label the scene simulates did not survive meshing. */
+BiomechanicalRegistration_EXPORT TetrahedralMesh
+MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene);
+
+/** Materials of the simulated labels (E [kPa], nu). */
+BiomechanicalRegistration_EXPORT std::map<std::int32_t, MaterialParameters>
+SceneMaterials(const Scene & scene);
+
+/** Boundary conditions of a forward simulation of a scene on its mesh: u = 0 on
+ * the walls of fixed labels (and on the outer boundary when the region of
+ * interest's boundary is fixed), the loads' prescribed wall displacements [mm]
+ * and pressure forces [mN]. A node on a fixed wall stays fixed. */
+struct BiomechanicalRegistration_EXPORT BoundaryConditions
+{
+  std::vector<std::int32_t> dirichletNodes;
+  std::vector<double>       dirichletValues; ///< 3 per Dirichlet node [mm]
+  std::vector<double>       forces;          ///< 3N [mN]
+};
+
+BiomechanicalRegistration_EXPORT BoundaryConditions
+SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh);
+
+/** Result of a forward simulation: nodal displacement [mm], total nodal force
+ * (applied + reaction) [mN], Dirichlet flag per node, von Mises stress [kPa],
+ * E [kPa] and nu per element, and the solver's timings. */
+struct BiomechanicalRegistration_EXPORT ForwardSimulation
+{
+  std::vector<double>        displacement;
+  std::vector<double>        force;
+  std::vector<unsigned char> dirichlet;
+  std::vector<double>        vonMises;
+  std::vector<double>        youngsModulus;
+  std::vector<double>        poissonRatio;
+  SolverTimings              timings;
+};
+
+/** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels). */
+BiomechanicalRegistration_EXPORT ForwardSimulation
+SimulateScene(const Scene & scene, const TetrahedralMesh & mesh);
+
+} // namespace bmr
+
+#endif

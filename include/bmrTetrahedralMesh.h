@@ -1,0 +1,128 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrTetrahedralMesh_h
+#define bmrTetrahedralMesh_h
+
+#include "BiomechanicalRegistrationExport.h"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+/** \namespace bmr
+ * \brief Plain C++ numerical core of the BiomechanicalRegistration module.
+ *
+ * Nothing in these headers exposes Eigen or CGAL types; the ITK classes in
+ * this module are thin pipeline wrappers around these functions.
+ * Units everywhere: millimetres (LPS physical space), kPa, mN (= kPa mm^2).
+ * \ingroup BiomechanicalRegistration
+ */
+namespace bmr
+{
+
+/** \brief A labelled 4-node tetrahedral mesh in physical LPS millimetres.
+ *
+ * Shapes: \c points is 3N (x,y,z of node i at 3i..3i+2), \c tetrahedra is 4M
+ * (node indices of element e at 4e..4e+3, positively oriented), \c labels is M.
+ * \c boundaryFaces is 3F node indices of the faces of the mesh boundary,
+ * oriented outward, and \c boundaryFaceLabels (F) gives the label of what lies
+ * beyond each face: 0 for the outside of the meshed domain, otherwise the label
+ * of an excluded region (a hollow organ or a fixed bone whose interior was left
+ * out of the mesh). Optional per-node fields are empty or 3N long:
+ * \c displacement [mm] and \c force [mN].
+ * \ingroup BiomechanicalRegistration
+ */
+struct BiomechanicalRegistration_EXPORT TetrahedralMesh
+{
+  std::vector<double>       points;
+  std::vector<std::int32_t> tetrahedra;
+  std::vector<std::int32_t> labels;
+  std::vector<std::int32_t> boundaryFaces;
+  std::vector<std::int32_t> boundaryFaceLabels;
+  std::vector<double>       displacement;
+  std::vector<double>       force;
+
+  std::size_t
+  GetNumberOfPoints() const
+  {
+    return points.size() / 3;
+  }
+  std::size_t
+  GetNumberOfTetrahedra() const
+  {
+    return labels.size();
+  }
+};
+
+/** Quality measures of a tetrahedral mesh. The radius ratio is 3 r_in / r_circ
+ * (1 for the regular tetrahedron, 0 for a degenerate one). */
+struct BiomechanicalRegistration_EXPORT MeshQuality
+{
+  double       minimumDihedralAngleDegrees{ 0.0 };
+  double       maximumDihedralAngleDegrees{ 0.0 };
+  double       minimumRadiusRatio{ 0.0 };
+  double       meanRadiusRatio{ 0.0 };
+  std::int64_t worstElement{ -1 }; ///< element with the smallest radius ratio
+  double       meanEdgeLength{ 0.0 };
+  double       volume{ 0.0 }; ///< total volume [mm^3]
+};
+
+/** Signed volume of element \a e [mm^3] (positive for the orientation used throughout). */
+BiomechanicalRegistration_EXPORT double
+TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e);
+
+/** Minimum/maximum dihedral angle and radius ratio over all elements. */
+BiomechanicalRegistration_EXPORT MeshQuality
+ComputeMeshQuality(const TetrahedralMesh & mesh);
+
+/** Checks the shapes of the arrays, index ranges, finite coordinates and
+ * positive element volumes. Throws itk::ExceptionObject naming the first
+ * offending element or node. */
+BiomechanicalRegistration_EXPORT void
+ValidateMesh(const TetrahedralMesh & mesh);
+
+/** Removes the elements whose label is in \a excluded, records the faces between
+ * kept and removed elements (and the faces on the outside) as boundary faces
+ * with the label beyond them, and drops unused nodes. Node order is preserved
+ * otherwise, so the result is deterministic. */
+BiomechanicalRegistration_EXPORT TetrahedralMesh
+ExtractSubmesh(const TetrahedralMesh & full, const std::vector<std::int32_t> & excluded);
+
+/** Sorted list of the nodes on boundary faces whose beyond-label is \a label. */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+NodesOnBoundary(const TetrahedralMesh & mesh, std::int32_t label);
+
+/** Sorted list of the nodes on the surface of the region of elements with
+ * label \a label: its faces towards other labels and towards the boundary. */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+NodesOnLabelSurface(const TetrahedralMesh & mesh, std::int32_t label);
+
+/** Faces (3 node indices each, oriented out of the region) of the surface of
+ * the region with label \a label. */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label);
+
+/** Number of connected components (elements sharing a face). \a componentOfNode
+ * receives, when not null, the component index of every node. */
+BiomechanicalRegistration_EXPORT std::size_t
+ConnectedComponents(const TetrahedralMesh & mesh, std::vector<std::int32_t> * componentOfNode);
+
+} // namespace bmr
+
+#endif

@@ -1,0 +1,178 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkPhysicsDeformationFieldSource_hxx
+#define itkPhysicsDeformationFieldSource_hxx
+
+#include "itkPhysicsDeformationFieldSource.h"
+#include "bmrDisplacementFieldRasterizer.h"
+#include "itkImageRegionIterator.h"
+#include "itkMultiThreaderBase.h"
+
+#include <numeric>
+
+namespace itk
+{
+
+template <typename TOutputImage>
+PhysicsDeformationFieldSource<TOutputImage>::PhysicsDeformationFieldSource()
+{
+  this->SetNumberOfRequiredInputs(2);
+  this->AddRequiredInputName("Mesh");
+  this->AddRequiredInputName("ReferenceImage");
+}
+
+template <typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::SetMesh(const MeshObjectType * mesh)
+{
+  this->SetInput("Mesh", const_cast<MeshObjectType *>(mesh));
+}
+
+template <typename TOutputImage>
+auto
+PhysicsDeformationFieldSource<TOutputImage>::GetMesh() const -> const MeshObjectType *
+{
+  return itkDynamicCastInDebugMode<const MeshObjectType *>(this->ProcessObject::GetInput("Mesh"));
+}
+
+template <typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::SetReferenceImage(const ReferenceImageType * image)
+{
+  this->SetInput("ReferenceImage", const_cast<ReferenceImageType *>(image));
+}
+
+template <typename TOutputImage>
+auto
+PhysicsDeformationFieldSource<TOutputImage>::GetReferenceImage() const -> const ReferenceImageType *
+{
+  return itkDynamicCastInDebugMode<const ReferenceImageType *>(this->ProcessObject::GetInput("ReferenceImage"));
+}
+
+template <typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::VerifyPreconditions() ITKv5_CONST
+{
+  Superclass::VerifyPreconditions();
+  const bmr::TetrahedralMesh & mesh = this->GetMesh()->Get();
+  if (mesh.GetNumberOfTetrahedra() == 0)
+  {
+    itkExceptionMacro("the input mesh has no element");
+  }
+  if (mesh.displacement.size() != mesh.points.size())
+  {
+    itkExceptionMacro("the input mesh carries no nodal displacement (3 values per node expected, got "
+                      << mesh.displacement.size() << ")");
+  }
+  GridGeometryOf(this->GetReferenceImage()).Validate("reference image");
+}
+
+template <typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::GenerateOutputInformation()
+{
+  OutputImageType *          output = this->GetOutput();
+  const ReferenceImageType * reference = this->GetReferenceImage();
+  if (!output || !reference)
+  {
+    return;
+  }
+  output->SetLargestPossibleRegion(reference->GetLargestPossibleRegion());
+  output->SetSpacing(reference->GetSpacing());
+  output->SetOrigin(reference->GetOrigin());
+  output->SetDirection(reference->GetDirection());
+}
+
+template <typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
+{
+  OutputImageType * output = this->GetOutput();
+  output->SetBufferedRegion(output->GetRequestedRegion());
+  output->Allocate();
+
+  const bmr::TetrahedralMesh & mesh = this->GetMesh()->Get();
+  const bmr::GridGeometry      grid = GridGeometryOf(output);
+  const bmr::FieldKind         kind =
+    m_FieldDirection == FieldDirectionEnum::FixedToMoving ? bmr::FieldKind::PullBack : bmr::FieldKind::Push;
+  const bmr::DisplacementFieldRasterizer rasterizer(mesh, mesh.displacement, grid, kind);
+  m_NumberOfInvertedElements = rasterizer.GetNumberOfInvertedElements();
+  if (m_NumberOfInvertedElements > 0)
+  {
+    itkWarningMacro(<< m_NumberOfInvertedElements
+                    << " elements are inverted by the deformation; the pull-back is undefined inside them");
+  }
+
+  std::vector<double>        field(3 * grid.GetNumberOfVoxels(), 0.0);
+  std::vector<unsigned char> inside(grid.GetNumberOfVoxels(), 0);
+  // Slabs along the last index: the rasteriser's ownership rule makes the result independent of the split.
+  const auto  largest = output->GetLargestPossibleRegion();
+  const auto  start = largest.GetIndex();
+  MultiThreaderBase * threader = this->GetMultiThreader();
+  threader->ParallelizeImageRegion<3>(
+    largest,
+    [&](const ImageRegion<3> & region) {
+      std::array<std::size_t, 3> s, n;
+      for (unsigned int i = 0; i < 3; ++i)
+      {
+        s[i] = static_cast<std::size_t>(region.GetIndex(i) - start[i]);
+        n[i] = region.GetSize(i);
+      }
+      rasterizer.RasterizeRegion(s, n, field.data(), inside.data());
+    },
+    nullptr);
+  this->UpdateProgress(0.6f);
+  m_NumberOfCoveredVoxels = std::accumulate(inside.begin(), inside.end(), SizeValueType{ 0 });
+  if (m_FillOutside)
+  {
+    bmr::FillOutsideHarmonic(grid, field.data(), inside.data(), m_FillCoarsening);
+  }
+  this->UpdateProgress(0.9f);
+  ImageRegionIterator<OutputImageType> it(output, output->GetRequestedRegion());
+  for (; !it.IsAtEnd(); ++it)
+  {
+    const auto        index = it.GetIndex();
+    const std::size_t off = static_cast<std::size_t>(index[0] - start[0]) +
+                            grid.size[0] * (static_cast<std::size_t>(index[1] - start[1]) +
+                                            grid.size[1] * static_cast<std::size_t>(index[2] - start[2]));
+    PixelType p;
+    for (unsigned int c = 0; c < 3; ++c)
+    {
+      p[c] = static_cast<typename PixelType::ValueType>(field[3 * off + c]);
+    }
+    it.Set(p);
+  }
+  this->UpdateProgress(1.0f);
+}
+
+template <typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::PrintSelf(std::ostream & os, Indent indent) const
+{
+  Superclass::PrintSelf(os, indent);
+  os << indent << "FieldDirection: "
+     << (m_FieldDirection == FieldDirectionEnum::FixedToMoving ? "FixedToMoving" : "MovingToFixed") << std::endl;
+  os << indent << "FillOutside: " << m_FillOutside << std::endl;
+  os << indent << "FillCoarsening: " << m_FillCoarsening << std::endl;
+  os << indent << "NumberOfCoveredVoxels: " << m_NumberOfCoveredVoxels << std::endl;
+  os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
+}
+
+} // namespace itk
+
+#endif

@@ -1,0 +1,700 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The system Eigen 3.4 and CHOLMOD are used only in this translation unit; no
+// ITK header that bundles ITK's own Eigen may be included here.
+#include "bmrLinearElasticModel.h"
+
+#include "bmrError.h"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+namespace bmr
+{
+namespace
+{
+using Clock = std::chrono::steady_clock;
+double
+Seconds(Clock::time_point start)
+{
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/** Gradients of the four barycentric coordinates of element e and its volume. */
+double
+ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
+{
+  const std::int32_t * t = &mesh.tetrahedra[4 * e];
+  const double *       x0 = &mesh.points[3 * t[0]];
+  double               J[3][3]; // columns x1-x0, x2-x0, x3-x0
+  for (int c = 0; c < 3; ++c)
+  {
+    const double * xc = &mesh.points[3 * t[c + 1]];
+    for (int r = 0; r < 3; ++r)
+    {
+      J[r][c] = xc[r] - x0[r];
+    }
+  }
+  const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                     J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                     J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+  // Rows of J^{-1} are the gradients of barycentric coordinates 1..3.
+  const double inv = 1.0 / det;
+  g[1][0] = (J[1][1] * J[2][2] - J[1][2] * J[2][1]) * inv;
+  g[1][1] = (J[0][2] * J[2][1] - J[0][1] * J[2][2]) * inv;
+  g[1][2] = (J[0][1] * J[1][2] - J[0][2] * J[1][1]) * inv;
+  g[2][0] = (J[1][2] * J[2][0] - J[1][0] * J[2][2]) * inv;
+  g[2][1] = (J[0][0] * J[2][2] - J[0][2] * J[2][0]) * inv;
+  g[2][2] = (J[0][2] * J[1][0] - J[0][0] * J[1][2]) * inv;
+  g[3][0] = (J[1][0] * J[2][1] - J[1][1] * J[2][0]) * inv;
+  g[3][1] = (J[0][1] * J[2][0] - J[0][0] * J[2][1]) * inv;
+  g[3][2] = (J[0][0] * J[1][1] - J[0][1] * J[1][0]) * inv;
+  for (int i = 0; i < 3; ++i)
+  {
+    g[0][i] = -(g[1][i] + g[2][i] + g[3][i]);
+  }
+  return det / 6.0;
+}
+
+void
+LameParameters(double E, double nu, double & lambda, double & mu)
+{
+  lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  mu = E / (2.0 * (1.0 + nu));
+}
+} // namespace
+
+struct LinearElasticModel::Impl
+{
+  const TetrahedralMesh &                      mesh;
+  std::map<std::int32_t, MaterialParameters>   materials;
+  std::size_t                                  ndof{ 0 };
+  // Lower triangle of the full 3N x 3N stiffness, compressed by column.
+  std::vector<std::int64_t>                    colStart;
+  std::vector<std::int32_t>                    rowIndex;
+  std::map<std::int32_t, std::vector<double>>  unitValues; // Khat_m per label, on the shared pattern
+  std::vector<double>                          values;     // sum_m E_m Khat_m
+  bool                                         valuesCurrent{ false };
+  std::vector<char>                            constrained;
+  std::vector<double>                          prescribed; // 3N
+  std::vector<std::int32_t>                    freeIndex;  // dof -> free index or -1
+  std::size_t                                  nfree{ 0 };
+  Eigen::SparseMatrix<double>                  Kff;
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
+  bool                                         analysed{ false };
+  bool                                         factorized{ false };
+  SolverTimings                                timings;
+
+  explicit Impl(const TetrahedralMesh & m)
+    : mesh(m)
+  {}
+
+  void
+  BuildPattern();
+  void
+  CheckElements() const;
+  void
+  CheckRigidBodyModes() const;
+  void
+  UpdateValues();
+  void
+  SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const;
+};
+
+void
+LinearElasticModel::Impl::CheckElements() const
+{
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    const std::int32_t label = mesh.labels[e];
+    if (materials.find(label) == materials.end())
+    {
+      std::ostringstream msg;
+      msg << "element " << e << " has label " << label << ", which has no material (E, nu) in the scene";
+      Fail("LinearElasticModel", msg.str());
+    }
+  }
+  ValidateMesh(mesh);
+}
+
+void
+LinearElasticModel::Impl::BuildPattern()
+{
+  const std::size_t N = mesh.GetNumberOfPoints();
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
+  ndof = 3 * N;
+  // Node adjacency (each node with itself and its element neighbours of higher or equal index).
+  std::vector<std::vector<std::int32_t>> upper(N);
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    const std::int32_t * t = &mesh.tetrahedra[4 * e];
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = 0; b < 4; ++b)
+      {
+        if (t[b] >= t[a])
+        {
+          upper[t[a]].push_back(t[b]);
+        }
+      }
+    }
+  }
+  std::vector<char> used(N, 0);
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    auto & v = upper[n];
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    used[n] = !v.empty();
+  }
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    if (!used[n])
+    {
+      std::ostringstream msg;
+      msg << "node " << n << " belongs to no element (its stiffness would be singular)";
+      Fail("LinearElasticModel", msg.str());
+    }
+  }
+  // Column 3n+c holds rows 3m+r >= 3n+c for every neighbour m >= n.
+  colStart.assign(ndof + 1, 0);
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      colStart[3 * n + c + 1] = colStart[3 * n + c] + static_cast<std::int64_t>(3 * upper[n].size() - c);
+    }
+  }
+  rowIndex.resize(static_cast<std::size_t>(colStart[ndof]));
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      std::int64_t k = colStart[3 * n + c];
+      for (std::int32_t m : upper[n])
+      {
+        for (int r = 0; r < 3; ++r)
+        {
+          const std::size_t row = 3 * static_cast<std::size_t>(m) + r;
+          if (row >= 3 * n + c)
+          {
+            rowIndex[k++] = static_cast<std::int32_t>(row);
+          }
+        }
+      }
+    }
+  }
+  // Unit-modulus element stiffnesses accumulated per label on the shared pattern.
+  for (const auto & kv : materials)
+  {
+    unitValues[kv.first].assign(rowIndex.size(), 0.0);
+  }
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    double       g[4][3];
+    const double V = ElementGradients(mesh, e, g);
+    double       lambda, mu;
+    LameParameters(1.0, materials.at(mesh.labels[e]).poissonRatio, lambda, mu);
+    std::vector<double> & vals = unitValues[mesh.labels[e]];
+    const std::int32_t *  t = &mesh.tetrahedra[4 * e];
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = 0; b < 4; ++b)
+      {
+        const double gab = g[a][0] * g[b][0] + g[a][1] * g[b][1] + g[a][2] * g[b][2];
+        for (int i = 0; i < 3; ++i)
+        {
+          for (int j = 0; j < 3; ++j)
+          {
+            const std::size_t row = 3 * static_cast<std::size_t>(t[a]) + i;
+            const std::size_t col = 3 * static_cast<std::size_t>(t[b]) + j;
+            if (row < col)
+            {
+              continue;
+            }
+            const double kij = V * (lambda * g[a][i] * g[b][j] + mu * g[a][j] * g[b][i] + (i == j ? mu * gab : 0.0));
+            const auto   first = rowIndex.begin() + colStart[col];
+            const auto   last = rowIndex.begin() + colStart[col + 1];
+            const auto   pos = std::lower_bound(first, last, static_cast<std::int32_t>(row));
+            vals[static_cast<std::size_t>(pos - rowIndex.begin())] += kij;
+          }
+        }
+      }
+    }
+  }
+  values.assign(rowIndex.size(), 0.0);
+  valuesCurrent = false;
+}
+
+void
+LinearElasticModel::Impl::UpdateValues()
+{
+  if (valuesCurrent)
+  {
+    return;
+  }
+  std::fill(values.begin(), values.end(), 0.0);
+  for (const auto & kv : unitValues)
+  {
+    const double E = materials.at(kv.first).youngsModulus;
+    const auto & u = kv.second;
+    for (std::size_t k = 0; k < values.size(); ++k)
+    {
+      values[k] += E * u[k];
+    }
+  }
+  valuesCurrent = true;
+}
+
+void
+LinearElasticModel::Impl::SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
+{
+  y.assign(ndof, 0.0);
+  for (std::size_t col = 0; col < ndof; ++col)
+  {
+    for (std::int64_t k = colStart[col]; k < colStart[col + 1]; ++k)
+    {
+      const std::size_t row = static_cast<std::size_t>(rowIndex[k]);
+      y[row] += values[k] * x[col];
+      if (row != col)
+      {
+        y[col] += values[k] * x[row];
+      }
+    }
+  }
+}
+
+void
+LinearElasticModel::Impl::CheckRigidBodyModes() const
+{
+  std::vector<std::int32_t> component;
+  const std::size_t         ncomp = ConnectedComponents(mesh, &component);
+  const std::size_t         N = mesh.GetNumberOfPoints();
+  for (std::size_t c = 0; c < ncomp; ++c)
+  {
+    // A component is held when its fully constrained nodes are not all on one line.
+    std::vector<std::size_t> held;
+    for (std::size_t n = 0; n < N; ++n)
+    {
+      if (component[n] == static_cast<std::int32_t>(c) && constrained[3 * n] && constrained[3 * n + 1] &&
+          constrained[3 * n + 2])
+      {
+        held.push_back(n);
+      }
+    }
+    bool ok = false;
+    if (held.size() >= 3)
+    {
+      const double * p0 = &mesh.points[3 * held[0]];
+      std::size_t    far = held[0];
+      double         best = -1;
+      for (std::size_t n : held)
+      {
+        const double * p = &mesh.points[3 * n];
+        const double   d = std::hypot(p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]);
+        if (d > best)
+        {
+          best = d;
+          far = n;
+        }
+      }
+      const double * p1 = &mesh.points[3 * far];
+      const double   axis[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+      for (std::size_t n : held)
+      {
+        const double * p = &mesh.points[3 * n];
+        const double   v[3] = { p[0] - p0[0], p[1] - p0[1], p[2] - p0[2] };
+        const double   cx = axis[1] * v[2] - axis[2] * v[1];
+        const double   cy = axis[2] * v[0] - axis[0] * v[2];
+        const double   cz = axis[0] * v[1] - axis[1] * v[0];
+        if (std::sqrt(cx * cx + cy * cy + cz * cz) > 1e-6 * best * best)
+        {
+          ok = true;
+          break;
+        }
+      }
+    }
+    if (!ok)
+    {
+      std::set<std::int32_t> labels;
+      for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+      {
+        if (component[mesh.tetrahedra[4 * e]] == static_cast<std::int32_t>(c))
+        {
+          labels.insert(mesh.labels[e]);
+        }
+      }
+      std::ostringstream msg;
+      msg << "nothing prevents rigid-body motion of the connected mesh component " << c << " (labels";
+      for (auto l : labels)
+      {
+        msg << ' ' << l;
+      }
+      msg << "): it has " << held.size()
+          << " fixed nodes, at least 3 not on one line are needed (add a fixed label or fix the ROI boundary)";
+      Fail("LinearElasticModel", msg.str());
+    }
+  }
+}
+
+LinearElasticModel::LinearElasticModel(const TetrahedralMesh &                            mesh,
+                                       const std::map<std::int32_t, MaterialParameters> & materials)
+  : m_Impl(new Impl(mesh))
+{
+  for (const auto & kv : materials)
+  {
+    const MaterialParameters & m = kv.second;
+    std::ostringstream         msg;
+    if (!(std::isfinite(m.youngsModulus) && m.youngsModulus > 0.0))
+    {
+      msg << "label " << kv.first << ": Young's modulus must be positive and finite, got " << m.youngsModulus
+          << " kPa";
+    }
+    else if (!(std::isfinite(m.poissonRatio) && m.poissonRatio > -1.0 && m.poissonRatio < 0.5))
+    {
+      msg << "label " << kv.first << ": Poisson's ratio must lie in (-1, 0.5), got " << m.poissonRatio;
+    }
+    if (!msg.str().empty())
+    {
+      Fail("LinearElasticModel", msg.str());
+    }
+  }
+  m_Impl->materials = materials;
+  const auto t0 = Clock::now();
+  m_Impl->CheckElements();
+  m_Impl->BuildPattern();
+  m_Impl->constrained.assign(m_Impl->ndof, 0);
+  m_Impl->prescribed.assign(m_Impl->ndof, 0.0);
+  m_Impl->timings.assemble = Seconds(t0);
+}
+
+LinearElasticModel::~LinearElasticModel() = default;
+
+void
+LinearElasticModel::SetDirichletConditions(const std::vector<std::int32_t> & nodes, const std::vector<double> & values)
+{
+  Impl &            d = *m_Impl;
+  const std::size_t N = d.mesh.GetNumberOfPoints();
+  if (!values.empty() && values.size() != 3 * nodes.size())
+  {
+    Fail("LinearElasticModel::SetDirichletConditions", "expected 3 values per node or none");
+  }
+  d.constrained.assign(d.ndof, 0);
+  d.prescribed.assign(d.ndof, 0.0);
+  for (std::size_t k = 0; k < nodes.size(); ++k)
+  {
+    if (nodes[k] < 0 || static_cast<std::size_t>(nodes[k]) >= N)
+    {
+      std::ostringstream msg;
+      msg << "Dirichlet node index " << nodes[k] << " is outside the mesh (" << N << " nodes)";
+      Fail("LinearElasticModel::SetDirichletConditions", msg.str());
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      const double v = values.empty() ? 0.0 : values[3 * k + c];
+      if (!std::isfinite(v))
+      {
+        std::ostringstream msg;
+        msg << "prescribed displacement of node " << nodes[k] << " is not finite";
+        Fail("LinearElasticModel::SetDirichletConditions", msg.str());
+      }
+      d.constrained[3 * nodes[k] + c] = 1;
+      d.prescribed[3 * nodes[k] + c] = v;
+    }
+  }
+  d.analysed = false;
+  d.factorized = false;
+}
+
+void
+LinearElasticModel::SetYoungsModulus(std::int32_t label, double youngsModulus)
+{
+  auto it = m_Impl->materials.find(label);
+  if (it == m_Impl->materials.end())
+  {
+    Fail("LinearElasticModel::SetYoungsModulus", "label " + std::to_string(label) + " has no material");
+  }
+  if (!(std::isfinite(youngsModulus) && youngsModulus > 0.0))
+  {
+    std::ostringstream msg;
+    msg << "label " << label << ": Young's modulus must be positive and finite, got " << youngsModulus << " kPa";
+    Fail("LinearElasticModel::SetYoungsModulus", msg.str());
+  }
+  if (it->second.youngsModulus != youngsModulus)
+  {
+    it->second.youngsModulus = youngsModulus;
+    m_Impl->valuesCurrent = false;
+    m_Impl->factorized = false;
+  }
+}
+
+double
+LinearElasticModel::GetYoungsModulus(std::int32_t label) const
+{
+  auto it = m_Impl->materials.find(label);
+  if (it == m_Impl->materials.end())
+  {
+    Fail("LinearElasticModel::GetYoungsModulus", "label " + std::to_string(label) + " has no material");
+  }
+  return it->second.youngsModulus;
+}
+
+void
+LinearElasticModel::Factorize()
+{
+  Impl & d = *m_Impl;
+  if (d.factorized)
+  {
+    return;
+  }
+  auto t0 = Clock::now();
+  if (!d.analysed)
+  {
+    d.CheckRigidBodyModes();
+  }
+  d.UpdateValues();
+  // Free-dof numbering is monotone in the dof number, so K_ff stays lower triangular.
+  d.freeIndex.assign(d.ndof, -1);
+  d.nfree = 0;
+  for (std::size_t i = 0; i < d.ndof; ++i)
+  {
+    if (!d.constrained[i])
+    {
+      d.freeIndex[i] = static_cast<std::int32_t>(d.nfree++);
+    }
+  }
+  if (d.nfree == 0)
+  {
+    d.factorized = true;
+    d.timings.assemble += Seconds(t0);
+    return;
+  }
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(d.values.size());
+  for (std::size_t col = 0; col < d.ndof; ++col)
+  {
+    const std::int32_t fc = d.freeIndex[col];
+    if (fc < 0)
+    {
+      continue;
+    }
+    for (std::int64_t k = d.colStart[col]; k < d.colStart[col + 1]; ++k)
+    {
+      const std::int32_t fr = d.freeIndex[d.rowIndex[k]];
+      if (fr >= 0)
+      {
+        triplets.emplace_back(fr, fc, d.values[k]);
+      }
+    }
+  }
+  d.Kff.resize(static_cast<Eigen::Index>(d.nfree), static_cast<Eigen::Index>(d.nfree));
+  d.Kff.setFromTriplets(triplets.begin(), triplets.end());
+  d.timings.assemble += Seconds(t0);
+  if (!d.analysed)
+  {
+    t0 = Clock::now();
+    d.solver.analyzePattern(d.Kff);
+    d.analysed = true;
+    d.timings.analyse = Seconds(t0);
+  }
+  t0 = Clock::now();
+  d.solver.factorize(d.Kff);
+  d.timings.factorise = Seconds(t0);
+  if (d.solver.info() != Eigen::Success)
+  {
+    Fail("LinearElasticModel::Factorize",
+         "the stiffness matrix is not positive definite (CHOLMOD failed): the model is singular or ill-conditioned; "
+         "check the fixed labels and the element quality");
+  }
+  d.factorized = true;
+}
+
+bool
+LinearElasticModel::IsFactorized() const
+{
+  return m_Impl->factorized;
+}
+
+std::vector<double>
+LinearElasticModel::Solve(const std::vector<double> & forces)
+{
+  Impl & d = *m_Impl;
+  if (!forces.empty() && forces.size() != d.ndof)
+  {
+    Fail("LinearElasticModel::Solve", "the force vector must hold 3 values per node");
+  }
+  Factorize();
+  const auto          t0 = Clock::now();
+  std::vector<double> Kg;
+  d.SymmetricProduct(d.prescribed, Kg);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(d.nfree));
+  for (std::size_t i = 0; i < d.ndof; ++i)
+  {
+    const std::int32_t f = d.freeIndex[i];
+    if (f >= 0)
+    {
+      const double fi = forces.empty() ? 0.0 : forces[i];
+      if (!std::isfinite(fi))
+      {
+        Fail("LinearElasticModel::Solve", "force at degree of freedom " + std::to_string(i) + " is not finite");
+      }
+      b[f] = fi - Kg[i];
+    }
+  }
+  std::vector<double> u(d.prescribed);
+  if (d.nfree > 0)
+  {
+    const Eigen::VectorXd x = d.solver.solve(b);
+    if (d.solver.info() != Eigen::Success || !x.allFinite())
+    {
+      Fail("LinearElasticModel::Solve", "the triangular solves failed or produced non-finite displacements");
+    }
+    for (std::size_t i = 0; i < d.ndof; ++i)
+    {
+      if (d.freeIndex[i] >= 0)
+      {
+        u[i] = x[d.freeIndex[i]];
+      }
+    }
+  }
+  d.timings.solve = Seconds(t0);
+  return u;
+}
+
+std::vector<double>
+LinearElasticModel::ComputeInternalForces(const std::vector<double> & u) const
+{
+  if (u.size() != m_Impl->ndof)
+  {
+    Fail("LinearElasticModel::ComputeInternalForces", "the displacement vector must hold 3 values per node");
+  }
+  m_Impl->UpdateValues();
+  std::vector<double> y;
+  m_Impl->SymmetricProduct(u, y);
+  return y;
+}
+
+std::vector<double>
+LinearElasticModel::ComputeReactionForces(const std::vector<double> & u, const std::vector<double> & forces) const
+{
+  std::vector<double> r = ComputeInternalForces(u);
+  for (std::size_t i = 0; i < r.size(); ++i)
+  {
+    r[i] = m_Impl->constrained[i] ? r[i] - (forces.empty() ? 0.0 : forces[i]) : 0.0;
+  }
+  return r;
+}
+
+std::vector<double>
+LinearElasticModel::ComputeVonMisesStress(const std::vector<double> & u) const
+{
+  const TetrahedralMesh & mesh = m_Impl->mesh;
+  const std::size_t       M = mesh.GetNumberOfTetrahedra();
+  std::vector<double>     vm(M);
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    double g[4][3];
+    ElementGradients(mesh, e, g);
+    double grad[3][3] = {}; // du_i/dx_j
+    for (int a = 0; a < 4; ++a)
+    {
+      const double * ua = &u[3 * mesh.tetrahedra[4 * e + a]];
+      for (int i = 0; i < 3; ++i)
+      {
+        for (int j = 0; j < 3; ++j)
+        {
+          grad[i][j] += ua[i] * g[a][j];
+        }
+      }
+    }
+    const MaterialParameters & m = m_Impl->materials.at(mesh.labels[e]);
+    double                     lambda, mu;
+    LameParameters(m.youngsModulus, m.poissonRatio, lambda, mu);
+    const double tr = grad[0][0] + grad[1][1] + grad[2][2];
+    double       s[3][3];
+    for (int i = 0; i < 3; ++i)
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        s[i][j] = mu * (grad[i][j] + grad[j][i]) + (i == j ? lambda * tr : 0.0);
+      }
+    }
+    const double p = (s[0][0] + s[1][1] + s[2][2]) / 3.0;
+    double       j2 = 0.0;
+    for (int i = 0; i < 3; ++i)
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        const double dev = s[i][j] - (i == j ? p : 0.0);
+        j2 += dev * dev;
+      }
+    }
+    vm[e] = std::sqrt(1.5 * j2);
+  }
+  return vm;
+}
+
+std::vector<double>
+LinearElasticModel::GetElementYoungsModuli() const
+{
+  std::vector<double> E(m_Impl->mesh.GetNumberOfTetrahedra());
+  for (std::size_t e = 0; e < E.size(); ++e)
+  {
+    E[e] = m_Impl->materials.at(m_Impl->mesh.labels[e]).youngsModulus;
+  }
+  return E;
+}
+
+std::vector<double>
+LinearElasticModel::GetElementPoissonRatios() const
+{
+  std::vector<double> nu(m_Impl->mesh.GetNumberOfTetrahedra());
+  for (std::size_t e = 0; e < nu.size(); ++e)
+  {
+    nu[e] = m_Impl->materials.at(m_Impl->mesh.labels[e]).poissonRatio;
+  }
+  return nu;
+}
+
+std::size_t
+LinearElasticModel::GetNumberOfFreeDegreesOfFreedom() const
+{
+  return m_Impl->nfree;
+}
+
+const std::vector<char> &
+LinearElasticModel::GetConstrainedDegreesOfFreedom() const
+{
+  return m_Impl->constrained;
+}
+
+const SolverTimings &
+LinearElasticModel::GetTimings() const
+{
+  return m_Impl->timings;
+}
+
+} // namespace bmr

@@ -1,0 +1,725 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrScene.h"
+
+#include "bmrError.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace bmr
+{
+namespace
+{
+using Json = nlohmann::json;
+
+[[noreturn]] void
+SceneError(const std::string & source, const std::string & entry, const std::string & message)
+{
+  Fail("Scene", source + ": " + entry + ": " + message);
+}
+
+void
+CheckKeys(const Json & object, const std::set<std::string> & allowed, const std::string & source, const std::string & entry)
+{
+  if (!object.is_object())
+  {
+    SceneError(source, entry, "must be a JSON object");
+  }
+  for (auto it = object.begin(); it != object.end(); ++it)
+  {
+    if (allowed.count(it.key()) == 0)
+    {
+      SceneError(source, entry + "." + it.key(), "unknown key");
+    }
+  }
+}
+
+double
+GetNumber(const Json & object, const std::string & key, const std::string & source, const std::string & entry)
+{
+  const Json & v = object.at(key);
+  if (!v.is_number())
+  {
+    SceneError(source, entry + "." + key, "must be a number");
+  }
+  const double d = v.get<double>();
+  if (!std::isfinite(d))
+  {
+    SceneError(source, entry + "." + key, "must be finite");
+  }
+  return d;
+}
+
+std::string
+GetString(const Json & object, const std::string & key, const std::string & source, const std::string & entry)
+{
+  const Json & v = object.at(key);
+  if (!v.is_string())
+  {
+    SceneError(source, entry + "." + key, "must be a string");
+  }
+  return v.get<std::string>();
+}
+
+bool
+GetBool(const Json & object, const std::string & key, const std::string & source, const std::string & entry)
+{
+  const Json & v = object.at(key);
+  if (!v.is_boolean())
+  {
+    SceneError(source, entry + "." + key, "must be true or false");
+  }
+  return v.get<bool>();
+}
+
+std::array<double, 3>
+GetPoint(const Json & object, const std::string & key, const std::string & source, const std::string & entry)
+{
+  const Json & v = object.at(key);
+  if (!v.is_array() || v.size() != 3)
+  {
+    SceneError(source, entry + "." + key, "must be an array of 3 numbers [mm]");
+  }
+  std::array<double, 3> p;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (!v[i].is_number() || !std::isfinite(v[i].get<double>()))
+    {
+      SceneError(source, entry + "." + key, "must be an array of 3 finite numbers [mm]");
+    }
+    p[i] = v[i].get<double>();
+  }
+  return p;
+}
+
+LabelRole
+ParseRole(const std::string & s, const std::string & source, const std::string & entry)
+{
+  if (s == "material")
+    return LabelRole::Material;
+  if (s == "unknown_material")
+    return LabelRole::UnknownMaterial;
+  if (s == "fixed")
+    return LabelRole::Fixed;
+  if (s == "hollow")
+    return LabelRole::Hollow;
+  if (s == "outside")
+    return LabelRole::Outside;
+  SceneError(source, entry + ".role", "\"" + s + "\" is not one of material, unknown_material, fixed, hollow, outside");
+}
+} // namespace
+
+const char *
+LabelRoleName(LabelRole role)
+{
+  switch (role)
+  {
+    case LabelRole::Material:
+      return "material";
+    case LabelRole::UnknownMaterial:
+      return "unknown_material";
+    case LabelRole::Fixed:
+      return "fixed";
+    case LabelRole::Hollow:
+      return "hollow";
+    case LabelRole::Outside:
+      return "outside";
+  }
+  return "?";
+}
+
+const SceneLabel *
+Scene::FindLabel(const std::string & labelName) const
+{
+  for (const auto & l : labels)
+  {
+    if (l.name == labelName)
+    {
+      return &l;
+    }
+  }
+  return nullptr;
+}
+
+const SceneLabel *
+Scene::FindLabelValue(std::int32_t value) const
+{
+  for (const auto & l : labels)
+  {
+    if (l.value == value)
+    {
+      return &l;
+    }
+  }
+  return nullptr;
+}
+
+std::vector<std::int32_t>
+Scene::ExcludedLabels() const
+{
+  std::vector<std::int32_t> v;
+  for (const auto & l : labels)
+  {
+    if (l.role == LabelRole::Fixed || l.role == LabelRole::Hollow || l.role == LabelRole::Outside)
+    {
+      v.push_back(l.value);
+    }
+  }
+  return v;
+}
+
+std::vector<std::int32_t>
+Scene::OutsideLabels() const
+{
+  std::vector<std::int32_t> v;
+  for (const auto & l : labels)
+  {
+    if (l.role == LabelRole::Outside)
+    {
+      v.push_back(l.value);
+    }
+  }
+  return v;
+}
+
+void
+Scene::Validate() const
+{
+  const std::string src = name.empty() ? std::string("scene") : name;
+  bool              simulated = false, fixedLabel = false;
+  std::set<std::string>  names;
+  std::set<std::int32_t> values;
+  for (const auto & l : labels)
+  {
+    const std::string entry = "labels[" + l.name + "]";
+    if (l.name.empty())
+    {
+      SceneError(src, "labels", "every label needs a name");
+    }
+    if (!names.insert(l.name).second)
+    {
+      SceneError(src, entry, "the name is used twice");
+    }
+    if (!values.insert(l.value).second)
+    {
+      SceneError(src, entry + ".value", "label value " + std::to_string(l.value) + " is used twice");
+    }
+    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    {
+      simulated = true;
+      if (l.value == 0)
+      {
+        SceneError(src, entry + ".value", "label 0 is the background and cannot be a material");
+      }
+      if (!(l.youngsModulus > 0.0))
+      {
+        SceneError(src, entry + ".youngs_modulus_kPa", "must be > 0, got " + std::to_string(l.youngsModulus));
+      }
+      if (!(l.poissonRatio < 0.5 && l.poissonRatio > -1.0))
+      {
+        SceneError(src, entry + ".poisson_ratio",
+                   "must lie in (-1, 0.5) for a compressible linear-elastic solid, got " + std::to_string(l.poissonRatio));
+      }
+    }
+    if (l.role == LabelRole::UnknownMaterial &&
+        !(l.lowerBound > 0.0 && l.lowerBound <= l.youngsModulus && l.youngsModulus <= l.upperBound))
+    {
+      SceneError(src, entry + ".bounds_kPa", "must satisfy 0 < lower <= youngs_modulus_kPa <= upper");
+    }
+    fixedLabel = fixedLabel || l.role == LabelRole::Fixed;
+  }
+  if (!simulated)
+  {
+    SceneError(src, "labels", "no label has the role material or unknown_material: there is nothing to simulate");
+  }
+  if (!gauge.empty())
+  {
+    const SceneLabel * g = FindLabel(gauge);
+    if (!g || g->role != LabelRole::Material)
+    {
+      SceneError(src, "gauge", "\"" + gauge + "\" must name a label with the role material (known modulus)");
+    }
+  }
+  auto checkSurface = [&](const std::string & surface, const std::string & entry) {
+    const SceneLabel * l = FindLabel(surface);
+    if (!l)
+    {
+      SceneError(src, entry, "\"" + surface + "\" is not a label of the scene");
+    }
+    if (l->role != LabelRole::Hollow && l->role != LabelRole::Outside && l->role != LabelRole::Fixed)
+    {
+      SceneError(src, entry, "\"" + surface + "\" must be a hollow, fixed or outside label (its wall is a mesh boundary)");
+    }
+  };
+  for (std::size_t i = 0; i < forceSurfaces.size(); ++i)
+  {
+    checkSurface(forceSurfaces[i], "force_surfaces[" + std::to_string(i) + "]");
+  }
+  bool displacementLoad = false;
+  for (std::size_t i = 0; i < loads.size(); ++i)
+  {
+    const std::string entry = "loads[" + std::to_string(i) + "]";
+    checkSurface(loads[i].surface, entry + ".surface");
+    displacementLoad = displacementLoad || loads[i].type == SceneLoad::Type::RadialDisplacement;
+  }
+  for (std::size_t i = 0; i < objective.size(); ++i)
+  {
+    const std::string entry = "objective[" + std::to_string(i) + "]";
+    if (!FindLabel(objective[i].label))
+    {
+      SceneError(src, entry + ".label", "\"" + objective[i].label + "\" is not a label of the scene");
+    }
+    if (!(objective[i].weight > 0.0))
+    {
+      SceneError(src, entry + ".weight", "must be > 0");
+    }
+  }
+  if (!fixedLabel && !roiBoundaryFixed && !displacementLoad)
+  {
+    SceneError(src, "labels",
+               "nothing prevents rigid-body motion: give a label the role fixed, set region_of_interest.boundary to "
+               "\"fixed\", or prescribe a displacement load");
+  }
+  const MeshingParameters & m = mesh;
+  const std::pair<const char *, double> sizes[] = { { "cell_size_mm", m.cellSize },
+                                                    { "facet_size_mm", m.facetSize },
+                                                    { "facet_distance_mm", m.facetDistance } };
+  for (const auto & s : sizes)
+  {
+    if (!(s.second > 0.0))
+    {
+      SceneError(src, std::string("mesh.") + s.first, "must be > 0");
+    }
+  }
+  for (const auto & kv : m.cellSizePerLabel)
+  {
+    if (!(kv.second > 0.0))
+    {
+      SceneError(src, "mesh.cell_size_per_label_mm", "sizes must be > 0");
+    }
+  }
+}
+
+void
+Scene::ValidateAgainstLabels(const std::set<std::int32_t> & present, const std::string & what) const
+{
+  const std::string src = name.empty() ? std::string("scene") : name;
+  for (std::int32_t v : present)
+  {
+    if (v != 0 && !FindLabelValue(v))
+    {
+      SceneError(src, "labels", what + " contains label " + std::to_string(v) + ", which the scene does not describe");
+    }
+  }
+  auto requirePresent = [&](const std::string & labelName, const std::string & entry) {
+    const SceneLabel * l = FindLabel(labelName);
+    if (l && present.count(l->value) == 0)
+    {
+      SceneError(src, entry, "label \"" + labelName + "\" (value " + std::to_string(l->value) + ") is absent from " + what);
+    }
+  };
+  for (const auto & l : labels)
+  {
+    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    {
+      requirePresent(l.name, "labels[" + l.name + "]");
+    }
+  }
+  for (std::size_t i = 0; i < forceSurfaces.size(); ++i)
+  {
+    requirePresent(forceSurfaces[i], "force_surfaces[" + std::to_string(i) + "]");
+  }
+  for (std::size_t i = 0; i < loads.size(); ++i)
+  {
+    if (FindLabel(loads[i].surface)->value != 0)
+    {
+      requirePresent(loads[i].surface, "loads[" + std::to_string(i) + "].surface");
+    }
+  }
+  for (std::size_t i = 0; i < objective.size(); ++i)
+  {
+    requirePresent(objective[i].label, "objective[" + std::to_string(i) + "].label");
+  }
+}
+
+Scene
+ParseScene(const std::string & text, const std::string & source)
+{
+  Json root;
+  try
+  {
+    root = Json::parse(text);
+  }
+  catch (const std::exception & e)
+  {
+    SceneError(source, "JSON", e.what());
+  }
+  Scene scene;
+  scene.name = source;
+  CheckKeys(root,
+            { "name", "units", "labels", "gauge", "force_surfaces", "objective", "loads", "landmarks",
+              "region_of_interest", "mesh" },
+            source,
+            "scene");
+  if (root.contains("name"))
+  {
+    GetString(root, "name", source, "scene");
+  }
+  if (root.contains("units"))
+  {
+    const Json & u = root["units"];
+    CheckKeys(u, { "length", "modulus", "force" }, source, "units");
+    const std::pair<const char *, const char *> expected[] = { { "length", "mm" }, { "modulus", "kPa" }, { "force", "mN" } };
+    for (const auto & e : expected)
+    {
+      if (u.contains(e.first) && GetString(u, e.first, source, "units") != e.second)
+      {
+        SceneError(source, std::string("units.") + e.first, std::string("only \"") + e.second + "\" is supported");
+      }
+    }
+  }
+  if (!root.contains("labels") || !root["labels"].is_array() || root["labels"].empty())
+  {
+    SceneError(source, "labels", "must be a non-empty array of label objects");
+  }
+  for (std::size_t i = 0; i < root["labels"].size(); ++i)
+  {
+    const Json &      j = root["labels"][i];
+    const std::string entry = "labels[" + std::to_string(i) + "]";
+    CheckKeys(j, { "name", "value", "role", "youngs_modulus_kPa", "poisson_ratio", "bounds_kPa" }, source, entry);
+    SceneLabel l;
+    if (!j.contains("name") || !j.contains("value") || !j.contains("role"))
+    {
+      SceneError(source, entry, "needs name, value and role");
+    }
+    l.name = GetString(j, "name", source, entry);
+    if (!j["value"].is_number_integer())
+    {
+      SceneError(source, entry + ".value", "must be an integer label value");
+    }
+    l.value = j["value"].get<std::int32_t>();
+    l.role = ParseRole(GetString(j, "role", source, entry), source, entry);
+    const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
+    if (simulated)
+    {
+      if (!j.contains("youngs_modulus_kPa") || !j.contains("poisson_ratio"))
+      {
+        SceneError(source, "labels[" + l.name + "]", "a material needs youngs_modulus_kPa and poisson_ratio");
+      }
+      l.youngsModulus = GetNumber(j, "youngs_modulus_kPa", source, "labels[" + l.name + "]");
+      l.poissonRatio = GetNumber(j, "poisson_ratio", source, "labels[" + l.name + "]");
+    }
+    else if (j.contains("youngs_modulus_kPa") || j.contains("poisson_ratio"))
+    {
+      SceneError(source, "labels[" + l.name + "]", "only material labels take youngs_modulus_kPa / poisson_ratio");
+    }
+    if (j.contains("bounds_kPa"))
+    {
+      if (l.role != LabelRole::UnknownMaterial)
+      {
+        SceneError(source, "labels[" + l.name + "].bounds_kPa", "only an unknown_material takes bounds");
+      }
+      const Json & b = j["bounds_kPa"];
+      if (!b.is_array() || b.size() != 2 || !b[0].is_number() || !b[1].is_number())
+      {
+        SceneError(source, "labels[" + l.name + "].bounds_kPa", "must be [lower, upper] in kPa");
+      }
+      l.lowerBound = b[0].get<double>();
+      l.upperBound = b[1].get<double>();
+    }
+    else if (l.role == LabelRole::UnknownMaterial)
+    {
+      SceneError(source, "labels[" + l.name + "]", "an unknown_material needs bounds_kPa");
+    }
+    scene.labels.push_back(l);
+  }
+  if (root.contains("gauge"))
+  {
+    scene.gauge = GetString(root, "gauge", source, "scene");
+  }
+  auto stringList = [&](const char * key, std::vector<std::string> & out) {
+    if (!root.contains(key))
+    {
+      return;
+    }
+    if (!root[key].is_array())
+    {
+      SceneError(source, key, "must be an array of label names");
+    }
+    for (const auto & v : root[key])
+    {
+      if (!v.is_string())
+      {
+        SceneError(source, key, "must be an array of label names");
+      }
+      out.push_back(v.get<std::string>());
+    }
+  };
+  stringList("force_surfaces", scene.forceSurfaces);
+  if (root.contains("objective"))
+  {
+    if (!root["objective"].is_array())
+    {
+      SceneError(source, "objective", "must be an array of {label, weight}");
+    }
+    for (std::size_t i = 0; i < root["objective"].size(); ++i)
+    {
+      const Json &      j = root["objective"][i];
+      const std::string entry = "objective[" + std::to_string(i) + "]";
+      CheckKeys(j, { "label", "weight" }, source, entry);
+      ObjectiveTerm t;
+      if (!j.contains("label"))
+      {
+        SceneError(source, entry, "needs a label");
+      }
+      t.label = GetString(j, "label", source, entry);
+      if (j.contains("weight"))
+      {
+        t.weight = GetNumber(j, "weight", source, entry);
+      }
+      scene.objective.push_back(t);
+    }
+  }
+  if (root.contains("loads"))
+  {
+    if (!root["loads"].is_array())
+    {
+      SceneError(source, "loads", "must be an array of load objects");
+    }
+    for (std::size_t i = 0; i < root["loads"].size(); ++i)
+    {
+      const Json &      j = root["loads"][i];
+      const std::string entry = "loads[" + std::to_string(i) + "]";
+      CheckKeys(j, { "surface", "type", "center_mm", "magnitude_mm", "pressure_kPa" }, source, entry);
+      SceneLoad load;
+      if (!j.contains("surface") || !j.contains("type"))
+      {
+        SceneError(source, entry, "needs surface and type");
+      }
+      load.surface = GetString(j, "surface", source, entry);
+      const std::string type = GetString(j, "type", source, entry);
+      if (type == "radial_displacement")
+      {
+        load.type = SceneLoad::Type::RadialDisplacement;
+        if (!j.contains("center_mm") || !j.contains("magnitude_mm"))
+        {
+          SceneError(source, entry, "a radial_displacement needs center_mm and magnitude_mm");
+        }
+        load.center = GetPoint(j, "center_mm", source, entry);
+        load.magnitude = GetNumber(j, "magnitude_mm", source, entry);
+      }
+      else if (type == "pressure")
+      {
+        load.type = SceneLoad::Type::Pressure;
+        if (!j.contains("pressure_kPa"))
+        {
+          SceneError(source, entry, "a pressure load needs pressure_kPa");
+        }
+        load.magnitude = GetNumber(j, "pressure_kPa", source, entry);
+      }
+      else
+      {
+        SceneError(source, entry + ".type", "\"" + type + "\" is not radial_displacement or pressure");
+      }
+      scene.loads.push_back(load);
+    }
+  }
+  if (root.contains("landmarks"))
+  {
+    const Json & j = root["landmarks"];
+    CheckKeys(j, { "moving", "fixed" }, source, "landmarks");
+    if (j.contains("moving"))
+      scene.movingLandmarks = GetString(j, "moving", source, "landmarks");
+    if (j.contains("fixed"))
+      scene.fixedLandmarks = GetString(j, "fixed", source, "landmarks");
+  }
+  if (root.contains("region_of_interest"))
+  {
+    const Json & j = root["region_of_interest"];
+    CheckKeys(j, { "margin_mm", "boundary" }, source, "region_of_interest");
+    if (j.contains("margin_mm"))
+    {
+      scene.roiMargin = GetNumber(j, "margin_mm", source, "region_of_interest");
+      if (scene.roiMargin < 0.0)
+      {
+        SceneError(source, "region_of_interest.margin_mm", "must be >= 0");
+      }
+    }
+    if (j.contains("boundary"))
+    {
+      const std::string b = GetString(j, "boundary", source, "region_of_interest");
+      if (b != "free" && b != "fixed")
+      {
+        SceneError(source, "region_of_interest.boundary", "must be \"free\" or \"fixed\"");
+      }
+      scene.roiBoundaryFixed = b == "fixed";
+    }
+  }
+  if (root.contains("mesh"))
+  {
+    const Json & j = root["mesh"];
+    CheckKeys(j,
+              { "cell_size_mm", "facet_size_mm", "facet_distance_mm", "facet_angle_deg", "cell_radius_edge_ratio",
+                "cell_size_per_label_mm", "optimize", "random_seed" },
+              source,
+              "mesh");
+    MeshingParameters & m = scene.mesh;
+    if (j.contains("cell_size_mm"))
+      m.cellSize = GetNumber(j, "cell_size_mm", source, "mesh");
+    if (j.contains("facet_size_mm"))
+      m.facetSize = GetNumber(j, "facet_size_mm", source, "mesh");
+    if (j.contains("facet_distance_mm"))
+      m.facetDistance = GetNumber(j, "facet_distance_mm", source, "mesh");
+    if (j.contains("facet_angle_deg"))
+      m.facetAngle = GetNumber(j, "facet_angle_deg", source, "mesh");
+    if (j.contains("cell_radius_edge_ratio"))
+      m.cellRadiusEdgeRatio = GetNumber(j, "cell_radius_edge_ratio", source, "mesh");
+    if (j.contains("optimize"))
+      m.optimize = GetBool(j, "optimize", source, "mesh");
+    if (j.contains("random_seed"))
+    {
+      if (!j["random_seed"].is_number_unsigned())
+      {
+        SceneError(source, "mesh.random_seed", "must be a non-negative integer");
+      }
+      m.randomSeed = j["random_seed"].get<unsigned int>();
+    }
+    if (j.contains("cell_size_per_label_mm") && !j["cell_size_per_label_mm"].is_object())
+    {
+      SceneError(source, "mesh.cell_size_per_label_mm", "must be an object {label name: size in mm}");
+    }
+  }
+  // Per-label sizes refer to label names, resolved once the labels are known.
+  if (root.contains("mesh") && root["mesh"].contains("cell_size_per_label_mm"))
+  {
+    for (auto it = root["mesh"]["cell_size_per_label_mm"].begin(); it != root["mesh"]["cell_size_per_label_mm"].end();
+         ++it)
+    {
+      const SceneLabel * l = scene.FindLabel(it.key());
+      if (!l)
+      {
+        SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "is not a label of the scene");
+      }
+      if (!it.value().is_number())
+      {
+        SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "must be a number [mm]");
+      }
+      scene.mesh.cellSizePerLabel[l->value] = it.value().get<double>();
+    }
+  }
+  scene.Validate();
+  return scene;
+}
+
+Scene
+ReadScene(const std::string & fileName)
+{
+  std::ifstream in(fileName);
+  if (!in)
+  {
+    Fail("ReadScene", "cannot open scene file \"" + fileName + "\"");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseScene(text.str(), fileName);
+}
+
+std::string
+SceneToJson(const Scene & scene)
+{
+  Json root;
+  root["units"] = { { "length", "mm" }, { "modulus", "kPa" }, { "force", "mN" } };
+  Json labels = Json::array();
+  for (const auto & l : scene.labels)
+  {
+    Json j = { { "name", l.name }, { "value", l.value }, { "role", LabelRoleName(l.role) } };
+    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    {
+      j["youngs_modulus_kPa"] = l.youngsModulus;
+      j["poisson_ratio"] = l.poissonRatio;
+    }
+    if (l.role == LabelRole::UnknownMaterial)
+    {
+      j["bounds_kPa"] = { l.lowerBound, l.upperBound };
+    }
+    labels.push_back(j);
+  }
+  root["labels"] = labels;
+  if (!scene.gauge.empty())
+    root["gauge"] = scene.gauge;
+  if (!scene.forceSurfaces.empty())
+    root["force_surfaces"] = scene.forceSurfaces;
+  if (!scene.objective.empty())
+  {
+    Json obj = Json::array();
+    for (const auto & t : scene.objective)
+      obj.push_back({ { "label", t.label }, { "weight", t.weight } });
+    root["objective"] = obj;
+  }
+  if (!scene.loads.empty())
+  {
+    Json loads = Json::array();
+    for (const auto & l : scene.loads)
+    {
+      if (l.type == SceneLoad::Type::RadialDisplacement)
+        loads.push_back({ { "surface", l.surface },
+                          { "type", "radial_displacement" },
+                          { "center_mm", l.center },
+                          { "magnitude_mm", l.magnitude } });
+      else
+        loads.push_back({ { "surface", l.surface }, { "type", "pressure" }, { "pressure_kPa", l.magnitude } });
+    }
+    root["loads"] = loads;
+  }
+  if (!scene.movingLandmarks.empty() || !scene.fixedLandmarks.empty())
+  {
+    root["landmarks"] = { { "moving", scene.movingLandmarks }, { "fixed", scene.fixedLandmarks } };
+  }
+  if (scene.roiMargin >= 0.0 || scene.roiBoundaryFixed)
+  {
+    Json roi = { { "boundary", scene.roiBoundaryFixed ? "fixed" : "free" } };
+    if (scene.roiMargin >= 0.0)
+      roi["margin_mm"] = scene.roiMargin;
+    root["region_of_interest"] = roi;
+  }
+  Json mesh = { { "cell_size_mm", scene.mesh.cellSize },
+                { "facet_size_mm", scene.mesh.facetSize },
+                { "facet_distance_mm", scene.mesh.facetDistance },
+                { "facet_angle_deg", scene.mesh.facetAngle },
+                { "cell_radius_edge_ratio", scene.mesh.cellRadiusEdgeRatio },
+                { "optimize", scene.mesh.optimize },
+                { "random_seed", scene.mesh.randomSeed } };
+  if (!scene.mesh.cellSizePerLabel.empty())
+  {
+    Json per = Json::object();
+    for (const auto & kv : scene.mesh.cellSizePerLabel)
+    {
+      const SceneLabel * l = scene.FindLabelValue(kv.first);
+      per[l ? l->name : std::to_string(kv.first)] = kv.second;
+    }
+    mesh["cell_size_per_label_mm"] = per;
+  }
+  root["mesh"] = mesh;
+  return root.dump(2) + "\n";
+}
+
+} // namespace bmr

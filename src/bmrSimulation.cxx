@@ -1,0 +1,256 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrSimulation.h"
+
+#include "bmrError.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+
+namespace bmr
+{
+
+std::map<std::int32_t, MaterialParameters>
+SceneMaterials(const Scene & scene)
+{
+  std::map<std::int32_t, MaterialParameters> materials;
+  for (const auto & l : scene.labels)
+  {
+    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    {
+      materials[l.value] = MaterialParameters{ l.youngsModulus, l.poissonRatio };
+    }
+  }
+  return materials;
+}
+
+TetrahedralMesh
+MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
+{
+  grid.Validate("moving label image");
+  const std::size_t                n = grid.GetNumberOfVoxels();
+  const std::vector<std::int32_t> outside = scene.OutsideLabels();
+  std::set<std::int32_t>           present;
+  for (std::size_t v = 0; v < n; ++v)
+  {
+    present.insert(labels[v]);
+  }
+  scene.ValidateAgainstLabels(present, "the moving label image");
+
+  // Region of interest: box around the labels that are not plain known material.
+  std::array<std::size_t, 3> lo{ { 0, 0, 0 } }, hi{ { grid.size[0] - 1, grid.size[1] - 1, grid.size[2] - 1 } };
+  if (scene.roiMargin >= 0.0)
+  {
+    std::array<std::int64_t, 3> blo{ { std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max(),
+                                       std::numeric_limits<std::int64_t>::max() } };
+    std::array<std::int64_t, 3> bhi{ { -1, -1, -1 } };
+    for (std::size_t k = 0; k < grid.size[2]; ++k)
+      for (std::size_t j = 0; j < grid.size[1]; ++j)
+        for (std::size_t i = 0; i < grid.size[0]; ++i)
+        {
+          const SceneLabel * l = scene.FindLabelValue(labels[i + grid.size[0] * (j + grid.size[1] * k)]);
+          if (l && l->role != LabelRole::Material && l->role != LabelRole::Outside)
+          {
+            const std::int64_t idx[3] = { static_cast<std::int64_t>(i), static_cast<std::int64_t>(j),
+                                          static_cast<std::int64_t>(k) };
+            for (int d = 0; d < 3; ++d)
+            {
+              blo[d] = std::min(blo[d], idx[d]);
+              bhi[d] = std::max(bhi[d], idx[d]);
+            }
+          }
+        }
+    if (bhi[0] >= 0)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        const auto m = static_cast<std::int64_t>(std::ceil(scene.roiMargin / grid.spacing[d]));
+        lo[d] = static_cast<std::size_t>(std::max<std::int64_t>(0, blo[d] - m));
+        hi[d] = static_cast<std::size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(grid.size[d]) - 1, bhi[d] + m));
+      }
+    }
+  }
+  GridGeometry roi = grid;
+  for (int d = 0; d < 3; ++d)
+  {
+    roi.size[d] = hi[d] - lo[d] + 1;
+  }
+  roi.origin = grid.IndexToPoint({ { static_cast<double>(lo[0]), static_cast<double>(lo[1]), static_cast<double>(lo[2]) } });
+  std::vector<std::int32_t> cropped(roi.GetNumberOfVoxels());
+  for (std::size_t k = 0; k < roi.size[2]; ++k)
+    for (std::size_t j = 0; j < roi.size[1]; ++j)
+      for (std::size_t i = 0; i < roi.size[0]; ++i)
+      {
+        std::int32_t v = labels[(i + lo[0]) + grid.size[0] * ((j + lo[1]) + grid.size[1] * (k + lo[2]))];
+        if (std::find(outside.begin(), outside.end(), v) != outside.end())
+        {
+          v = 0;
+        }
+        cropped[i + roi.size[0] * (j + roi.size[1] * k)] = v;
+      }
+
+  // Excluded regions only contribute their surface: mesh their interior coarsely.
+  MeshingParameters parameters = scene.mesh;
+  const std::vector<std::int32_t> excluded = scene.ExcludedLabels();
+  for (std::int32_t v : excluded)
+  {
+    if (parameters.cellSizePerLabel.count(v) == 0)
+    {
+      parameters.cellSizePerLabel[v] = 4.0 * parameters.cellSize;
+    }
+  }
+  const TetrahedralMesh full = MeshLabelVolume(cropped.data(), roi, parameters);
+  TetrahedralMesh       mesh = ExtractSubmesh(full, excluded);
+
+  std::set<std::int32_t> meshed(mesh.labels.begin(), mesh.labels.end());
+  std::set<std::int32_t> walls(mesh.boundaryFaceLabels.begin(), mesh.boundaryFaceLabels.end());
+  for (const auto & l : scene.labels)
+  {
+    if (present.count(l.value) == 0)
+    {
+      continue;
+    }
+    const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
+    if (simulated && meshed.count(l.value) == 0)
+    {
+      Fail("MeshSceneLabels", "label \"" + l.name + "\" is in the image but has no element after meshing (too small "
+                              "for mesh.cell_size_mm / facet_size_mm?)");
+    }
+    if ((l.role == LabelRole::Fixed || l.role == LabelRole::Hollow) && walls.count(l.value) == 0)
+    {
+      Fail("MeshSceneLabels", "the wall of label \"" + l.name + "\" is missing from the mesh (is it touching the "
+                              "simulated tissue?)");
+    }
+  }
+  return mesh;
+}
+
+BoundaryConditions
+SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
+{
+  const std::size_t  N = mesh.GetNumberOfPoints();
+  BoundaryConditions bc;
+  bc.forces.assign(3 * N, 0.0);
+  std::vector<char>   isDirichlet(N, 0);
+  std::vector<double> value(3 * N, 0.0);
+  for (const auto & load : scene.loads)
+  {
+    const std::int32_t label = scene.FindLabel(load.surface)->value;
+    if (load.type == SceneLoad::Type::RadialDisplacement)
+    {
+      for (std::int32_t node : NodesOnBoundary(mesh, label))
+      {
+        double       d[3], r = 0.0;
+        for (int c = 0; c < 3; ++c)
+        {
+          d[c] = mesh.points[3 * node + c] - load.center[c];
+          r += d[c] * d[c];
+        }
+        r = std::sqrt(r);
+        if (r <= 0.0)
+        {
+          Fail("SceneBoundaryConditions", "loads on \"" + load.surface + "\": a wall node lies on center_mm");
+        }
+        isDirichlet[node] = 1;
+        for (int c = 0; c < 3; ++c)
+        {
+          value[3 * node + c] = load.magnitude * d[c] / r;
+        }
+      }
+    }
+    else
+    {
+      // Boundary faces point out of the tissue, into the lumen; the lumen's pressure pushes back into the tissue.
+      for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
+      {
+        if (mesh.boundaryFaceLabels[f] != label)
+        {
+          continue;
+        }
+        const double * x0 = &mesh.points[3 * mesh.boundaryFaces[3 * f]];
+        const double * x1 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 1]];
+        const double * x2 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 2]];
+        const double   a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+        const double   b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+        const double   areaNormal[3] = { 0.5 * (a[1] * b[2] - a[2] * b[1]), 0.5 * (a[2] * b[0] - a[0] * b[2]),
+                                       0.5 * (a[0] * b[1] - a[1] * b[0]) };
+        for (int k = 0; k < 3; ++k)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            bc.forces[3 * mesh.boundaryFaces[3 * f + k] + c] -= load.magnitude * areaNormal[c] / 3.0;
+          }
+        }
+      }
+    }
+  }
+  std::vector<std::int32_t> fixedWalls;
+  for (const auto & l : scene.labels)
+  {
+    if (l.role == LabelRole::Fixed)
+    {
+      fixedWalls.push_back(l.value);
+    }
+  }
+  if (scene.roiBoundaryFixed)
+  {
+    fixedWalls.push_back(0);
+  }
+  for (std::int32_t label : fixedWalls)
+  {
+    for (std::int32_t node : NodesOnBoundary(mesh, label))
+    {
+      isDirichlet[node] = 1;
+      value[3 * node] = value[3 * node + 1] = value[3 * node + 2] = 0.0;
+    }
+  }
+  for (std::size_t node = 0; node < N; ++node)
+  {
+    if (isDirichlet[node])
+    {
+      bc.dirichletNodes.push_back(static_cast<std::int32_t>(node));
+      bc.dirichletValues.insert(bc.dirichletValues.end(), &value[3 * node], &value[3 * node + 3]);
+    }
+  }
+  return bc;
+}
+
+ForwardSimulation
+SimulateScene(const Scene & scene, const TetrahedralMesh & mesh)
+{
+  LinearElasticModel       model(mesh, SceneMaterials(scene));
+  const BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
+  model.SetDirichletConditions(bc.dirichletNodes, bc.dirichletValues);
+  ForwardSimulation out;
+  out.displacement = model.Solve(bc.forces);
+  out.force = model.ComputeInternalForces(out.displacement);
+  out.dirichlet.assign(mesh.GetNumberOfPoints(), 0);
+  for (std::int32_t node : bc.dirichletNodes)
+  {
+    out.dirichlet[node] = 1;
+  }
+  out.vonMises = model.ComputeVonMisesStress(out.displacement);
+  out.youngsModulus = model.GetElementYoungsModuli();
+  out.poissonRatio = model.GetElementPoissonRatios();
+  out.timings = model.GetTimings();
+  return out;
+}
+
+} // namespace bmr

@@ -1,0 +1,94 @@
+# Bad input to biomechreg: each case must exit non-zero with exactly one line on
+# stderr, "biomechreg: error: ..." naming the cause, and leave no output file.
+# Run with: cmake -DCLI=<biomechreg> -DTEMP=<dir> -P biomechregErrorTests.cmake
+file(REMOVE_RECURSE ${TEMP})
+file(MAKE_DIRECTORY ${TEMP})
+set(failures 0)
+
+function(expect_error name expected)
+  execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  string(STRIP "${err}" err_stripped)
+  string(REGEX MATCHALL "\n" newlines "${err_stripped}")
+  list(LENGTH newlines extra_lines)
+  if(rc EQUAL 0)
+    message(SEND_ERROR "${name}: exit code 0, expected an error")
+  elseif(NOT err_stripped MATCHES "^biomechreg: error: ")
+    message(SEND_ERROR "${name}: stderr does not start with 'biomechreg: error:': ${err}")
+  elseif(extra_lines GREATER 0)
+    message(SEND_ERROR "${name}: error message spans several lines: ${err}")
+  elseif(NOT err_stripped MATCHES "${expected}")
+    message(SEND_ERROR "${name}: message does not mention '${expected}': ${err}")
+  else()
+    message(STATUS "ok ${name}: ${err_stripped}")
+  endif()
+endfunction()
+
+# A small valid phantom to build the other cases from.
+execute_process(COMMAND ${CLI} phantom --scene spheres --size 24,24,24 --spacing 4,4,4 --noise-HU 0 --out ${TEMP}/ok
+  RESULT_VARIABLE rc OUTPUT_QUIET)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "could not make the reference phantom")
+endif()
+set(labels ${TEMP}/ok/moving_labels.nrrd)
+file(READ ${TEMP}/ok/truth_scene.json scene)
+
+expect_error(unknown_command "unknown command" frobnicate)
+expect_error(unknown_option "unknown option --frob" phantom --out ${TEMP}/x --frob 1)
+expect_error(missing_out "missing required option --out" phantom)
+expect_error(bad_number "expects a number" phantom --out ${TEMP}/x --noise-HU abc)
+expect_error(zero_spacing "spacing" phantom --out ${TEMP}/x --spacing 0,1,1)
+expect_error(missing_file "cannot read moving label image" simulate --moving-labels ${TEMP}/none.nrrd
+  --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s1)
+
+file(WRITE ${TEMP}/corrupt.nrrd "NRRD0004\ntype: banana\ndimension: 3\n\n")
+expect_error(corrupt_file "cannot read moving label image" simulate --moving-labels ${TEMP}/corrupt.nrrd
+  --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s2)
+
+file(WRITE ${TEMP}/flat.mha "ObjectType = Image\nNDims = 2\nDimSize = 4 4\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n0123456789abcdef")
+expect_error(two_d_image "2-D; a 3-D image is required" simulate --moving-labels ${TEMP}/flat.mha
+  --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s3)
+
+file(WRITE ${TEMP}/truncated.mha "ObjectType = Image\nNDims = 3\nDimSize = 40 40 40\nElementType = MET_INT\nElementDataFile = LOCAL\n0123")
+expect_error(truncated_file "cannot read moving label image" simulate --moving-labels ${TEMP}/truncated.mha
+  --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s4)
+
+string(REPLACE "\"poisson_ratio\": 0.35" "\"poisson_ratio\": 0.5" bad "${scene}")
+file(WRITE ${TEMP}/nu.json "${bad}")
+expect_error(poisson_half "labels\\[outer\\].poisson_ratio" simulate --moving-labels ${labels} --scene ${TEMP}/nu.json --out ${TEMP}/s5)
+
+string(REPLACE "\"youngs_modulus_kPa\": 10" "\"youngs_modulus_kPa\": -10" bad "${scene}")
+file(WRITE ${TEMP}/e.json "${bad}")
+expect_error(negative_modulus "labels\\[outer\\].youngs_modulus_kPa" simulate --moving-labels ${labels} --scene ${TEMP}/e.json --out ${TEMP}/s6)
+
+string(REPLACE "\"labels\"" "\"lables_typo\": 1, \"labels\"" bad "${scene}")
+file(WRITE ${TEMP}/key.json "${bad}")
+expect_error(unknown_key "lables_typo: unknown key" simulate --moving-labels ${labels} --scene ${TEMP}/key.json --out ${TEMP}/s7)
+
+string(REPLACE "\"value\": 2" "\"value\": 7" bad "${scene}")
+file(WRITE ${TEMP}/absent.json "${bad}")
+expect_error(absent_label "contains label 2, which the scene does not describe" simulate --moving-labels ${labels}
+  --scene ${TEMP}/absent.json --out ${TEMP}/s8)
+
+string(REGEX REPLACE "\"loads\": \\[[^]]*\\]" "\"loads\": []" bad "${scene}")
+file(WRITE ${TEMP}/rigid.json "${bad}")
+expect_error(rigid_body "rigid-body motion" simulate --moving-labels ${labels} --scene ${TEMP}/rigid.json --out ${TEMP}/s9)
+
+file(WRITE ${TEMP}/broken.json "{ \"labels\": [ ")
+expect_error(broken_json "JSON" simulate --moving-labels ${labels} --scene ${TEMP}/broken.json --out ${TEMP}/s10)
+
+expect_error(unwritable_output "cannot create output directory" simulate --moving-labels ${labels}
+  --scene ${TEMP}/ok/truth_scene.json --out /proc/biomechreg-not-writable/out)
+
+# No partial outputs: none of the failed runs may have left a directory or temporary file.
+foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 x)
+  if(EXISTS ${TEMP}/${dir})
+    file(GLOB leftovers ${TEMP}/${dir}/*)
+    if(leftovers)
+      message(SEND_ERROR "a failed run left files behind in ${TEMP}/${dir}: ${leftovers}")
+    endif()
+  endif()
+endforeach()
+file(GLOB_RECURSE temporaries ${TEMP}/.tmp-*)
+if(temporaries)
+  message(SEND_ERROR "temporary files left behind: ${temporaries}")
+endif()

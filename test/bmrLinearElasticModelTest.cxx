@@ -1,0 +1,194 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// Linear-elastic FEM core: patch test, scale invariance of u under E, F -> 10^k (E, F),
+// reaction forces in equilibrium, reuse of the factorisation, and every error path.
+#include "bmrLinearElasticModel.h"
+#include "bmrTestUtilities.h"
+
+#include <cmath>
+#include <cstdlib>
+
+namespace
+{
+double
+RelativeDifference(const std::vector<double> & a, const std::vector<double> & b)
+{
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    num += (a[i] - b[i]) * (a[i] - b[i]);
+    den += b[i] * b[i];
+  }
+  return std::sqrt(num / den);
+}
+} // namespace
+
+int
+bmrLinearElasticModelTest(int, char *[])
+{
+  using bmr::test::ExpectException;
+  bool ok = true;
+
+  // 1. Patch test: u = A x + b on the boundary reproduces it exactly inside (P1 elements contain linear fields).
+  {
+    const bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(6, 2.0);
+    const double               A[3][3] = { { 0.01, -0.02, 0.005 }, { 0.03, 0.0, -0.01 }, { -0.004, 0.02, 0.015 } };
+    const double               b[3] = { 0.5, -0.25, 1.0 };
+    std::vector<std::int32_t>  nodes;
+    std::vector<double>        values, exact(mesh.points.size());
+    for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
+    {
+      const double * x = &mesh.points[3 * n];
+      for (int r = 0; r < 3; ++r)
+      {
+        exact[3 * n + r] = A[r][0] * x[0] + A[r][1] * x[1] + A[r][2] * x[2] + b[r];
+      }
+      const bool boundary = x[0] == 0 || x[1] == 0 || x[2] == 0 || x[0] == 12 || x[1] == 12 || x[2] == 12;
+      if (boundary)
+      {
+        nodes.push_back(static_cast<std::int32_t>(n));
+        values.insert(values.end(), &exact[3 * n], &exact[3 * n + 3]);
+      }
+    }
+    bmr::LinearElasticModel model(mesh, { { 1, { 10.0, 0.3 } } });
+    model.SetDirichletConditions(nodes, values);
+    const std::vector<double> u = model.Solve({});
+    const double              err = RelativeDifference(u, exact);
+    std::cout << "patch test relative error " << err << std::endl;
+    // 1e-10: the linear field is in the element space, so only rounding remains.
+    ok = ok && err <= 1e-10;
+  }
+
+  // 2. Scale invariance: u(10^k E, 10^k F) = u(E, F).
+  {
+    const bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(5, 2.0, 2);
+    std::vector<std::int32_t>  bottom;
+    std::vector<double>        forces(mesh.points.size(), 0.0);
+    for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
+    {
+      if (mesh.points[3 * n + 2] == 0.0)
+      {
+        bottom.push_back(static_cast<std::int32_t>(n));
+      }
+      if (mesh.points[3 * n + 2] == 10.0)
+      {
+        forces[3 * n] = 0.3;
+        forces[3 * n + 2] = -1.0;
+      }
+    }
+    std::vector<double> reference;
+    double              worst = 0.0;
+    for (int k = -6; k <= 6; ++k)
+    {
+      const double            s = std::pow(10.0, k);
+      bmr::LinearElasticModel model(mesh, { { 1, { 10.0 * s, 0.35 } }, { 2, { 50.0 * s, 0.4 } } });
+      model.SetDirichletConditions(bottom, {});
+      std::vector<double> f(forces);
+      for (double & v : f)
+      {
+        v *= s;
+      }
+      const std::vector<double> u = model.Solve(f);
+      if (k == -6)
+      {
+        reference = u;
+      }
+      worst = std::max(worst, RelativeDifference(u, reference));
+      if (k == 0)
+      {
+        // Equilibrium: the reactions balance the applied load (sum of forces = 0).
+        const std::vector<double> r = model.ComputeReactionForces(u, f);
+        double                    sum[3] = { 0, 0, 0 }, applied = 0.0;
+        for (std::size_t i = 0; i < r.size(); ++i)
+        {
+          sum[i % 3] += r[i] + f[i];
+          applied += std::abs(f[i]);
+        }
+        const double imbalance = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]) / applied;
+        std::cout << "force imbalance " << imbalance << std::endl;
+        ok = ok && imbalance < 1e-10; // rounding only
+        // The cached factorisation: a second right-hand side reuses it and doubles u.
+        std::vector<double> f2(f);
+        for (double & v : f2)
+        {
+          v *= 2.0;
+        }
+        const double factoriseBefore = model.GetTimings().factorise;
+        std::vector<double> u2 = model.Solve(f2);
+        for (double & v : u2)
+        {
+          v *= 0.5;
+        }
+        ok = ok && RelativeDifference(u2, u) < 1e-12 && model.GetTimings().factorise == factoriseBefore;
+      }
+    }
+    std::cout << "scale invariance: worst relative difference over k = -6..6: " << worst << std::endl;
+    // 1e-10: exact in exact arithmetic; the factorisation's rounding is scale-free.
+    ok = ok && worst <= 1e-10;
+  }
+
+  // 3. Error paths, each with a message naming the cause.
+  const bmr::TetrahedralMesh cube = bmr::test::StructuredCube(2, 1.0, 2);
+  const std::map<std::int32_t, bmr::MaterialParameters> good{ { 1, { 10, 0.3 } }, { 2, { 20, 0.3 } } };
+  ok &= ExpectException("nu = 0.5", [&] { bmr::LinearElasticModel m(cube, { { 1, { 10, 0.5 } }, { 2, { 20, 0.3 } } }); },
+                        "label 1: Poisson's ratio");
+  ok &= ExpectException("E = 0", [&] { bmr::LinearElasticModel m(cube, { { 1, { 10, 0.3 } }, { 2, { 0, 0.3 } } }); },
+                        "label 2: Young's modulus");
+  ok &= ExpectException("E = NaN", [&] { bmr::LinearElasticModel m(cube, { { 1, { NAN, 0.3 } }, { 2, { 1, 0.3 } } }); },
+                        "label 1: Young's modulus");
+  ok &= ExpectException("missing material", [&] { bmr::LinearElasticModel m(cube, { { 1, { 10, 0.3 } } }); },
+                        "has label 2, which has no material");
+  ok &= ExpectException("no Dirichlet", [&] {
+    bmr::LinearElasticModel m(cube, good);
+    m.Solve({});
+  }, "rigid-body motion");
+  ok &= ExpectException("collinear Dirichlet", [&] {
+    bmr::LinearElasticModel m(cube, good);
+    m.SetDirichletConditions({ 0, 1, 2 }, {}); // three nodes on the x axis
+    m.Solve({});
+  }, "rigid-body motion");
+  {
+    bmr::TetrahedralMesh inverted = cube;
+    std::swap(inverted.tetrahedra[4 * 5], inverted.tetrahedra[4 * 5 + 1]);
+    ok &= ExpectException("inverted element", [&] { bmr::LinearElasticModel m(inverted, good); },
+                          "element 5 (label 1) is inverted");
+    bmr::TetrahedralMesh degenerate = cube;
+    degenerate.tetrahedra[4 * 3 + 1] = degenerate.tetrahedra[4 * 3];
+    ok &= ExpectException("degenerate element", [&] { bmr::LinearElasticModel m(degenerate, good); },
+                          "element 3 (label 1) is degenerate");
+    bmr::TetrahedralMesh orphan = cube;
+    orphan.points.insert(orphan.points.end(), { 50.0, 50.0, 50.0 });
+    ok &= ExpectException("orphan node", [&] { bmr::LinearElasticModel m(orphan, good); }, "belongs to no element");
+    bmr::TetrahedralMesh nanPoint = cube;
+    nanPoint.points[4] = NAN;
+    ok &= ExpectException("NaN coordinate", [&] { bmr::LinearElasticModel m(nanPoint, good); },
+                          "node 1 has a non-finite coordinate");
+  }
+  ok &= ExpectException("bad Dirichlet node", [&] {
+    bmr::LinearElasticModel m(cube, good);
+    m.SetDirichletConditions({ 999 }, {});
+  }, "Dirichlet node index 999");
+  ok &= ExpectException("NaN force", [&] {
+    bmr::LinearElasticModel m(cube, good);
+    m.SetDirichletConditions({ 0, 1, 3, 9 }, {});
+    std::vector<double> f(cube.points.size(), 0.0);
+    f.back() = NAN;
+    m.Solve(f);
+  }, "is not finite");
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
+}

@@ -1,0 +1,404 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrPhantom.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace
+{
+
+constexpr double Pi = 3.14159265358979323846;
+
+/** Counts failures instead of stopping at the first one, so that one run shows
+ * every broken property. */
+class Checker
+{
+public:
+  void
+  Check(bool condition, const std::string & message)
+  {
+    if (!condition)
+    {
+      std::cerr << "FAILED: " << message << std::endl;
+      ++m_Failures;
+    }
+  }
+
+  int
+  GetFailures() const
+  {
+    return m_Failures;
+  }
+
+private:
+  int m_Failures{ 0 };
+};
+
+double
+VoxelVolume(const bmr::GridGeometry & grid)
+{
+  const auto & d = grid.direction;
+  const double det =
+    d[0] * (d[4] * d[8] - d[5] * d[7]) - d[1] * (d[3] * d[8] - d[5] * d[6]) + d[2] * (d[3] * d[7] - d[4] * d[6]);
+  return std::abs(det) * grid.spacing[0] * grid.spacing[1] * grid.spacing[2];
+}
+
+std::size_t
+CountLabel(const bmr::PhantomVolume & volume, std::int32_t label)
+{
+  std::size_t count = 0;
+  for (std::int32_t value : volume.labels)
+  {
+    count += value == label ? 1 : 0;
+  }
+  return count;
+}
+
+/** Offset of the voxel nearest to a physical point, or -1 outside the grid. */
+long long
+NearestOffset(const bmr::GridGeometry & grid, const std::array<double, 3> & point)
+{
+  const std::array<double, 3> index = grid.PointToIndex(point);
+  long long                   rounded[3];
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    rounded[a] = static_cast<long long>(std::lround(index[a]));
+    if (rounded[a] < 0 || rounded[a] >= static_cast<long long>(grid.size[a]))
+    {
+      return -1;
+    }
+  }
+  return rounded[0] +
+         static_cast<long long>(grid.size[0]) * (rounded[1] + static_cast<long long>(grid.size[1]) * rounded[2]);
+}
+
+const double ProstateVolume = 4.0 / 3.0 * Pi * 20.0 * 16.0 * 18.0;
+
+void
+TestDefaultPelvis(Checker & checker)
+{
+  const bmr::PelvisPhantomParameters parameters;
+  const bmr::PhantomVolume           volume = bmr::MakePelvisPhantom(parameters);
+  const bmr::GridGeometry &          grid = volume.grid;
+
+  checker.Check(volume.labels.size() == grid.GetNumberOfVoxels() && volume.ct.size() == grid.GetNumberOfVoxels(),
+                "buffer sizes match the default grid");
+  checker.Check(grid.size[0] == 160 && grid.size[1] == 128 && grid.size[2] == 64, "default grid size 160x128x64");
+  const std::array<double, 3> center = bmr::GridCenter(grid);
+  checker.Check(std::abs(center[0]) < 1e-9 && std::abs(center[1]) < 1e-9 && std::abs(center[2]) < 1e-9,
+                "default grid is centred on the origin");
+
+  for (std::int32_t label = 0; label <= 5; ++label)
+  {
+    checker.Check(CountLabel(volume, label) > 0, "default pelvis contains label " + std::to_string(label));
+  }
+
+  // Tolerance 5 %: the 1.25 x 1.25 x 2.5 mm voxelisation of a 40 x 32 x 36 mm
+  // ellipsoid has a boundary error of a few tenths of a percent; 5 % catches a
+  // wrong size or a missing organ while leaving room for label-priority changes.
+  const double prostateVolume = CountLabel(volume, bmr::PelvisProstate) * VoxelVolume(grid);
+  std::cout << "default pelvis prostate volume " << prostateVolume << " mm^3 (analytic " << ProstateVolume << ")"
+            << std::endl;
+  checker.Check(std::abs(prostateVolume - ProstateVolume) <= 0.05 * ProstateVolume,
+                "default prostate volume within 5 % of the ellipsoid volume");
+
+  checker.Check(volume.seeds.size() == parameters.numberOfSeeds, "the requested number of seeds was placed");
+  for (std::size_t s = 0; s < volume.seeds.size(); ++s)
+  {
+    const bmr::Seed & seed = volume.seeds[s];
+    const long long   offset = NearestOffset(grid, seed.center);
+    checker.Check(offset >= 0, "seed centre inside the grid");
+    if (offset < 0)
+    {
+      continue;
+    }
+    checker.Check(volume.labels[offset] == bmr::PelvisProstate, "seed centre labelled prostate");
+    // Threshold 1000 HU: by partial volume a 1.5 mm seed gives ~740 HU (axis on
+    // a voxel corner) to ~2200 HU (axis through the voxel centre) in 1.25 mm
+    // voxels; the default seeds give 1100-1400 HU, 45 HU without a seed.
+    const double seedCT = volume.ct[offset];
+    std::cout << "seed " << s << " at (" << seed.center[0] << ", " << seed.center[1] << ", " << seed.center[2]
+              << ") axis (" << seed.axis[0] << ", " << seed.axis[1] << ", " << seed.axis[2] << "): CT " << seedCT
+              << " HU" << std::endl;
+    checker.Check(seedCT > 1000.0, "CT at the seed centre exceeds 1000 HU");
+    // 20 degrees is the documented maximum tilt of the seed axes from +z.
+    checker.Check(seed.axis[2] >= std::cos(20.0 * Pi / 180.0) - 1e-12, "seed axis within 20 degrees of z");
+    for (std::size_t t = s + 1; t < volume.seeds.size(); ++t)
+    {
+      const auto & other = volume.seeds[t].center;
+      const double distance = std::sqrt((seed.center[0] - other[0]) * (seed.center[0] - other[0]) +
+                                        (seed.center[1] - other[1]) * (seed.center[1] - other[1]) +
+                                        (seed.center[2] - other[2]) * (seed.center[2] - other[2]));
+      // 6 mm is the placement rule itself; no tolerance.
+      checker.Check(distance >= 6.0, "seed centres at least 6 mm apart");
+    }
+  }
+
+  // Seeds keep >= 2 mm from the prostate surface, so no bright voxel may carry
+  // another label (exact: partial volume only spreads a seed into neighbouring
+  // prostate voxels).
+  std::size_t brightOutside = 0;
+  std::size_t bright = 0;
+  for (std::size_t v = 0; v < volume.ct.size(); ++v)
+  {
+    if (volume.ct[v] > 1000.0f)
+    {
+      ++bright;
+      brightOutside += volume.labels[v] != bmr::PelvisProstate ? 1 : 0;
+    }
+  }
+  checker.Check(bright > 0 && brightOutside == 0, "seed voxels lie inside the prostate label");
+
+  // The anatomy is fixed in physical space: a few known points must carry the
+  // expected labels (exact, they are far from any boundary).
+  const std::pair<std::array<double, 3>, std::int32_t> probes[] = {
+    { { { 0.0, 5.0, -15.0 } }, bmr::PelvisProstate },    { { { 0.0, -5.0, 30.0 } }, bmr::PelvisBladder },
+    { { { 0.0, 38.0, -40.0 } }, bmr::PelvisRectum },     { { { 0.0, -42.0, -20.0 } }, bmr::PelvisBone },
+    { { { 58.0, 10.0, 0.0 } }, bmr::PelvisBone },        { { { -58.0, 10.0, 0.0 } }, bmr::PelvisBone },
+    { { { 0.0, -58.0, 40.0 } }, bmr::PelvisSoftTissue }, { { { 95.0, 0.0, 0.0 } }, bmr::PelvisAir }
+  };
+  for (const auto & probe : probes)
+  {
+    const long long offset = NearestOffset(grid, probe.first);
+    checker.Check(offset >= 0 && volume.labels[offset] == probe.second,
+                  "label at probe point is " + std::to_string(probe.second));
+  }
+}
+
+void
+TestObliquePelvis(Checker & checker)
+{
+  // Direction = Rz(30 deg) Rx(10 deg); the grid centre is moved off the origin
+  // so that the anatomy must follow the centre, not the origin.
+  const double cz = std::cos(30.0 * Pi / 180.0);
+  const double sz = std::sin(30.0 * Pi / 180.0);
+  const double cx = std::cos(10.0 * Pi / 180.0);
+  const double sx = std::sin(10.0 * Pi / 180.0);
+
+  bmr::PelvisPhantomParameters parameters;
+  bmr::GridGeometry &          grid = parameters.grid;
+  grid.size = { { 240, 240, 64 } };
+  grid.spacing = { { 1.0, 1.0, 3.0 } };
+  grid.direction = { { cz, -sz * cx, sz * sx, sz, cz * cx, -cz * sx, 0.0, sx, cx } };
+  const std::array<double, 3> wantedCenter{ { 10.0, -7.0, 4.0 } };
+  grid.origin = { { 0.0, 0.0, 0.0 } };
+  const std::array<double, 3> offCenter = bmr::GridCenter(grid);
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    grid.origin[a] = wantedCenter[a] - offCenter[a];
+  }
+
+  // IndexToPoint / PointToIndex round trip (exact inverse up to rounding).
+  const std::array<double, 3> index{ { 12.25, -3.5, 40.75 } };
+  const std::array<double, 3> back = grid.PointToIndex(grid.IndexToPoint(index));
+  checker.Check(std::abs(back[0] - index[0]) < 1e-9 && std::abs(back[1] - index[1]) < 1e-9 &&
+                  std::abs(back[2] - index[2]) < 1e-9,
+                "PointToIndex inverts IndexToPoint on an oblique grid");
+
+  const bmr::PhantomVolume    volume = bmr::MakePelvisPhantom(parameters);
+  const std::array<double, 3> center = bmr::GridCenter(volume.grid);
+
+  std::size_t           count = 0;
+  std::array<double, 3> sum{ { 0.0, 0.0, 0.0 } };
+  for (std::size_t k = 0; k < grid.size[2]; ++k)
+  {
+    for (std::size_t j = 0; j < grid.size[1]; ++j)
+    {
+      for (std::size_t i = 0; i < grid.size[0]; ++i)
+      {
+        if (volume.labels[i + grid.size[0] * (j + grid.size[1] * k)] != bmr::PelvisProstate)
+        {
+          continue;
+        }
+        const std::array<double, 3> p =
+          grid.IndexToPoint({ { static_cast<double>(i), static_cast<double>(j), static_cast<double>(k) } });
+        for (unsigned int a = 0; a < 3; ++a)
+        {
+          sum[a] += p[a];
+        }
+        ++count;
+      }
+    }
+  }
+  const double prostateVolume = count * VoxelVolume(grid);
+  std::cout << "oblique pelvis prostate volume " << prostateVolume << " mm^3 (analytic " << ProstateVolume << ")"
+            << std::endl;
+  // Tolerance 8 %: 3 mm slices through an 18 mm semi-axis at an oblique angle
+  // give a larger (but still sub-percent in expectation) staircase error; 8 %
+  // still fails for a wrong axis order or a grid-aligned instead of physical anatomy.
+  checker.Check(std::abs(prostateVolume - ProstateVolume) <= 0.08 * ProstateVolume,
+                "oblique prostate volume within 8 % of the ellipsoid volume");
+  if (count > 0)
+  {
+    const std::array<double, 3> expected{ { center[0], center[1] + 5.0, center[2] - 15.0 } };
+    double                      distance2 = 0.0;
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      const double d = sum[a] / count - expected[a];
+      distance2 += d * d;
+    }
+    std::cout << "oblique prostate centroid error " << std::sqrt(distance2) << " mm" << std::endl;
+    // Tolerance 1.5 mm: half the largest spacing; the symmetric ellipsoid's
+    // voxel centroid moves by far less, a mis-oriented anatomy by centimetres.
+    checker.Check(distance2 <= 1.5 * 1.5, "oblique prostate centroid within 1.5 mm of c + (0, 5, -15)");
+  }
+  for (const bmr::Seed & seed : volume.seeds)
+  {
+    const long long offset = NearestOffset(grid, seed.center);
+    checker.Check(offset >= 0 && volume.labels[offset] == bmr::PelvisProstate, "oblique seed centre labelled prostate");
+  }
+}
+
+void
+TestDeterminism(Checker & checker)
+{
+  bmr::PelvisPhantomParameters parameters;
+  parameters.noiseSigmaHU = 12.0;
+  parameters.numberOfSeeds = 5;
+  const bmr::PhantomVolume first = bmr::MakePelvisPhantom(parameters);
+  const bmr::PhantomVolume second = bmr::MakePelvisPhantom(parameters);
+  // Exact equality: the generators are self-contained, nothing may vary.
+  checker.Check(first.labels == second.labels, "two calls give identical labels");
+  checker.Check(first.ct == second.ct, "two calls give identical CT (with noise)");
+  bool sameSeeds = first.seeds.size() == second.seeds.size();
+  for (std::size_t s = 0; sameSeeds && s < first.seeds.size(); ++s)
+  {
+    sameSeeds = first.seeds[s].center == second.seeds[s].center && first.seeds[s].axis == second.seeds[s].axis;
+  }
+  checker.Check(sameSeeds, "two calls give identical seeds");
+
+  parameters.seedPlacementSeed = 2;
+  const bmr::PhantomVolume other = bmr::MakePelvisPhantom(parameters);
+  checker.Check(other.seeds.size() == 5 && other.seeds[0].center != first.seeds[0].center,
+                "another placement seed moves the seeds");
+}
+
+void
+TestSphere(Checker & checker)
+{
+  const bmr::SpherePhantomParameters parameters;
+  const bmr::PhantomVolume           volume = bmr::MakeSpherePhantom(parameters);
+  const double                       inner = CountLabel(volume, bmr::SphereInnerCore) * VoxelVolume(volume.grid);
+  const double                       shell = CountLabel(volume, bmr::SphereOuterShell) * VoxelVolume(volume.grid);
+  const double                       analyticInner = 4.0 / 3.0 * Pi * 30.0 * 30.0 * 30.0;
+  const double                       analyticShell = 4.0 / 3.0 * Pi * (37.5 * 37.5 * 37.5) - analyticInner;
+  std::cout << "sphere core volume " << inner << " mm^3 (analytic " << analyticInner << "), shell " << shell
+            << " mm^3 (analytic " << analyticShell << ")" << std::endl;
+  // Tolerance 3 %: 1 mm voxels on a 30 mm sphere give well under 1 % error.
+  checker.Check(std::abs(inner - analyticInner) <= 0.03 * analyticInner, "sphere core volume within 3 %");
+  // Tolerance 5 % for the thin (7.5 mm) shell, whose relative staircase error is larger.
+  checker.Check(std::abs(shell - analyticShell) <= 0.05 * analyticShell, "sphere shell volume within 5 %");
+  // Centre voxel value exact: 8 voxels around the centre are homogeneous core.
+  const std::size_t centerOffset = 48 + 96 * (48 + 96 * 48);
+  checker.Check(volume.ct[centerOffset] == 60.0f && volume.ct[0] == -1000.0f, "sphere core 60 HU, corner air");
+}
+
+void
+TestNoise(Checker & checker)
+{
+  std::vector<float> values(100000, 0.0f);
+  bmr::AddGaussianNoise(values, 10.0, 42);
+  double sum = 0.0;
+  double sum2 = 0.0;
+  for (float v : values)
+  {
+    sum += v;
+    sum2 += static_cast<double>(v) * v;
+  }
+  const double n = static_cast<double>(values.size());
+  const double mean = sum / n;
+  const double sd = std::sqrt((sum2 - n * mean * mean) / (n - 1.0));
+  std::cout << "noise mean " << mean << ", SD " << sd << std::endl;
+  // Tolerance 2 %: the SD estimate of 1e5 normals has a relative standard error
+  // of 1/sqrt(2n) = 0.22 %, so 2 % is ~9 standard errors.
+  checker.Check(std::abs(sd - 10.0) <= 0.2, "noise SD within 2 % of 10");
+  // Tolerance 0.2: the standard error of the mean is 10/sqrt(1e5) = 0.032, so
+  // 0.2 is ~6 standard errors.
+  checker.Check(std::abs(mean) < 0.2, "noise mean below 0.2");
+
+  std::vector<float> again(100000, 0.0f);
+  bmr::AddGaussianNoise(again, 10.0, 42);
+  checker.Check(again == values, "same noise seed gives the same values");
+  std::vector<float> different(100000, 0.0f);
+  bmr::AddGaussianNoise(different, 10.0, 43);
+  checker.Check(different != values, "another noise seed gives other values");
+}
+
+void
+TestErrors(Checker & checker)
+{
+  const auto throws = [](const bmr::PelvisPhantomParameters & parameters) {
+    try
+    {
+      bmr::MakePelvisPhantom(parameters);
+    }
+    catch (const std::exception &)
+    {
+      return true;
+    }
+    return false;
+  };
+  bmr::PelvisPhantomParameters parameters;
+  parameters.grid.spacing[1] = 0.0;
+  checker.Check(throws(parameters), "zero spacing is refused");
+  parameters = bmr::PelvisPhantomParameters();
+  parameters.grid.direction = { { 1, 0, 0, 1, 0, 0, 0, 0, 1 } };
+  checker.Check(throws(parameters), "singular direction is refused");
+  parameters = bmr::PelvisPhantomParameters();
+  parameters.grid.size = { { 4096, 4096, 4096 } };
+  checker.Check(throws(parameters), "more than 2^31 voxels is refused");
+  parameters = bmr::PelvisPhantomParameters();
+  parameters.numberOfSeeds = 10000;
+  checker.Check(throws(parameters), "an impossible number of seeds is refused");
+}
+
+} // namespace
+
+int
+bmrPhantomTest(int, char *[])
+{
+  Checker checker;
+  try
+  {
+    TestDefaultPelvis(checker);
+    TestObliquePelvis(checker);
+    TestDeterminism(checker);
+    TestSphere(checker);
+    TestNoise(checker);
+    TestErrors(checker);
+  }
+  catch (const std::exception & error)
+  {
+    std::cerr << "Unexpected exception: " << error.what() << std::endl;
+    return EXIT_FAILURE;
+  }
+  if (checker.GetFailures() > 0)
+  {
+    std::cerr << checker.GetFailures() << " check(s) failed" << std::endl;
+    return EXIT_FAILURE;
+  }
+  std::cout << "bmrPhantomTest passed" << std::endl;
+  return EXIT_SUCCESS;
+}

@@ -1,0 +1,104 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// Scene files: a valid scene parses and round-trips; every invalid entry is named in the error.
+#include "bmrScene.h"
+#include "bmrTestUtilities.h"
+
+#include <cstdlib>
+
+namespace
+{
+const char * const ValidScene = R"({
+  "units": {"length": "mm", "modulus": "kPa", "force": "mN"},
+  "labels": [
+    {"name": "air", "value": 0, "role": "outside"},
+    {"name": "soft_tissue", "value": 1, "role": "material", "youngs_modulus_kPa": 10, "poisson_ratio": 0.35},
+    {"name": "prostate", "value": 2, "role": "unknown_material", "youngs_modulus_kPa": 50, "poisson_ratio": 0.4,
+     "bounds_kPa": [30, 300]},
+    {"name": "bladder", "value": 3, "role": "hollow"},
+    {"name": "bone", "value": 5, "role": "fixed"}
+  ],
+  "gauge": "soft_tissue",
+  "force_surfaces": ["bladder"],
+  "objective": [{"label": "prostate", "weight": 2}, {"label": "bladder"}],
+  "loads": [{"surface": "bladder", "type": "radial_displacement", "center_mm": [0, -5, 30], "magnitude_mm": 6}],
+  "region_of_interest": {"margin_mm": 20, "boundary": "free"},
+  "mesh": {"cell_size_mm": 6, "facet_size_mm": 4, "facet_distance_mm": 1, "cell_size_per_label_mm": {"prostate": 3}}
+})";
+
+std::string
+Replace(std::string text, const std::string & from, const std::string & to)
+{
+  const auto pos = text.find(from);
+  if (pos == std::string::npos)
+  {
+    throw std::logic_error("test bug: \"" + from + "\" not in the scene");
+  }
+  return text.replace(pos, from.size(), to);
+}
+} // namespace
+
+int
+bmrSceneTest(int, char *[])
+{
+  using bmr::test::ExpectException;
+  bool             ok = true;
+  const bmr::Scene s = bmr::ParseScene(ValidScene, "valid.json");
+  ok = ok && s.labels.size() == 5 && s.FindLabel("prostate")->role == bmr::LabelRole::UnknownMaterial &&
+       s.FindLabel("prostate")->upperBound == 300 && s.objective[0].weight == 2 && s.objective[1].weight == 1 &&
+       s.mesh.cellSizePerLabel.at(2) == 3 && s.roiMargin == 20 && s.loads[0].magnitude == 6;
+  const std::vector<std::int32_t> excluded = s.ExcludedLabels();
+  ok = ok && excluded == std::vector<std::int32_t>({ 0, 3, 5 });
+  // Round trip through SceneToJson.
+  const bmr::Scene again = bmr::ParseScene(bmr::SceneToJson(s), "roundtrip");
+  ok = ok && bmr::SceneToJson(again) == bmr::SceneToJson(s);
+  std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
+
+  auto parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
+  const std::string v = ValidScene;
+  ok &= ExpectException("nu = 0.5", parse(Replace(v, "\"poisson_ratio\": 0.35", "\"poisson_ratio\": 0.5")),
+                        "labels[soft_tissue].poisson_ratio");
+  ok &= ExpectException("E <= 0", parse(Replace(v, "\"youngs_modulus_kPa\": 10", "\"youngs_modulus_kPa\": 0")),
+                        "labels[soft_tissue].youngs_modulus_kPa");
+  ok &= ExpectException("unknown key", parse(Replace(v, "\"gauge\"", "\"gauge_typo\": 1, \"gauge\"")),
+                        "scene.gauge_typo: unknown key");
+  ok &= ExpectException("wrong type", parse(Replace(v, "\"margin_mm\": 20", "\"margin_mm\": \"20\"")),
+                        "region_of_interest.margin_mm: must be a number");
+  ok &= ExpectException("unknown role", parse(Replace(v, "\"role\": \"hollow\"", "\"role\": \"empty\"")),
+                        "labels[3].role");
+  ok &= ExpectException("undefined objective label", parse(Replace(v, "{\"label\": \"bladder\"}", "{\"label\": \"liver\"}")),
+                        "objective[1].label: \"liver\" is not a label");
+  ok &= ExpectException("loads on a material", parse(Replace(v, "\"surface\": \"bladder\"", "\"surface\": \"prostate\"")),
+                        "loads[0].surface");
+  ok &= ExpectException("bounds", parse(Replace(v, "[30, 300]", "[60, 300]")), "labels[prostate].bounds_kPa");
+  ok &= ExpectException("duplicate value", parse(Replace(v, "\"value\": 5", "\"value\": 3")), "labels[bone].value");
+  ok &= ExpectException("broken JSON", parse("{\"labels\": ["), "bad.json: JSON");
+  ok &= ExpectException("wrong unit", parse(Replace(v, "\"modulus\": \"kPa\"", "\"modulus\": \"Pa\"")), "units.modulus");
+  // Nothing against rigid-body motion: no fixed label, no displacement load, free boundary.
+  ok &= ExpectException(
+    "rigid body",
+    parse(Replace(Replace(v, "\"role\": \"fixed\"", "\"role\": \"hollow\""), "radial_displacement\", \"center_mm\": [0, -5, 30], \"magnitude_mm\": 6", "pressure\", \"pressure_kPa\": 1")),
+    "nothing prevents rigid-body motion");
+  // Against the labels of an image.
+  ok &= ExpectException("label absent from the image", [&] { s.ValidateAgainstLabels({ 0, 1, 3, 5 }, "img.nrrd"); },
+                        "labels[prostate]: label \"prostate\" (value 2) is absent from img.nrrd");
+  ok &= ExpectException("undescribed image label", [&] { s.ValidateAgainstLabels({ 0, 1, 2, 3, 5, 9 }, "img.nrrd"); },
+                        "img.nrrd contains label 9");
+  ok &= ExpectException("missing file", [] { bmr::ReadScene("/nonexistent/scene.json"); }, "cannot open scene file");
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
+}

@@ -1,0 +1,97 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrTestUtilities_h
+#define bmrTestUtilities_h
+
+#include "bmrTetrahedralMesh.h"
+#include "itkMacro.h"
+
+#include <functional>
+#include <iostream>
+#include <string>
+
+namespace bmr
+{
+namespace test
+{
+
+/** Cube [0, n*h]^3 split into n^3 voxels of 6 Kuhn tetrahedra each (a conforming
+ * mesh without CGAL); label 1 for x < n*h/2, \a rightLabel otherwise. */
+inline TetrahedralMesh
+StructuredCube(int n, double h, std::int32_t rightLabel = 1)
+{
+  TetrahedralMesh mesh;
+  auto            id = [n](int i, int j, int k) { return static_cast<std::int32_t>(i + (n + 1) * (j + (n + 1) * k)); };
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+      {
+        mesh.points.insert(mesh.points.end(), { i * h, j * h, k * h });
+      }
+  // The six tetrahedra of a cube along its main diagonal 0-7 (corner c = i + 2j + 4k).
+  const int paths[6][2] = { { 1, 3 }, { 1, 5 }, { 2, 3 }, { 2, 6 }, { 4, 5 }, { 4, 6 } };
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+      {
+        std::int32_t corner[8];
+        for (int c = 0; c < 8; ++c)
+        {
+          corner[c] = id(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+        }
+        for (const auto & p : paths)
+        {
+          std::int32_t t[4] = { corner[0], corner[p[0]], corner[p[1]], corner[7] };
+          mesh.tetrahedra.insert(mesh.tetrahedra.end(), t, t + 4);
+          mesh.labels.push_back(2 * i < n ? 1 : rightLabel);
+          if (TetrahedronVolume(mesh, mesh.labels.size() - 1) < 0)
+          {
+            std::swap(mesh.tetrahedra[mesh.tetrahedra.size() - 1], mesh.tetrahedra[mesh.tetrahedra.size() - 2]);
+          }
+        }
+      }
+  return mesh;
+}
+
+/** Runs \a f and checks that it throws an itk::ExceptionObject whose description contains \a expected. */
+inline bool
+ExpectException(const std::string & name, const std::function<void()> & f, const std::string & expected)
+{
+  try
+  {
+    f();
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    const std::string d = e.GetDescription();
+    if (d.find(expected) == std::string::npos)
+    {
+      std::cerr << "FAIL " << name << ": message \"" << d << "\" does not mention \"" << expected << "\"" << std::endl;
+      return false;
+    }
+    std::cout << "ok " << name << ": " << d << std::endl;
+    return true;
+  }
+  std::cerr << "FAIL " << name << ": no exception" << std::endl;
+  return false;
+}
+
+} // namespace test
+} // namespace bmr
+
+#endif

@@ -1,0 +1,110 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// ImageWarper: a known translation field on a linear ramp is exact; labels stay labels.
+#include "itkImageWarper.h"
+#include "itkImageRegionIteratorWithIndex.h"
+#include "itkTestingMacros.h"
+
+#include <set>
+
+int
+itkImageWarperTest(int, char *[])
+{
+  using ImageType = itk::Image<float, 3>;
+  using LabelType = itk::Image<unsigned char, 3>;
+  using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
+  bool ok = true;
+
+  auto          image = ImageType::New();
+  auto          labels = LabelType::New();
+  itk::Size<3>  size = { { 24, 20, 10 } };
+  const double  spacing[3] = { 1.0, 1.5, 2.0 };
+  for (itk::ImageBase<3> * im : { static_cast<itk::ImageBase<3> *>(image), static_cast<itk::ImageBase<3> *>(labels) })
+  {
+    im->SetRegions(itk::ImageRegion<3>(size));
+    im->SetSpacing(spacing);
+  }
+  image->Allocate();
+  labels->Allocate();
+  for (itk::ImageRegionIteratorWithIndex<ImageType> it(image, image->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it)
+  {
+    ImageType::PointType p;
+    image->TransformIndexToPhysicalPoint(it.GetIndex(), p);
+    it.Set(static_cast<float>(3.0 * p[0] - 2.0 * p[1] + p[2]));
+    labels->SetPixel(it.GetIndex(), static_cast<unsigned char>(p[0] < 8 ? 1 : (p[1] < 12 ? 2 : 7)));
+  }
+  // Field: translation by (2.5, -1.5, 1.0) mm, fixed -> moving.
+  auto field = FieldType::New();
+  field->CopyInformation(image);
+  field->SetRegions(image->GetLargestPossibleRegion());
+  field->Allocate();
+  FieldType::PixelType t;
+  t[0] = 2.5;
+  t[1] = -1.5;
+  t[2] = 1.0;
+  field->FillBuffer(t);
+
+  using WarperType = itk::ImageWarper<ImageType, FieldType>;
+  auto warper = WarperType::New();
+  ITK_EXERCISE_BASIC_OBJECT_METHODS(warper, ImageWarper, ImageToImageFilter);
+  warper->SetInput(image);
+  warper->SetDisplacementField(field);
+  warper->SetDefaultPixelValue(-1000.0f);
+  ITK_TEST_SET_GET_VALUE(WarperType::InterpolationEnum::Linear, warper->GetInterpolation());
+  warper->Update();
+  double      worst = 0.0;
+  std::size_t inside = 0;
+  for (itk::ImageRegionIteratorWithIndex<ImageType> it(warper->GetOutput(), image->GetLargestPossibleRegion());
+       !it.IsAtEnd();
+       ++it)
+  {
+    ImageType::PointType p;
+    image->TransformIndexToPhysicalPoint(it.GetIndex(), p);
+    const double q[3] = { p[0] + 2.5, p[1] - 1.5, p[2] + 1.0 };
+    if (q[0] >= 0 && q[0] <= 23 && q[1] >= 0 && q[1] <= 28.5 && q[2] >= 0 && q[2] <= 18)
+    {
+      ++inside;
+      worst = std::max(worst, std::abs(it.Get() - (3.0 * q[0] - 2.0 * q[1] + q[2])));
+    }
+  }
+  std::cout << "linear ramp through a translation: max error " << worst << " over " << inside << " voxels" << std::endl;
+  // 1e-3: linear interpolation of a linear function is exact; float pixels round at ~1e-5 relative.
+  ok = ok && inside > 1000 && worst < 1e-3;
+
+  // Labels: nearest neighbour and label-Gaussian both return only input labels.
+  for (auto mode : { itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::NearestNeighbor,
+                     itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::LabelGaussian })
+  {
+    auto lw = itk::ImageWarper<LabelType, FieldType>::New();
+    lw->SetInput(labels);
+    lw->SetDisplacementField(field);
+    lw->SetInterpolation(mode);
+    lw->Update();
+    std::set<int> seen;
+    for (itk::ImageRegionIteratorWithIndex<LabelType> it(lw->GetOutput(), labels->GetLargestPossibleRegion());
+         !it.IsAtEnd();
+         ++it)
+    {
+      seen.insert(it.Get());
+    }
+    const bool preserved = seen == std::set<int>({ 0, 1, 2, 7 });
+    std::cout << "label interpolation " << static_cast<int>(mode) << " preserves labels: " << preserved << std::endl;
+    ok = ok && preserved;
+  }
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
+}
