@@ -334,10 +334,10 @@ PelvisScene(double prostateE, bool unknown)
   s.forceSurfaces = { "bladder", "rectum" };
   s.objective = { { "prostate", 1.0 }, { "bladder", 1.0 }, { "rectum", 1.0 } };
   s.roiMargin = 25.0;
-  s.mesh.cellSize = 6.0;
-  s.mesh.facetSize = 4.0;
-  s.mesh.facetDistance = 1.0;
-  s.mesh.cellSizePerLabel[bmr::PelvisProstate] = 4.0;
+  s.mesh.cellSize = 8.0;
+  s.mesh.facetSize = 6.0;
+  s.mesh.facetDistance = 1.5;
+  s.mesh.cellSizePerLabel[bmr::PelvisProstate] = 5.0;
   return s;
 }
 
@@ -482,11 +482,11 @@ struct PhantomOptions
   std::string           out;
   bmr::GridGeometry     grid;
   double                prostateE{ 50.0 };
-  double                bladderMM{ 6.0 };
-  double                rectumMM{ 4.0 };
+  double                bladderMM{ 4.0 };
+  double                rectumMM{ 3.0 };
   double                noiseHU{ 10.0 };
   std::uint64_t         seed{ 1 };
-  double                truthRefinement{ 0.6 };
+  double                truthRefinement{ 0.75 };
 };
 
 std::string
@@ -694,8 +694,8 @@ PhantomCommand(const Arguments & args)
   o.grid = GridFromArguments(args, o.scene == "pelvis" ? bmr::PelvisPhantomParameters().grid
                                                        : bmr::SpherePhantomParameters().grid);
   o.prostateE = args.Number("--true-E-kPa", 50.0);
-  o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 6.0 : 1.5);
-  o.rectumMM = args.Number("--rectum-mm", 4.0);
+  o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
+  o.rectumMM = args.Number("--rectum-mm", 3.0);
   o.noiseHU = args.Number("--noise-HU", 10.0);
   const double seed = args.Number("--seed", 1.0);
   if (!(seed >= 0.0 && seed == std::floor(seed)))
@@ -741,14 +741,22 @@ SimulateCommand(const Arguments & args)
   timer.End();
   MakeDirectory(out);
   SimulationOutputs sim = RunSimulation(labels, scene, reference, timer);
-  timer.Begin("warp and write outputs");
+  timer.Begin("warp (CT linear, labels nearest)");
+  auto warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
+  CTImageType::Pointer warpedCT;
+  if (ct)
+  {
+    warpedCT = Warp<CTImageType>(ct, sim.pullBack, false, -1000.0f);
+  }
+  timer.End();
+  timer.Begin("write outputs");
   WriteMesh(out + "/mesh.vtu", sim);
   WriteImage<FieldType>(sim.pullBack, out + "/field.nrrd");
   WriteImage<FieldType>(sim.push, out + "/forward_field.nrrd");
-  WriteImage<LabelImageType>(Warp<LabelImageType>(labels, sim.pullBack, true, 0), out + "/warped_labels.nrrd");
+  WriteImage<LabelImageType>(warpedLabels, out + "/warped_labels.nrrd");
   if (ct)
   {
-    WriteImage<CTImageType>(Warp<CTImageType>(ct, sim.pullBack, false, -1000.0f), out + "/warped_ct.nrrd");
+    WriteImage<CTImageType>(warpedCT, out + "/warped_ct.nrrd");
   }
   timer.End();
   PrintTimings(timer);
@@ -767,7 +775,7 @@ DemoCommand()
   PhantomOptions o;
   o.out = dir;
   o.grid = bmr::PelvisPhantomParameters().grid;
-  std::cout << "1. phantom pair with known truth (prostate 50 kPa, tissue 10 kPa, bladder +6 mm, rectum +4 mm)\n";
+  std::cout << "1. phantom pair with known truth (prostate 50 kPa, tissue 10 kPa, bladder +4 mm, rectum +3 mm)\n";
   MakePhantom(o, timer);
 
   std::cout << "\n2. forward simulation of the truth scene on the estimation mesh\n";

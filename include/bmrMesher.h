@@ -35,7 +35,8 @@ namespace bmr
  * facetAngle (degrees) is the lower bound of surface triangle angles,
  * cellRadiusEdgeRatio the upper bound of circumradius / shortest edge.
  * cellSizePerLabel overrides cellSize inside given labels. optimize runs CGAL's
- * sliver perturbation and exudation (no time limit, so deterministic).
+ * sliver perturbation, exude additionally its (slower) sliver exudation; both
+ * without time limit, so that the result does not depend on the machine's load.
  * \ingroup BiomechanicalRegistration
  */
 struct BiomechanicalRegistration_EXPORT MeshingParameters
@@ -47,6 +48,7 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
   double                        cellRadiusEdgeRatio{ 3.0 };
   std::map<std::int32_t, double> cellSizePerLabel;
   bool                          optimize{ true };
+  bool                          exude{ false };
   unsigned int                  randomSeed{ 0 };
 };
 

@@ -31,8 +31,8 @@ namespace itk
 template <typename TOutputImage>
 PhysicsDeformationFieldSource<TOutputImage>::PhysicsDeformationFieldSource()
 {
-  this->SetNumberOfRequiredInputs(2);
-  this->AddRequiredInputName("Mesh");
+  // The mesh is the primary input (always required); the reference image defines the grid.
+  this->SetPrimaryInputName("Mesh");
   this->AddRequiredInputName("ReferenceImage");
 }
 

@@ -210,7 +210,7 @@ MakeCriteria(const MeshingParameters & parameters)
  * the mesh. Seeding each component makes every label present in the input
  * present in the mesh, deterministically. Returns the number of points. */
 std::size_t
-InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLattice & lattice)
+InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLattice & lattice, double minimumDistance)
 {
   const std::size_t    count = lattice.NumberOfSamples();
   const std::int32_t * labels = lattice.labels;
@@ -254,6 +254,9 @@ InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLatt
   const auto                               weighted = tr.geom_traits().construct_weighted_point_3_object();
   const MeshDomain::Construct_intersection intersect = domain.construct_intersection_object();
   std::size_t                              inserted = 0;
+  // Rays from a sample next to the surface hit it at nearly the same point; vertices closer than a
+  // fraction of the facet size would survive refinement as a cluster of flat elements.
+  std::vector<Kernel::Point_3> placed;
   for (const std::size_t seed : seeds)
   {
     const LatticeIndex origin = lattice.IndexOf(seed);
@@ -270,7 +273,18 @@ InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLatt
       {
         continue; // the domain function disagrees with the lattice here
       }
-      const Vertex_handle vertex = tr.insert(weighted(std::get<0>(hit)));
+      const Kernel::Point_3 point = std::get<0>(hit);
+      bool                  tooClose = false;
+      for (const auto & q : placed)
+      {
+        tooClose = tooClose || CGAL::squared_distance(point, q) < minimumDistance * minimumDistance;
+      }
+      if (tooClose)
+      {
+        continue;
+      }
+      placed.push_back(point);
+      const Vertex_handle vertex = tr.insert(weighted(point));
       if (vertex != Vertex_handle())
       {
         // Same bookkeeping as CGAL's own initialisation: a surface point.
@@ -295,7 +309,7 @@ GenerateMesh(const MeshDomain & domain, const SampleLattice & lattice, const Mes
   const Criteria criteria = MakeCriteria(parameters);
 
   Complex c3t3;
-  InsertComponentSeeds(c3t3, domain, lattice);
+  InsertComponentSeeds(c3t3, domain, lattice, 0.5 * std::min(parameters.facetSize, parameters.cellSize));
   // No fallback to CGAL's random shooting here: it loops forever when the
   // domain function is 0 everywhere, which is what CGAL sees of labels that lie
   // only in the last slice of an image (its interpolation stops there).
@@ -306,13 +320,26 @@ GenerateMesh(const MeshDomain & domain, const SampleLattice & lattice, const Mes
          "too thin, or only in the last slice of the volume)");
   }
 
-  if (parameters.optimize)
+  // Perturbation alone lifts the minimum dihedral angle from ~0.3 to ~12 degrees on the pelvis in ~2 s;
+  // exudation costs 3-4x more and adds little, so it is opt-in.
+  if (parameters.optimize && parameters.exude)
   {
     CGAL::refine_mesh_3(c3t3,
                         domain,
                         criteria,
                         p::perturb(p::time_limit = 0),
                         p::exude(p::time_limit = 0),
+                        p::no_lloyd(),
+                        p::no_odt(),
+                        p::no_reset_c3t3());
+  }
+  else if (parameters.optimize)
+  {
+    CGAL::refine_mesh_3(c3t3,
+                        domain,
+                        criteria,
+                        p::perturb(p::time_limit = 0),
+                        p::no_exude(),
                         p::no_lloyd(),
                         p::no_odt(),
                         p::no_reset_c3t3());

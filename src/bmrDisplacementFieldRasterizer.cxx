@@ -416,6 +416,65 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
       }
     }
   }
+  // The coarse interpolation leaves a mismatch at the mesh boundary, within a few coarse cells of
+  // it. Gauss-Seidel sweeps of the fine-grid Laplacian on the uncovered voxels of that band (in a
+  // fixed order, so deterministic) remove it; the band is found by dilating the covered mask.
+  const double      fw[3] = { 1.0 / (grid.spacing[0] * grid.spacing[0]), 1.0 / (grid.spacing[1] * grid.spacing[1]),
+                         1.0 / (grid.spacing[2] * grid.spacing[2]) };
+  const std::size_t fstride[3] = { 1, n[0], n[0] * n[1] };
+  const std::size_t nvox = grid.GetNumberOfVoxels();
+  std::vector<unsigned char> band(inside, inside + nvox);
+  const unsigned int         width = 2 * static_cast<unsigned int>(c) + 2;
+  for (unsigned int pass = 1; pass <= width; ++pass)
+  {
+    std::vector<unsigned char> grown(band);
+    for (std::size_t off = 0; off < nvox; ++off)
+    {
+      if (band[off])
+      {
+        continue;
+      }
+      const std::size_t f[3] = { off % n[0], (off / n[0]) % n[1], off / (n[0] * n[1]) };
+      for (int d = 0; d < 3 && !grown[off]; ++d)
+      {
+        if ((f[d] > 0 && band[off - fstride[d]]) || (f[d] + 1 < n[d] && band[off + fstride[d]]))
+        {
+          grown[off] = static_cast<unsigned char>(pass + 1);
+        }
+      }
+    }
+    band.swap(grown);
+  }
+  std::vector<std::size_t> bandVoxels;
+  for (std::size_t off = 0; off < nvox; ++off)
+  {
+    const std::size_t f[3] = { off % n[0], (off / n[0]) % n[1], off / (n[0] * n[1]) };
+    const bool border = f[0] == 0 || f[1] == 0 || f[2] == 0 || f[0] + 1 == n[0] || f[1] + 1 == n[1] || f[2] + 1 == n[2];
+    if (band[off] && !inside[off] && !border)
+    {
+      bandVoxels.push_back(off);
+    }
+  }
+  double weight = 0.0;
+  for (int d = 0; d < 3; ++d)
+  {
+    weight += 2.0 * fw[d];
+  }
+  for (unsigned int sweep = 0; sweep < 6 * width; ++sweep)
+  {
+    for (std::size_t off : bandVoxels)
+    {
+      for (int comp = 0; comp < 3; ++comp)
+      {
+        double sum = 0.0;
+        for (int d = 0; d < 3; ++d)
+        {
+          sum += fw[d] * (field[3 * (off - fstride[d]) + comp] + field[3 * (off + fstride[d]) + comp]);
+        }
+        field[3 * off + comp] = sum / weight;
+      }
+    }
+  }
 }
 
 PointLocator::PointLocator(const std::vector<double> & points, const std::vector<std::int32_t> & tetrahedra)

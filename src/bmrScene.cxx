@@ -579,7 +579,7 @@ ParseScene(const std::string & text, const std::string & source)
     const Json & j = root["mesh"];
     CheckKeys(j,
               { "cell_size_mm", "facet_size_mm", "facet_distance_mm", "facet_angle_deg", "cell_radius_edge_ratio",
-                "cell_size_per_label_mm", "optimize", "random_seed" },
+                "cell_size_per_label_mm", "optimize", "exude", "random_seed" },
               source,
               "mesh");
     MeshingParameters & m = scene.mesh;
@@ -595,6 +595,8 @@ ParseScene(const std::string & text, const std::string & source)
       m.cellRadiusEdgeRatio = GetNumber(j, "cell_radius_edge_ratio", source, "mesh");
     if (j.contains("optimize"))
       m.optimize = GetBool(j, "optimize", source, "mesh");
+    if (j.contains("exude"))
+      m.exude = GetBool(j, "exude", source, "mesh");
     if (j.contains("random_seed"))
     {
       if (!j["random_seed"].is_number_unsigned())
@@ -707,6 +709,7 @@ SceneToJson(const Scene & scene)
                 { "facet_angle_deg", scene.mesh.facetAngle },
                 { "cell_radius_edge_ratio", scene.mesh.cellRadiusEdgeRatio },
                 { "optimize", scene.mesh.optimize },
+                { "exude", scene.mesh.exude },
                 { "random_seed", scene.mesh.randomSeed } };
   if (!scene.mesh.cellSizePerLabel.empty())
   {

@@ -65,7 +65,8 @@ itkImageWarperTest(int, char *[])
   warper->SetInput(image);
   warper->SetDisplacementField(field);
   warper->SetDefaultPixelValue(-1000.0f);
-  ITK_TEST_SET_GET_VALUE(WarperType::InterpolationEnum::Linear, warper->GetInterpolation());
+  // Float images default to linear interpolation, integer (label) images to nearest neighbour.
+  ok = ok && warper->GetInterpolation() == WarperType::InterpolationEnum::Linear;
   warper->Update();
   double      worst = 0.0;
   std::size_t inside = 0;

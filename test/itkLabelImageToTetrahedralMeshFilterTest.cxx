@@ -185,8 +185,11 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
   badSpacing->SetRegions(image->GetLargestPossibleRegion());
   badSpacing->Allocate(true);
   const double zero[3] = { 1.0, 0.0, 1.0 };
-  badSpacing->SetSpacing(zero);
-  bad->SetInput(badSpacing);
-  ok &= bmr::test::ExpectException("zero spacing", [&] { bad->Update(); }, "spacing");
+  // ITK itself refuses a zero spacing when it is set; either way the error names the spacing.
+  ok &= bmr::test::ExpectException("zero spacing", [&] {
+    badSpacing->SetSpacing(zero);
+    bad->SetInput(badSpacing);
+    bad->Update();
+  }, "spacing");
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -53,11 +53,11 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   // Cube [0, 20]^3 mm, with a grid that extends beyond it (so the fill is exercised).
   bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(10, 2.0);
   auto                 reference = itk::Image<float, 3>::New();
-  itk::Size<3>         size = { { 30, 30, 18 } };
+  itk::Size<3>         size = { { 50, 50, 32 } };
   reference->SetRegions(itk::ImageRegion<3>(size));
   const double spacing[3] = { 1.0, 1.0, 1.5 };
   reference->SetSpacing(spacing);
-  const double origin[3] = { -4.7, -4.2, -3.9 };
+  const double origin[3] = { -14.7, -14.2, -13.9 };
   reference->SetOrigin(origin);
   auto sourceObject = SourceType::New();
   ITK_EXERCISE_BASIC_OBJECT_METHODS(sourceObject, PhysicsDeformationFieldSource, ImageSource);
@@ -117,6 +117,12 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   auto pull1 = Run(meshObject, reference, true, 1);
   auto pull2 = Run(meshObject, reference, true, 2);
   const bmr::PointLocator locator(mesh.points, mesh.tetrahedra);
+  std::vector<double>     deformedPoints(mesh.points);
+  for (std::size_t i = 0; i < deformedPoints.size(); ++i)
+  {
+    deformedPoints[i] += mesh.displacement[i];
+  }
+  const bmr::PointLocator deformedLocator(deformedPoints, mesh.tetrahedra);
   double      roundTrip = 0.0;
   std::size_t checked = 0, differing = 0;
   bool        finite = true;
@@ -130,14 +136,12 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
     const std::array<double, 3> q{ { x[0] + d[0], x[1] + d[1], x[2] + d[2] } };
     std::array<double, 3>       u;
     // Only voxels the deformed mesh covers have an exact pull-back; the fill elsewhere is not an inverse.
-    if (bmr::InterpolateDisplacement(locator, mesh, mesh.displacement, q, u))
+    std::array<double, 4> bary;
+    if (deformedLocator.Locate({ { x[0], x[1], x[2] } }, bary) >= 0 &&
+        bmr::InterpolateDisplacement(locator, mesh, mesh.displacement, q, u))
     {
-      const double e = std::hypot(q[0] + u[0] - x[0], q[1] + u[1] - x[1], q[2] + u[2] - x[2]);
-      if (e < 0.5) // voxels in the fill region map near the mesh by chance; the inverse is checked inside only
-      {
-        roundTrip = std::max(roundTrip, e);
-        ++checked;
-      }
+      roundTrip = std::max(roundTrip, std::hypot(q[0] + u[0] - x[0], q[1] + u[1] - x[1], q[2] + u[2] - x[2]));
+      ++checked;
     }
   }
   std::cout << "push o pull-back: max |x - phi(phi^-1(x))| = " << roundTrip << " mm over " << checked
@@ -145,24 +149,33 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   // 1e-6 mm: exact inverse of the piecewise-linear map up to rounding.
   ok = ok && checked > 5000 && roundTrip < 1e-6 && differing == 0 && finite;
 
-  // 3. The fill: zero on the grid border, bounded by the mesh values (maximum principle), continuous.
-  double border = 0.0, jump = 0.0;
-  for (itk::ImageRegionConstIteratorWithIndex<FieldType> it(pull1, pull1->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it)
-  {
-    const auto idx = it.GetIndex();
-    if (idx[0] == 0 || idx[1] == 0 || idx[2] == 0)
-      border = std::max(border, it.Get().GetNorm());
-    if (idx[0] + 1 < static_cast<long>(size[0]))
+  // 3. The fill: zero on the grid border and continuous at the mesh boundary. The largest jump between
+  // x-neighbours is compared with the same field without fill, whose step at the mesh boundary is the
+  // field itself (|d| up to ~2 mm); a continuous fill leaves only the steep but smooth harmonic decay
+  // near the cube's corners (measured 0.48, 0.25, 0.16 mm in consecutive voxels there).
+  auto maxJump = [&size](const FieldType * f, double & border) {
+    double jump = 0.0;
+    border = 0.0;
+    for (itk::ImageRegionConstIteratorWithIndex<FieldType> it(f, f->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it)
     {
-      auto next = idx;
-      ++next[0];
-      jump = std::max(jump, (pull1->GetPixel(next) - it.Get()).GetNorm());
+      const auto idx = it.GetIndex();
+      if (idx[0] == 0 || idx[1] == 0 || idx[2] == 0)
+        border = std::max(border, it.Get().GetNorm());
+      if (idx[0] + 1 < static_cast<long>(size[0]))
+      {
+        auto next = idx;
+        ++next[0];
+        jump = std::max(jump, (f->GetPixel(next) - it.Get()).GetNorm());
+      }
     }
-  }
-  std::cout << "fill: max |d| on the border " << border << " mm, largest jump between x-neighbours " << jump << " mm"
-            << std::endl;
-  // The field varies by at most ~0.3 mm per 1 mm voxel inside the mesh; the fill must not add jumps much larger.
-  ok = ok && border < 1e-12 && jump < 0.8;
+    return jump;
+  };
+  double       border = 0.0, unusedBorder = 0.0;
+  const double jumpFilled = maxJump(pull1, border);
+  const double jumpUnfilled = maxJump(Run(meshObject, reference, true, 2, false), unusedBorder);
+  std::cout << "fill: max |d| on the border " << border << " mm; largest jump between x-neighbours " << jumpFilled
+            << " mm with the fill, " << jumpUnfilled << " mm without" << std::endl;
+  ok = ok && border < 1e-12 && jumpUnfilled > 1.5 && jumpFilled < 0.35 * jumpUnfilled;
 
   // 4. Errors: a mesh without displacement.
   bmr::TetrahedralMesh bare = bmr::test::StructuredCube(2, 1.0);
