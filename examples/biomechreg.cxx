@@ -46,8 +46,7 @@
 #include <sstream>
 #include <sys/stat.h>
 
-namespace
-{
+namespace {
 using CTImageType = itk::Image<float, 3>;
 using LabelImageType = itk::Image<std::int32_t, 3>;
 using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
@@ -109,12 +108,35 @@ MakeDirectory(const std::string & path)
   }
 }
 
+/** Captures what a library prints on std::cerr while it lives (restores it after). Some image IOs
+ * (MetaIO) report a truncated file only there and return a half-read image without throwing. */
+class CerrCapture
+{
+public:
+  CerrCapture()
+    : m_Old(std::cerr.rdbuf(m_Text.rdbuf()))
+  {}
+  ~CerrCapture() { std::cerr.rdbuf(m_Old); }
+  std::string
+  FirstLine() const
+  {
+    std::string t = m_Text.str();
+    t.erase(0, std::min(t.size(), t.find_first_not_of(" \n\t")));
+    return t.substr(0, t.find('\n'));
+  }
+
+private:
+  std::ostringstream m_Text;
+  std::streambuf *   m_Old;
+};
+
 /** Reads a 3-D image from any file ITK reads, or a DICOM series directory (GDCM). */
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 ReadImage(const std::string & path, const std::string & what)
 {
   typename TImage::Pointer image;
+  CerrCapture              diagnostics;
   try
   {
     if (IsDirectory(path))
@@ -153,11 +175,15 @@ ReadImage(const std::string & path, const std::string & what)
     const auto  nl = description.find('\n');
     throw std::runtime_error("cannot read " + what + " \"" + path + "\": " + description.substr(0, nl));
   }
+  if (!diagnostics.FirstLine().empty())
+  {
+    throw std::runtime_error("cannot read " + what + " \"" + path + "\": " + diagnostics.FirstLine());
+  }
   itk::GridGeometryOf(image).Validate((what + " \"" + path + "\"").c_str());
   return image;
 }
 
-template <typename TImage>
+template<typename TImage>
 void
 WriteImage(const TImage * image, const std::string & path)
 {
@@ -178,14 +204,14 @@ WriteImage(const TImage * image, const std::string & path)
   bmr::CommitTemporaryFile(tmp, path);
 }
 
-template <typename TImage, typename TValue>
+template<typename TImage, typename TValue>
 typename TImage::Pointer
 ImageFromBuffer(const bmr::GridGeometry & grid, const std::vector<TValue> & values)
 {
-  auto                        image = TImage::New();
-  typename TImage::RegionType region;
-  typename TImage::SpacingType spacing;
-  typename TImage::PointType   origin;
+  auto                           image = TImage::New();
+  typename TImage::RegionType    region;
+  typename TImage::SpacingType   spacing;
+  typename TImage::PointType     origin;
   typename TImage::DirectionType direction;
   for (unsigned int i = 0; i < 3; ++i)
   {
@@ -318,7 +344,9 @@ PelvisScene(double prostateE, bool unknown)
   using R = bmr::LabelRole;
   bmr::SceneLabel air{ "air", bmr::PelvisAir, R::Outside };
   bmr::SceneLabel tissue{ "soft_tissue", bmr::PelvisSoftTissue, R::Material, 10.0, 0.35 };
-  bmr::SceneLabel prostate{ "prostate", bmr::PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, 0.40 };
+  bmr::SceneLabel prostate{
+    "prostate", bmr::PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, 0.40
+  };
   if (unknown)
   {
     prostate.lowerBound = 30.0;
@@ -353,7 +381,9 @@ SpheresScene(double innerE, bool unknown)
     inner.lowerBound = 30.0;
     inner.upperBound = 300.0;
   }
-  s.labels = { { "outside", bmr::SphereOutside, R::Outside }, { "outer", bmr::SphereOuterShell, R::Material, 10.0, 0.35 }, inner };
+  s.labels = { { "outside", bmr::SphereOutside, R::Outside },
+               { "outer", bmr::SphereOuterShell, R::Material, 10.0, 0.35 },
+               inner };
   s.gauge = "outer";
   s.forceSurfaces = { "outside" };
   s.objective = { { "inner", 1.0 }, { "outer", 1.0 } };
@@ -375,7 +405,7 @@ struct SimulationOutputs
 
 /** Mesh -> FEM -> fields, timing each stage. */
 SimulationOutputs
-RunSimulation(const LabelImageType *   movingLabels,
+RunSimulation(const LabelImageType *    movingLabels,
               const bmr::Scene &        scene,
               const itk::ImageBase<3> * fixedReference,
               StageTimer &              timer)
@@ -400,8 +430,9 @@ RunSimulation(const LabelImageType *   movingLabels,
   double umax = 0.0;
   for (std::size_t n = 0; n < out.mesh.GetNumberOfPoints(); ++n)
   {
-    umax = std::max(umax, std::hypot(out.mesh.displacement[3 * n], out.mesh.displacement[3 * n + 1],
-                                     out.mesh.displacement[3 * n + 2]));
+    umax = std::max(
+      umax,
+      std::hypot(out.mesh.displacement[3 * n], out.mesh.displacement[3 * n + 1], out.mesh.displacement[3 * n + 2]));
   }
   std::ostringstream fem;
   fem << "max |u| " << std::setprecision(2) << umax << " mm";
@@ -437,16 +468,17 @@ WriteMesh(const std::string & path, const SimulationOutputs & s)
 {
   std::vector<double> dirichlet(s.simulation.dirichlet.begin(), s.simulation.dirichlet.end());
   std::vector<double> labels(s.mesh.labels.begin(), s.mesh.labels.end());
-  bmr::WriteVtu(path,
-                s.mesh,
-                { { "displacement", 3, s.mesh.displacement }, { "force", 3, s.mesh.force }, { "dirichlet", 1, dirichlet } },
-                { { "label", 1, labels },
-                  { "youngs_modulus", 1, s.simulation.youngsModulus },
-                  { "poisson_ratio", 1, s.simulation.poissonRatio },
-                  { "von_mises", 1, s.simulation.vonMises } });
+  bmr::WriteVtu(
+    path,
+    s.mesh,
+    { { "displacement", 3, s.mesh.displacement }, { "force", 3, s.mesh.force }, { "dirichlet", 1, dirichlet } },
+    { { "label", 1, labels },
+      { "youngs_modulus", 1, s.simulation.youngsModulus },
+      { "poisson_ratio", 1, s.simulation.poissonRatio },
+      { "von_mises", 1, s.simulation.vonMises } });
 }
 
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 Warp(const TImage * image, const FieldType * field, bool labels, typename TImage::PixelType outside)
 {
@@ -478,15 +510,15 @@ PrintTimings(const StageTimer & timer)
 
 struct PhantomOptions
 {
-  std::string           scene{ "pelvis" };
-  std::string           out;
-  bmr::GridGeometry     grid;
-  double                prostateE{ 50.0 };
-  double                bladderMM{ 4.0 };
-  double                rectumMM{ 3.0 };
-  double                noiseHU{ 10.0 };
-  std::uint64_t         seed{ 1 };
-  double                truthRefinement{ 0.75 };
+  std::string       scene{ "pelvis" };
+  std::string       out;
+  bmr::GridGeometry grid;
+  double            prostateE{ 50.0 };
+  double            bladderMM{ 4.0 };
+  double            rectumMM{ 3.0 };
+  double            noiseHU{ 10.0 };
+  std::uint64_t     seed{ 1 };
+  double            truthRefinement{ 0.75 };
 };
 
 std::string
@@ -503,7 +535,7 @@ void
 MakePhantom(const PhantomOptions & o, StageTimer & timer)
 {
   MakeDirectory(o.out);
-  const bool      pelvis = o.scene == "pelvis";
+  const bool         pelvis = o.scene == "pelvis";
   bmr::PhantomVolume moving;
   timer.Begin("phantom volume");
   std::array<double, 3> centre;
@@ -538,10 +570,13 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   truth.mesh.randomSeed = 12345;
   if (pelvis)
   {
-    truth.loads = { { "bladder", bmr::SceneLoad::Type::RadialDisplacement, { { centre[0], centre[1] - 5, centre[2] + 30 } },
-                      o.bladderMM },
-                    { "rectum", bmr::SceneLoad::Type::RadialDisplacement, { { centre[0], centre[1] + 38, centre[2] } },
-                      o.rectumMM } };
+    truth.loads = {
+      { "bladder",
+        bmr::SceneLoad::Type::RadialDisplacement,
+        { { centre[0], centre[1] - 5, centre[2] + 30 } },
+        o.bladderMM },
+      { "rectum", bmr::SceneLoad::Type::RadialDisplacement, { { centre[0], centre[1] + 38, centre[2] } }, o.rectumMM }
+    };
   }
   else
   {
@@ -549,8 +584,8 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   }
   truth.Validate();
 
-  auto movingCT = ImageFromBuffer<CTImageType>(moving.grid, moving.ct);
-  auto movingLabels = ImageFromBuffer<LabelImageType>(moving.grid, moving.labels);
+  auto              movingCT = ImageFromBuffer<CTImageType>(moving.grid, moving.ct);
+  auto              movingLabels = ImageFromBuffer<LabelImageType>(moving.grid, moving.labels);
   SimulationOutputs sim = RunSimulation(movingLabels, truth, movingLabels, timer);
 
   timer.Begin("warp to the fixed volume");
@@ -691,8 +726,8 @@ PhantomCommand(const Arguments & args)
     throw UsageError("--scene must be pelvis or spheres");
   }
   o.out = args.Require("--out");
-  o.grid = GridFromArguments(args, o.scene == "pelvis" ? bmr::PelvisPhantomParameters().grid
-                                                       : bmr::SpherePhantomParameters().grid);
+  o.grid = GridFromArguments(
+    args, o.scene == "pelvis" ? bmr::PelvisPhantomParameters().grid : bmr::SpherePhantomParameters().grid);
   o.prostateE = args.Number("--true-E-kPa", 50.0);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
@@ -726,8 +761,8 @@ SimulateCommand(const Arguments & args)
   StageTimer timer;
   std::cout << "biomechreg simulate -> " << out << std::endl;
   timer.Begin("read inputs");
-  const bmr::Scene scene = bmr::ReadScene(scenePath);
-  auto             labels = ReadImage<LabelImageType>(labelsPath, "moving label image");
+  const bmr::Scene     scene = bmr::ReadScene(scenePath);
+  auto                 labels = ReadImage<LabelImageType>(labelsPath, "moving label image");
   CTImageType::Pointer ct;
   if (!ctPath.empty())
   {
@@ -742,7 +777,7 @@ SimulateCommand(const Arguments & args)
   MakeDirectory(out);
   SimulationOutputs sim = RunSimulation(labels, scene, reference, timer);
   timer.Begin("warp (CT linear, labels nearest)");
-  auto warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
+  auto                 warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
   CTImageType::Pointer warpedCT;
   if (ct)
   {
@@ -782,10 +817,10 @@ DemoCommand()
   bmr::Scene scene = bmr::ReadScene(dir + "/truth_scene.json");
   bmr::Scene coarse = PelvisScene(50.0, false);
   scene.mesh = coarse.mesh; // the estimation mesh sizes, not the truth mesh's
-  auto       labels = ReadImage<LabelImageType>(dir + "/moving_labels.nrrd", "moving label image");
-  auto       ct = ReadImage<CTImageType>(dir + "/moving_ct.nrrd", "moving CT");
-  auto       fixedLabels = ReadImage<LabelImageType>(dir + "/fixed_labels.nrrd", "fixed label image");
-  StageTimer run;
+  auto              labels = ReadImage<LabelImageType>(dir + "/moving_labels.nrrd", "moving label image");
+  auto              ct = ReadImage<CTImageType>(dir + "/moving_ct.nrrd", "moving CT");
+  auto              fixedLabels = ReadImage<LabelImageType>(dir + "/fixed_labels.nrrd", "fixed label image");
+  StageTimer        run;
   const std::string out = dir + "/simulate";
   MakeDirectory(out);
   SimulationOutputs sim = RunSimulation(labels, scene, labels, run);
@@ -803,8 +838,8 @@ DemoCommand()
 
   // Agreement of the simulated warp with the truth-mesh warp: Dice per organ.
   std::cout << "\n  Dice of warped moving labels vs fixed labels (coarse estimation mesh vs finer truth mesh):\n";
-  const auto * a = warpedLabels->GetBufferPointer();
-  const auto * b = fixedLabels->GetBufferPointer();
+  const auto *      a = warpedLabels->GetBufferPointer();
+  const auto *      b = fixedLabels->GetBufferPointer();
   const std::size_t n = fixedLabels->GetBufferedRegion().GetNumberOfPixels();
   for (std::int32_t l : { 2, 3, 4 })
   {
@@ -815,7 +850,10 @@ DemoCommand()
       nb += b[i] == l;
       both += a[i] == l && b[i] == l;
     }
-    std::cout << "    " << std::left << std::setw(10) << (l == 2 ? "prostate" : l == 3 ? "bladder" : "rectum")
+    std::cout << "    " << std::left << std::setw(10)
+              << (l == 2   ? "prostate"
+                  : l == 3 ? "bladder"
+                           : "rectum")
               << std::fixed << std::setprecision(4) << 2.0 * both / std::max<std::size_t>(1, na + nb) << "\n";
   }
   std::cout << "\nPhantom generation:";

@@ -22,13 +22,12 @@
 
 #include <string>
 
-namespace bmr
-{
+namespace bmr {
 
 /** A path in the same directory as \a finalPath, hidden and unique to this
  * process, that keeps the file extension (writers choose the format by it). */
 BiomechanicalRegistration_EXPORT std::string
-TemporaryPathFor(const std::string & finalPath);
+                                 TemporaryPathFor(const std::string & finalPath);
 
 /** Renames \a temporaryPath to \a finalPath (atomic on one file system); removes
  * the temporary file and throws itk::ExceptionObject when that fails. */

@@ -21,8 +21,7 @@
 #include "bmrGridGeometry.h"
 #include "bmrTetrahedralMesh.h"
 
-namespace bmr
-{
+namespace bmr {
 
 /** Which map of the finite-element deformation a field represents.
  *
@@ -75,10 +74,10 @@ public:
 private:
   struct Element
   {
-    double                       v0[3];    // first vertex, continuous index
-    double                       inv[9];   // inverse of [v1-v0, v2-v0, v3-v0] (row-major)
-    std::int64_t                 lo[3], hi[3]; // voxel bounding box (inclusive)
-    std::int32_t                 nodes[4];
+    double       v0[3];        // first vertex, continuous index
+    double       inv[9];       // inverse of [v1-v0, v2-v0, v3-v0] (row-major)
+    std::int64_t lo[3], hi[3]; // voxel bounding box (inclusive)
+    std::int32_t nodes[4];
   };
   const TetrahedralMesh &     m_Mesh;
   const std::vector<double> & m_Displacement;
@@ -130,9 +129,9 @@ private:
 /** FE displacement u(X) [mm] at an undeformed point X (PullBack-free helper):
  * returns false when X is outside the mesh. */
 BiomechanicalRegistration_EXPORT bool
-InterpolateDisplacement(const PointLocator &        undeformedLocator,
-                        const TetrahedralMesh &     mesh,
-                        const std::vector<double> & displacement,
+InterpolateDisplacement(const PointLocator &          undeformedLocator,
+                        const TetrahedralMesh &       mesh,
+                        const std::vector<double> &   displacement,
                         const std::array<double, 3> & X,
                         std::array<double, 3> &       u);
 

@@ -22,8 +22,7 @@
 
 #include <string>
 
-namespace bmr
-{
+namespace bmr {
 
 /** Throws an itk::ExceptionObject carrying \a message, with the core function's
  * name as location. Every error of the numerical core goes through here so that

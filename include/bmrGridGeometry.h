@@ -23,8 +23,7 @@
 #include <array>
 #include <cstddef>
 
-namespace bmr
-{
+namespace bmr {
 
 /** \brief Geometry of a 3-D image grid, as ITK defines it.
  *

@@ -23,8 +23,7 @@
 #include <map>
 #include <memory>
 
-namespace bmr
-{
+namespace bmr {
 
 /** Isotropic linear-elastic material: Young's modulus E [kPa] and Poisson's ratio nu. */
 struct BiomechanicalRegistration_EXPORT MaterialParameters

@@ -24,8 +24,7 @@
 #include <functional>
 #include <map>
 
-namespace bmr
-{
+namespace bmr {
 
 /** \brief Sizing and quality criteria for CGAL Mesh_3 (all lengths in mm).
  *
@@ -41,15 +40,15 @@ namespace bmr
  */
 struct BiomechanicalRegistration_EXPORT MeshingParameters
 {
-  double                        cellSize{ 4.0 };
-  double                        facetSize{ 4.0 };
-  double                        facetDistance{ 0.75 };
-  double                        facetAngle{ 25.0 };
-  double                        cellRadiusEdgeRatio{ 3.0 };
+  double                         cellSize{ 4.0 };
+  double                         facetSize{ 4.0 };
+  double                         facetDistance{ 0.75 };
+  double                         facetAngle{ 25.0 };
+  double                         cellRadiusEdgeRatio{ 3.0 };
   std::map<std::int32_t, double> cellSizePerLabel;
-  bool                          optimize{ true };
-  bool                          exude{ false };
-  unsigned int                  randomSeed{ 0 };
+  bool                           optimize{ true };
+  bool                           exude{ false };
+  unsigned int                   randomSeed{ 0 };
 };
 
 /** Meshes every non-zero label of a label volume with CGAL Mesh_3
@@ -70,9 +69,9 @@ MeshLabelVolume(const std::int32_t * labels, const GridGeometry & grid, const Me
  * order of the finite elements. */
 BiomechanicalRegistration_EXPORT TetrahedralMesh
 MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & labelAt,
-                   const std::array<double, 3> &                                center,
-                   double                                                       boundingRadius,
-                   const MeshingParameters &                                    parameters);
+                   const std::array<double, 3> &                               center,
+                   double                                                      boundingRadius,
+                   const MeshingParameters &                                   parameters);
 
 } // namespace bmr
 

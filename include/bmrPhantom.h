@@ -23,8 +23,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace bmr
-{
+namespace bmr {
 
 /** Label values of the pelvis phantom (0 is air, outside the body). */
 enum PelvisLabel : std::int32_t
@@ -79,7 +78,7 @@ struct BiomechanicalRegistration_EXPORT PelvisPhantomParameters
   std::array<double, 3> center{ { 0, 0, 0 } };
   std::uint64_t         seedPlacementSeed{ 1 }; ///< random seed for the implant positions
   unsigned int          numberOfSeeds{ 3 };
-  double                noiseSigmaHU{ 0.0 };    ///< Gaussian noise added to the CT (0: none)
+  double                noiseSigmaHU{ 0.0 }; ///< Gaussian noise added to the CT (0: none)
   std::uint64_t         noiseSeed{ 7 };
 
   PelvisPhantomParameters();
@@ -113,7 +112,7 @@ MakeSpherePhantom(const SpherePhantomParameters & parameters);
 
 /** Physical centre of the grid (centre of the voxel box). */
 BiomechanicalRegistration_EXPORT std::array<double, 3>
-GridCenter(const GridGeometry & grid);
+                                 GridCenter(const GridGeometry & grid);
 
 /** Adds zero-mean Gaussian noise of standard deviation \a sigma to \a values,
  * from a self-contained generator so that the result is the same on every

@@ -24,8 +24,7 @@
 #include <string>
 #include <vector>
 
-namespace bmr
-{
+namespace bmr {
 
 /** What a label of the moving label map is in the simulation. */
 enum class LabelRole
@@ -44,8 +43,8 @@ struct BiomechanicalRegistration_EXPORT SceneLabel
   LabelRole    role{ LabelRole::Material };
   double       youngsModulus{ 0.0 }; ///< kPa (initial value for an unknown material)
   double       poissonRatio{ 0.0 };
-  double       lowerBound{ 0.0 };    ///< kPa, unknown materials only
-  double       upperBound{ 0.0 };    ///< kPa, unknown materials only
+  double       lowerBound{ 0.0 }; ///< kPa, unknown materials only
+  double       upperBound{ 0.0 }; ///< kPa, unknown materials only
 };
 
 struct BiomechanicalRegistration_EXPORT ObjectiveTerm
@@ -123,7 +122,7 @@ ReadScene(const std::string & fileName);
 
 /** Serialises a scene to JSON text (the format ParseScene reads). */
 BiomechanicalRegistration_EXPORT std::string
-SceneToJson(const Scene & scene);
+                                 SceneToJson(const Scene & scene);
 
 BiomechanicalRegistration_EXPORT const char *
 LabelRoleName(LabelRole role);

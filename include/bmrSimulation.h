@@ -21,8 +21,7 @@
 #include "bmrLinearElasticModel.h"
 #include "bmrScene.h"
 
-namespace bmr
-{
+namespace bmr {
 
 /** \brief Builds the FEM mesh a scene needs from a moving label volume.
  *
@@ -39,7 +38,7 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
 
 /** Materials of the simulated labels (E [kPa], nu). */
 BiomechanicalRegistration_EXPORT std::map<std::int32_t, MaterialParameters>
-SceneMaterials(const Scene & scene);
+                                 SceneMaterials(const Scene & scene);
 
 /** Boundary conditions of a forward simulation of a scene on its mesh: u = 0 on
  * the walls of fixed labels (and on the outer boundary when the region of

@@ -33,8 +33,7 @@
  * Units everywhere: millimetres (LPS physical space), kPa, mN (= kPa mm^2).
  * \ingroup BiomechanicalRegistration
  */
-namespace bmr
-{
+namespace bmr {
 
 /** \brief A labelled 4-node tetrahedral mesh in physical LPS millimetres.
  *
@@ -106,17 +105,17 @@ ExtractSubmesh(const TetrahedralMesh & full, const std::vector<std::int32_t> & e
 
 /** Sorted list of the nodes on boundary faces whose beyond-label is \a label. */
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
-NodesOnBoundary(const TetrahedralMesh & mesh, std::int32_t label);
+                                 NodesOnBoundary(const TetrahedralMesh & mesh, std::int32_t label);
 
 /** Sorted list of the nodes on the surface of the region of elements with
  * label \a label: its faces towards other labels and towards the boundary. */
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
-NodesOnLabelSurface(const TetrahedralMesh & mesh, std::int32_t label);
+                                 NodesOnLabelSurface(const TetrahedralMesh & mesh, std::int32_t label);
 
 /** Faces (3 node indices each, oriented out of the region) of the surface of
  * the region with label \a label. */
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
-LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label);
+                                 LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label);
 
 /** Number of connected components (elements sharing a face). \a componentOfNode
  * receives, when not null, the component index of every node. */

@@ -21,8 +21,7 @@
 #include <array>
 #include <cmath>
 
-namespace bmr
-{
+namespace bmr {
 
 /** \brief Closed-form radial displacement of a two-layer elastic sphere under external pressure.
  *

@@ -20,8 +20,7 @@
 
 #include "bmrTetrahedralMesh.h"
 
-namespace bmr
-{
+namespace bmr {
 
 /** A named data array: \c components values per point or per cell. */
 struct BiomechanicalRegistration_EXPORT DataArray

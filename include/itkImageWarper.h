@@ -21,8 +21,7 @@
 #include "itkImageToImageFilter.h"
 #include "itkVector.h"
 
-namespace itk
-{
+namespace itk {
 
 /** \class ImageWarper
  * \brief Warps an image through a displacement field: a composite of
@@ -37,7 +36,7 @@ namespace itk
  * for labels). Units: mm.
  * \ingroup BiomechanicalRegistration
  */
-template <typename TImage, typename TDisplacementField = Image<Vector<double, 3>, 3>>
+template<typename TImage, typename TDisplacementField = Image<Vector<double, 3>, 3>>
 class ITK_TEMPLATE_EXPORT ImageWarper : public ImageToImageFilter<TImage, TImage>
 {
 public:

@@ -28,31 +28,30 @@
 
 #include <type_traits>
 
-namespace itk
-{
+namespace itk {
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 ImageWarper<TImage, TDisplacementField>::ImageWarper()
   : m_Interpolation(std::is_integral<PixelType>::value ? InterpolationEnum::NearestNeighbor : InterpolationEnum::Linear)
 {
   this->AddRequiredInputName("DisplacementField");
 }
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 void
 ImageWarper<TImage, TDisplacementField>::SetDisplacementField(const DisplacementFieldType * field)
 {
   this->SetInput("DisplacementField", const_cast<DisplacementFieldType *>(field));
 }
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 auto
 ImageWarper<TImage, TDisplacementField>::GetDisplacementField() const -> const DisplacementFieldType *
 {
   return itkDynamicCastInDebugMode<const DisplacementFieldType *>(this->ProcessObject::GetInput("DisplacementField"));
 }
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 void
 ImageWarper<TImage, TDisplacementField>::GenerateOutputInformation()
 {
@@ -69,7 +68,7 @@ ImageWarper<TImage, TDisplacementField>::GenerateOutputInformation()
   output->SetDirection(field->GetDirection());
 }
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 void
 ImageWarper<TImage, TDisplacementField>::GenerateInputRequestedRegion()
 {
@@ -84,7 +83,7 @@ ImageWarper<TImage, TDisplacementField>::GenerateInputRequestedRegion()
   }
 }
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 void
 ImageWarper<TImage, TDisplacementField>::GenerateData()
 {
@@ -111,9 +110,8 @@ ImageWarper<TImage, TDisplacementField>::GenerateData()
     case InterpolationEnum::NearestNeighbor:
       resample->SetInterpolator(NearestNeighborInterpolateImageFunction<ImageType, ScalarType>::New());
       break;
-    case InterpolationEnum::LabelGaussian:
-    {
-      auto interpolator = LabelImageGaussianInterpolateImageFunction<ImageType, ScalarType>::New();
+    case InterpolationEnum::LabelGaussian: {
+      auto   interpolator = LabelImageGaussianInterpolateImageFunction<ImageType, ScalarType>::New();
       double sigma[3];
       for (unsigned int i = 0; i < 3; ++i)
       {
@@ -134,14 +132,15 @@ ImageWarper<TImage, TDisplacementField>::GenerateData()
   this->GraftOutput(resample->GetOutput());
 }
 
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 void
 ImageWarper<TImage, TDisplacementField>::PrintSelf(std::ostream & os, Indent indent) const
 {
   Superclass::PrintSelf(os, indent);
   const char * names[] = { "Linear", "NearestNeighbor", "LabelGaussian", "BSpline" };
   os << indent << "Interpolation: " << names[static_cast<int>(m_Interpolation)] << std::endl;
-  os << indent << "DefaultPixelValue: " << static_cast<typename NumericTraits<PixelType>::PrintType>(m_DefaultPixelValue)
+  os << indent
+     << "DefaultPixelValue: " << static_cast<typename NumericTraits<PixelType>::PrintType>(m_DefaultPixelValue)
      << std::endl;
 }
 

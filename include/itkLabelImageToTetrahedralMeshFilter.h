@@ -23,8 +23,7 @@
 #include "itkProcessObject.h"
 #include "itkTetrahedralMeshObject.h"
 
-namespace itk
-{
+namespace itk {
 
 /** \class LabelImageToTetrahedralMeshFilter
  * \brief Meshes a label image into labelled 4-node tetrahedra with CGAL Mesh_3.
@@ -50,7 +49,7 @@ namespace itk
  * Input: a 3-D integer label image. Output: itk::TetrahedralMeshObject.
  * \ingroup BiomechanicalRegistration
  */
-template <typename TInputImage>
+template<typename TInputImage>
 class ITK_TEMPLATE_EXPORT LabelImageToTetrahedralMeshFilter : public ProcessObject
 {
 public:
@@ -119,9 +118,8 @@ protected:
   void
   VerifyPreconditions() ITKv5_CONST override;
   void
-  GenerateInputRequestedRegion() override;
-  DataObjectPointer
-  MakeOutput(DataObjectPointerArraySizeType) override;
+                    GenerateInputRequestedRegion() override;
+  DataObjectPointer MakeOutput(DataObjectPointerArraySizeType) override;
   void
   PrintSelf(std::ostream & os, Indent indent) const override;
 

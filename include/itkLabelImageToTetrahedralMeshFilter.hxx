@@ -24,10 +24,9 @@
 
 #include <limits>
 
-namespace itk
-{
+namespace itk {
 
-template <typename TInputImage>
+template<typename TInputImage>
 LabelImageToTetrahedralMeshFilter<TInputImage>::LabelImageToTetrahedralMeshFilter()
 {
   this->SetNumberOfRequiredInputs(1);
@@ -35,35 +34,35 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::LabelImageToTetrahedralMeshFilte
   this->SetNthOutput(0, this->MakeOutput(0));
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::SetInput(const InputImageType * image)
 {
   this->SetNthInput(0, const_cast<InputImageType *>(image));
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 auto
 LabelImageToTetrahedralMeshFilter<TInputImage>::GetInput() const -> const InputImageType *
 {
   return itkDynamicCastInDebugMode<const InputImageType *>(this->GetPrimaryInput());
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 auto
 LabelImageToTetrahedralMeshFilter<TInputImage>::GetOutput() -> OutputMeshType *
 {
   return itkDynamicCastInDebugMode<OutputMeshType *>(this->GetPrimaryOutput());
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 ProcessObject::DataObjectPointer
 LabelImageToTetrahedralMeshFilter<TInputImage>::MakeOutput(DataObjectPointerArraySizeType)
 {
   return OutputMeshType::New().GetPointer();
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::SetMeshingParameters(const bmr::MeshingParameters & parameters)
 {
@@ -71,7 +70,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::SetMeshingParameters(const bmr::
   this->Modified();
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::SetExcludedLabels(const LabelListType & labels)
 {
@@ -82,7 +81,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::SetExcludedLabels(const LabelLis
   }
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::SetScene(const bmr::Scene & scene)
 {
@@ -92,7 +91,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::SetScene(const bmr::Scene & scen
   this->Modified();
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::ClearScene()
 {
@@ -103,7 +102,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::ClearScene()
   }
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::GenerateInputRequestedRegion()
 {
@@ -115,7 +114,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::GenerateInputRequestedRegion()
   }
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::VerifyPreconditions() ITKv5_CONST
 {
@@ -129,7 +128,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::VerifyPreconditions() ITKv5_CONS
   grid.Validate("input label image");
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::GenerateData()
 {
@@ -163,7 +162,7 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::GenerateData()
   this->UpdateProgress(1.0f);
 }
 
-template <typename TInputImage>
+template<typename TInputImage>
 void
 LabelImageToTetrahedralMeshFilter<TInputImage>::PrintSelf(std::ostream & os, Indent indent) const
 {

@@ -21,8 +21,7 @@
 #include "itkImageSource.h"
 #include "itkTetrahedralMeshObject.h"
 
-namespace itk
-{
+namespace itk {
 
 /** \class PhysicsDeformationFieldSource
  * \brief Turns the nodal displacements of a finite-element simulation into a displacement field image.
@@ -53,7 +52,7 @@ namespace itk
  * Units: mm (LPS). Input: an itk::TetrahedralMeshObject with nodal displacement.
  * \ingroup BiomechanicalRegistration
  */
-template <typename TOutputImage>
+template<typename TOutputImage>
 class ITK_TEMPLATE_EXPORT PhysicsDeformationFieldSource : public ImageSource<TOutputImage>
 {
 public:

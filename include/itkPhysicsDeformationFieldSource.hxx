@@ -25,10 +25,9 @@
 
 #include <numeric>
 
-namespace itk
-{
+namespace itk {
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 PhysicsDeformationFieldSource<TOutputImage>::PhysicsDeformationFieldSource()
 {
   // The mesh is the primary input (always required); the reference image defines the grid.
@@ -36,35 +35,35 @@ PhysicsDeformationFieldSource<TOutputImage>::PhysicsDeformationFieldSource()
   this->AddRequiredInputName("ReferenceImage");
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 void
 PhysicsDeformationFieldSource<TOutputImage>::SetMesh(const MeshObjectType * mesh)
 {
   this->SetInput("Mesh", const_cast<MeshObjectType *>(mesh));
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 auto
 PhysicsDeformationFieldSource<TOutputImage>::GetMesh() const -> const MeshObjectType *
 {
   return itkDynamicCastInDebugMode<const MeshObjectType *>(this->ProcessObject::GetInput("Mesh"));
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 void
 PhysicsDeformationFieldSource<TOutputImage>::SetReferenceImage(const ReferenceImageType * image)
 {
   this->SetInput("ReferenceImage", const_cast<ReferenceImageType *>(image));
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 auto
 PhysicsDeformationFieldSource<TOutputImage>::GetReferenceImage() const -> const ReferenceImageType *
 {
   return itkDynamicCastInDebugMode<const ReferenceImageType *>(this->ProcessObject::GetInput("ReferenceImage"));
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 void
 PhysicsDeformationFieldSource<TOutputImage>::VerifyPreconditions() ITKv5_CONST
 {
@@ -82,7 +81,7 @@ PhysicsDeformationFieldSource<TOutputImage>::VerifyPreconditions() ITKv5_CONST
   GridGeometryOf(this->GetReferenceImage()).Validate("reference image");
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 void
 PhysicsDeformationFieldSource<TOutputImage>::GenerateOutputInformation()
 {
@@ -98,7 +97,7 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateOutputInformation()
   output->SetDirection(reference->GetDirection());
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 void
 PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
 {
@@ -121,8 +120,8 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
   std::vector<double>        field(3 * grid.GetNumberOfVoxels(), 0.0);
   std::vector<unsigned char> inside(grid.GetNumberOfVoxels(), 0);
   // Slabs along the last index: the rasteriser's ownership rule makes the result independent of the split.
-  const auto  largest = output->GetLargestPossibleRegion();
-  const auto  start = largest.GetIndex();
+  const auto          largest = output->GetLargestPossibleRegion();
+  const auto          start = largest.GetIndex();
   MultiThreaderBase * threader = this->GetMultiThreader();
   threader->ParallelizeImageRegion<3>(
     largest,
@@ -160,7 +159,7 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
   this->UpdateProgress(1.0f);
 }
 
-template <typename TOutputImage>
+template<typename TOutputImage>
 void
 PhysicsDeformationFieldSource<TOutputImage>::PrintSelf(std::ostream & os, Indent indent) const
 {

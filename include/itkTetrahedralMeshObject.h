@@ -25,8 +25,7 @@
 
 #include <ostream>
 
-namespace bmr
-{
+namespace bmr {
 /** Summary for PrintSelf: node, element and boundary-face counts. */
 inline std::ostream &
 operator<<(std::ostream & os, const TetrahedralMesh & mesh)
@@ -50,8 +49,7 @@ operator!=(const TetrahedralMesh & a, const TetrahedralMesh & b)
 }
 } // namespace bmr
 
-namespace itk
-{
+namespace itk {
 /** \brief Pipeline data object holding a labelled tetrahedral mesh (bmr::TetrahedralMesh).
  *
  * Coordinates in LPS mm; optional nodal displacement [mm] and force [mN].
@@ -64,8 +62,8 @@ using TetrahedralMeshObject = SimpleDataObjectDecorator<bmr::TetrahedralMesh>;
 inline bmr::GridGeometry
 GridGeometryOf(const ImageBase<3> * image)
 {
-  bmr::GridGeometry g;
-  const auto        region = image->GetLargestPossibleRegion();
+  bmr::GridGeometry                g;
+  const auto                       region = image->GetLargestPossibleRegion();
   typename ImageBase<3>::PointType origin;
   image->TransformIndexToPhysicalPoint(region.GetIndex(), origin);
   for (unsigned int i = 0; i < 3; ++i)

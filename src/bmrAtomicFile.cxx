@@ -25,8 +25,7 @@
 #include <fstream>
 #include <unistd.h>
 
-namespace bmr
-{
+namespace bmr {
 
 std::string
 TemporaryPathFor(const std::string & finalPath)

@@ -53,10 +53,8 @@
 #include <utility>
 #include <vector>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
@@ -302,8 +300,10 @@ InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLatt
  * time of the refinement as their budget, which makes the result depend on
  * machine load. */
 Complex
-GenerateMesh(const MeshDomain & domain, const SampleLattice & lattice, const MeshingParameters & parameters,
-             const char * where)
+GenerateMesh(const MeshDomain &        domain,
+             const SampleLattice &     lattice,
+             const MeshingParameters & parameters,
+             const char *              where)
 {
   namespace p = CGAL::parameters;
   const Criteria criteria = MakeCriteria(parameters);
@@ -357,7 +357,7 @@ GenerateMesh(const MeshDomain & domain, const SampleLattice & lattice, const Mes
  * (deterministic) cell order of the triangulation. Orientation is fixed after
  * the mapping to physical space because a direction matrix with negative
  * determinant mirrors every element. */
-template <typename TMapToPhysical>
+template<typename TMapToPhysical>
 TetrahedralMesh
 ExtractMesh(const Complex & c3t3, const TMapToPhysical & toPhysical, const char * where)
 {
@@ -501,7 +501,9 @@ MeshLabelVolume(const std::int32_t * labels, const GridGeometry & grid, const Me
 
 TetrahedralMesh
 MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & labelAt,
-                   const std::array<double, 3> & center, double boundingRadius, const MeshingParameters & parameters)
+                   const std::array<double, 3> &                               center,
+                   double                                                      boundingRadius,
+                   const MeshingParameters &                                   parameters)
 {
   const char * where = "bmr::MeshImplicitLabels";
   CheckParameters(where, parameters);

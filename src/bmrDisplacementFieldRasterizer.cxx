@@ -23,16 +23,14 @@
 #include <cmath>
 #include <limits>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 /** Inverse of a row-major 3x3 matrix; returns the determinant. */
 double
 Invert3(const double m[9], double inv[9])
 {
-  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
-                     m[2] * (m[3] * m[7] - m[4] * m[6]);
+  const double det =
+    m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
   const double s = 1.0 / det;
   inv[0] = (m[4] * m[8] - m[5] * m[7]) * s;
   inv[1] = (m[2] * m[7] - m[1] * m[8]) * s;
@@ -82,7 +80,8 @@ DisplacementFieldRasterizer::DisplacementFieldRasterizer(const TetrahedralMesh &
       std::array<double, 3> x;
       for (int i = 0; i < 3; ++i)
       {
-        x[i] = mesh.points[3 * el.nodes[a] + i] + (kind == FieldKind::PullBack ? displacement[3 * el.nodes[a] + i] : 0.0);
+        x[i] =
+          mesh.points[3 * el.nodes[a] + i] + (kind == FieldKind::PullBack ? displacement[3 * el.nodes[a] + i] : 0.0);
       }
       const std::array<double, 3> idx = grid.PointToIndex(x);
       std::copy(idx.begin(), idx.end(), v[a]);
@@ -98,7 +97,7 @@ DisplacementFieldRasterizer::DisplacementFieldRasterizer(const TetrahedralMesh &
     const double det = Invert3(m, el.inv);
     // The orientation in index space flips with a left-handed direction matrix; only a sign change
     // relative to the grid's own handedness (or a collapsed element) means inversion.
-    double dir[9];
+    double       dir[9];
     const double gridDet = Invert3(grid.direction.data(), dir);
     if (!(det * gridDet > 0.0) || !std::isfinite(det))
     {
@@ -156,8 +155,8 @@ DisplacementFieldRasterizer::RasterizeRegion(const std::array<std::size_t, 3> & 
       {
         for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
         {
-          const std::size_t off = static_cast<std::size_t>(i) + nx * static_cast<std::size_t>(j) +
-                                  nxy * static_cast<std::size_t>(k);
+          const std::size_t off =
+            static_cast<std::size_t>(i) + nx * static_cast<std::size_t>(j) + nxy * static_cast<std::size_t>(k);
           if (inside[off])
           {
             continue;
@@ -168,8 +167,7 @@ DisplacementFieldRasterizer::RasterizeRegion(const std::array<std::size_t, 3> & 
           b[2] = el.inv[3] * d[0] + el.inv[4] * d[1] + el.inv[5] * d[2];
           b[3] = el.inv[6] * d[0] + el.inv[7] * d[1] + el.inv[8] * d[2];
           b[0] = 1.0 - b[1] - b[2] - b[3];
-          if (b[0] < -InsideTolerance || b[1] < -InsideTolerance || b[2] < -InsideTolerance ||
-              b[3] < -InsideTolerance)
+          if (b[0] < -InsideTolerance || b[1] < -InsideTolerance || b[2] < -InsideTolerance || b[3] < -InsideTolerance)
           {
             continue;
           }
@@ -276,11 +274,12 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
     return;
   }
   // Matrix-free conjugate gradients on the free coarse nodes, one component at a time.
-  const double w[3] = { 1.0 / std::pow(c * grid.spacing[0], 2), 1.0 / std::pow(c * grid.spacing[1], 2),
-                        1.0 / std::pow(c * grid.spacing[2], 2) };
+  const double       w[3] = { 1.0 / std::pow(c * grid.spacing[0], 2),
+                              1.0 / std::pow(c * grid.spacing[1], 2),
+                              1.0 / std::pow(c * grid.spacing[2], 2) };
   const std::int64_t stride[3] = { 1, static_cast<std::int64_t>(m[0]), static_cast<std::int64_t>(m[0] * m[1]) };
   const std::size_t  coord[3] = { 1, m[0], m[0] * m[1] };
-  auto               applyA = [&](const std::vector<double> & x, std::vector<double> & y, const std::vector<double> * bc) {
+  auto applyA = [&](const std::vector<double> & x, std::vector<double> & y, const std::vector<double> * bc) {
     // y = A x on free nodes; A is the negative Laplacian, with fixed neighbours taken from bc (or 0).
     for (std::size_t node = 0; node < M; ++node)
     {
@@ -324,7 +323,7 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
       r[node] = fixed[node] ? 0.0 : -r[node];
     }
     p = r;
-    double       rr = 0.0;
+    double rr = 0.0;
     for (double v : r)
     {
       rr += v * v;
@@ -419,10 +418,11 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
   // The coarse interpolation leaves a mismatch at the mesh boundary, within a few coarse cells of
   // it. Gauss-Seidel sweeps of the fine-grid Laplacian on the uncovered voxels of that band (in a
   // fixed order, so deterministic) remove it; the band is found by dilating the covered mask.
-  const double      fw[3] = { 1.0 / (grid.spacing[0] * grid.spacing[0]), 1.0 / (grid.spacing[1] * grid.spacing[1]),
-                         1.0 / (grid.spacing[2] * grid.spacing[2]) };
-  const std::size_t fstride[3] = { 1, n[0], n[0] * n[1] };
-  const std::size_t nvox = grid.GetNumberOfVoxels();
+  const double               fw[3] = { 1.0 / (grid.spacing[0] * grid.spacing[0]),
+                                       1.0 / (grid.spacing[1] * grid.spacing[1]),
+                                       1.0 / (grid.spacing[2] * grid.spacing[2]) };
+  const std::size_t          fstride[3] = { 1, n[0], n[0] * n[1] };
+  const std::size_t          nvox = grid.GetNumberOfVoxels();
   std::vector<unsigned char> band(inside, inside + nvox);
   const unsigned int         width = 2 * static_cast<unsigned int>(c) + 2;
   for (unsigned int pass = 1; pass <= width; ++pass)

@@ -19,8 +19,7 @@
 
 #include "itkMacro.h"
 
-namespace bmr
-{
+namespace bmr {
 
 void
 Fail(const std::string & where, const std::string & message)

@@ -23,10 +23,8 @@
 #include <sstream>
 #include <string>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 
 /** Row-major 3x3 matrix M = D diag(spacing): column c of D scaled by spacing[c].
  * Kept as one helper so that IndexToPoint and PointToIndex use exactly the same

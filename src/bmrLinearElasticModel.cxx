@@ -31,10 +31,8 @@
 #include <set>
 #include <sstream>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 using Clock = std::chrono::steady_clock;
 double
 Seconds(Clock::time_point start)
@@ -88,24 +86,24 @@ LameParameters(double E, double nu, double & lambda, double & mu)
 
 struct LinearElasticModel::Impl
 {
-  const TetrahedralMesh &                      mesh;
-  std::map<std::int32_t, MaterialParameters>   materials;
-  std::size_t                                  ndof{ 0 };
+  const TetrahedralMesh &                    mesh;
+  std::map<std::int32_t, MaterialParameters> materials;
+  std::size_t                                ndof{ 0 };
   // Lower triangle of the full 3N x 3N stiffness, compressed by column.
-  std::vector<std::int64_t>                    colStart;
-  std::vector<std::int32_t>                    rowIndex;
-  std::map<std::int32_t, std::vector<double>>  unitValues; // Khat_m per label, on the shared pattern
-  std::vector<double>                          values;     // sum_m E_m Khat_m
-  bool                                         valuesCurrent{ false };
-  std::vector<char>                            constrained;
-  std::vector<double>                          prescribed; // 3N
-  std::vector<std::int32_t>                    freeIndex;  // dof -> free index or -1
-  std::size_t                                  nfree{ 0 };
-  Eigen::SparseMatrix<double>                  Kff;
+  std::vector<std::int64_t>                   colStart;
+  std::vector<std::int32_t>                   rowIndex;
+  std::map<std::int32_t, std::vector<double>> unitValues; // Khat_m per label, on the shared pattern
+  std::vector<double>                         values;     // sum_m E_m Khat_m
+  bool                                        valuesCurrent{ false };
+  std::vector<char>                           constrained;
+  std::vector<double>                         prescribed; // 3N
+  std::vector<std::int32_t>                   freeIndex;  // dof -> free index or -1
+  std::size_t                                 nfree{ 0 };
+  Eigen::SparseMatrix<double>                 Kff;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
-  bool                                         analysed{ false };
-  bool                                         factorized{ false };
-  SolverTimings                                timings;
+  bool                                                                   analysed{ false };
+  bool                                                                   factorized{ false };
+  SolverTimings                                                          timings;
 
   explicit Impl(const TetrahedralMesh & m)
     : mesh(m)
@@ -370,8 +368,7 @@ LinearElasticModel::LinearElasticModel(const TetrahedralMesh &                  
     std::ostringstream         msg;
     if (!(std::isfinite(m.youngsModulus) && m.youngsModulus > 0.0))
     {
-      msg << "label " << kv.first << ": Young's modulus must be positive and finite, got " << m.youngsModulus
-          << " kPa";
+      msg << "label " << kv.first << ": Young's modulus must be positive and finite, got " << m.youngsModulus << " kPa";
     }
     else if (!(std::isfinite(m.poissonRatio) && m.poissonRatio > -1.0 && m.poissonRatio < 0.5))
     {

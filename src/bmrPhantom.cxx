@@ -26,10 +26,8 @@
 #include <string>
 #include <utility>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 
 using Vec3 = std::array<double, 3>;
 
@@ -583,7 +581,7 @@ SeedIndexBoxes(const GridGeometry & grid, const std::vector<Seed> & seeds)
  * time, and a voxel whose corners and centre share one class takes that class's
  * HU directly. Convex organs much larger than a voxel cannot hide inside a
  * voxel without reaching a corner; the thin seeds can, hence \a forcedBoxes. */
-template <typename TModel>
+template<typename TModel>
 void
 Rasterize(const GridGeometry &          grid,
           const TModel &                model,

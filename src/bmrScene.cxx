@@ -25,10 +25,8 @@
 #include <fstream>
 #include <sstream>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 using Json = nlohmann::json;
 
 [[noreturn]] void
@@ -38,7 +36,10 @@ SceneError(const std::string & source, const std::string & entry, const std::str
 }
 
 void
-CheckKeys(const Json & object, const std::set<std::string> & allowed, const std::string & source, const std::string & entry)
+CheckKeys(const Json &                  object,
+          const std::set<std::string> & allowed,
+          const std::string &           source,
+          const std::string &           entry)
 {
   if (!object.is_object())
   {
@@ -204,8 +205,8 @@ Scene::OutsideLabels() const
 void
 Scene::Validate() const
 {
-  const std::string src = name.empty() ? std::string("scene") : name;
-  bool              simulated = false, fixedLabel = false;
+  const std::string      src = name.empty() ? std::string("scene") : name;
+  bool                   simulated = false, fixedLabel = false;
   std::set<std::string>  names;
   std::set<std::int32_t> values;
   for (const auto & l : labels)
@@ -236,8 +237,10 @@ Scene::Validate() const
       }
       if (!(l.poissonRatio < 0.5 && l.poissonRatio > -1.0))
       {
-        SceneError(src, entry + ".poisson_ratio",
-                   "must lie in (-1, 0.5) for a compressible linear-elastic solid, got " + std::to_string(l.poissonRatio));
+        SceneError(src,
+                   entry + ".poisson_ratio",
+                   "must lie in (-1, 0.5) for a compressible linear-elastic solid, got " +
+                     std::to_string(l.poissonRatio));
       }
     }
     if (l.role == LabelRole::UnknownMaterial &&
@@ -267,7 +270,8 @@ Scene::Validate() const
     }
     if (l->role != LabelRole::Hollow && l->role != LabelRole::Outside && l->role != LabelRole::Fixed)
     {
-      SceneError(src, entry, "\"" + surface + "\" must be a hollow, fixed or outside label (its wall is a mesh boundary)");
+      SceneError(
+        src, entry, "\"" + surface + "\" must be a hollow, fixed or outside label (its wall is a mesh boundary)");
     }
   };
   for (std::size_t i = 0; i < forceSurfaces.size(); ++i)
@@ -295,11 +299,12 @@ Scene::Validate() const
   }
   if (!fixedLabel && !roiBoundaryFixed && !displacementLoad)
   {
-    SceneError(src, "labels",
+    SceneError(src,
+               "labels",
                "nothing prevents rigid-body motion: give a label the role fixed, set region_of_interest.boundary to "
                "\"fixed\", or prescribe a displacement load");
   }
-  const MeshingParameters & m = mesh;
+  const MeshingParameters &             m = mesh;
   const std::pair<const char *, double> sizes[] = { { "cell_size_mm", m.cellSize },
                                                     { "facet_size_mm", m.facetSize },
                                                     { "facet_distance_mm", m.facetDistance } };
@@ -334,7 +339,8 @@ Scene::ValidateAgainstLabels(const std::set<std::int32_t> & present, const std::
     const SceneLabel * l = FindLabel(labelName);
     if (l && present.count(l->value) == 0)
     {
-      SceneError(src, entry, "label \"" + labelName + "\" (value " + std::to_string(l->value) + ") is absent from " + what);
+      SceneError(
+        src, entry, "label \"" + labelName + "\" (value " + std::to_string(l->value) + ") is absent from " + what);
     }
   };
   for (const auto & l : labels)
@@ -376,8 +382,16 @@ ParseScene(const std::string & text, const std::string & source)
   Scene scene;
   scene.name = source;
   CheckKeys(root,
-            { "name", "units", "labels", "gauge", "force_surfaces", "objective", "loads", "landmarks",
-              "region_of_interest", "mesh" },
+            { "name",
+              "units",
+              "labels",
+              "gauge",
+              "force_surfaces",
+              "objective",
+              "loads",
+              "landmarks",
+              "region_of_interest",
+              "mesh" },
             source,
             "scene");
   if (root.contains("name"))
@@ -388,7 +402,9 @@ ParseScene(const std::string & text, const std::string & source)
   {
     const Json & u = root["units"];
     CheckKeys(u, { "length", "modulus", "force" }, source, "units");
-    const std::pair<const char *, const char *> expected[] = { { "length", "mm" }, { "modulus", "kPa" }, { "force", "mN" } };
+    const std::pair<const char *, const char *> expected[] = { { "length", "mm" },
+                                                               { "modulus", "kPa" },
+                                                               { "force", "mN" } };
     for (const auto & e : expected)
     {
       if (u.contains(e.first) && GetString(u, e.first, source, "units") != e.second)
@@ -578,8 +594,15 @@ ParseScene(const std::string & text, const std::string & source)
   {
     const Json & j = root["mesh"];
     CheckKeys(j,
-              { "cell_size_mm", "facet_size_mm", "facet_distance_mm", "facet_angle_deg", "cell_radius_edge_ratio",
-                "cell_size_per_label_mm", "optimize", "exude", "random_seed" },
+              { "cell_size_mm",
+                "facet_size_mm",
+                "facet_distance_mm",
+                "facet_angle_deg",
+                "cell_radius_edge_ratio",
+                "cell_size_per_label_mm",
+                "optimize",
+                "exude",
+                "random_seed" },
               source,
               "mesh");
     MeshingParameters & m = scene.mesh;

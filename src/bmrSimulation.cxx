@@ -24,8 +24,7 @@
 #include <limits>
 #include <set>
 
-namespace bmr
-{
+namespace bmr {
 
 std::map<std::int32_t, MaterialParameters>
 SceneMaterials(const Scene & scene)
@@ -45,9 +44,9 @@ TetrahedralMesh
 MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
 {
   grid.Validate("moving label image");
-  const std::size_t                n = grid.GetNumberOfVoxels();
+  const std::size_t               n = grid.GetNumberOfVoxels();
   const std::vector<std::int32_t> outside = scene.OutsideLabels();
-  std::set<std::int32_t>           present;
+  std::set<std::int32_t>          present;
   for (std::size_t v = 0; v < n; ++v)
   {
     present.insert(labels[v]);
@@ -58,7 +57,8 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
   std::array<std::size_t, 3> lo{ { 0, 0, 0 } }, hi{ { grid.size[0] - 1, grid.size[1] - 1, grid.size[2] - 1 } };
   if (scene.roiMargin >= 0.0)
   {
-    std::array<std::int64_t, 3> blo{ { std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max(),
+    std::array<std::int64_t, 3> blo{ { std::numeric_limits<std::int64_t>::max(),
+                                       std::numeric_limits<std::int64_t>::max(),
                                        std::numeric_limits<std::int64_t>::max() } };
     std::array<std::int64_t, 3> bhi{ { -1, -1, -1 } };
     for (std::size_t k = 0; k < grid.size[2]; ++k)
@@ -68,7 +68,8 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
           const SceneLabel * l = scene.FindLabelValue(labels[i + grid.size[0] * (j + grid.size[1] * k)]);
           if (l && l->role != LabelRole::Material && l->role != LabelRole::Outside)
           {
-            const std::int64_t idx[3] = { static_cast<std::int64_t>(i), static_cast<std::int64_t>(j),
+            const std::int64_t idx[3] = { static_cast<std::int64_t>(i),
+                                          static_cast<std::int64_t>(j),
                                           static_cast<std::int64_t>(k) };
             for (int d = 0; d < 3; ++d)
             {
@@ -83,7 +84,8 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
       {
         const auto m = static_cast<std::int64_t>(std::ceil(scene.roiMargin / grid.spacing[d]));
         lo[d] = static_cast<std::size_t>(std::max<std::int64_t>(0, blo[d] - m));
-        hi[d] = static_cast<std::size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(grid.size[d]) - 1, bhi[d] + m));
+        hi[d] =
+          static_cast<std::size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(grid.size[d]) - 1, bhi[d] + m));
       }
     }
   }
@@ -92,7 +94,8 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
   {
     roi.size[d] = hi[d] - lo[d] + 1;
   }
-  roi.origin = grid.IndexToPoint({ { static_cast<double>(lo[0]), static_cast<double>(lo[1]), static_cast<double>(lo[2]) } });
+  roi.origin =
+    grid.IndexToPoint({ { static_cast<double>(lo[0]), static_cast<double>(lo[1]), static_cast<double>(lo[2]) } });
   std::vector<std::int32_t> cropped(roi.GetNumberOfVoxels());
   for (std::size_t k = 0; k < roi.size[2]; ++k)
     for (std::size_t j = 0; j < roi.size[1]; ++j)
@@ -107,7 +110,7 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
       }
 
   // Excluded regions only contribute their surface: mesh their interior coarsely.
-  MeshingParameters parameters = scene.mesh;
+  MeshingParameters               parameters = scene.mesh;
   const std::vector<std::int32_t> excluded = scene.ExcludedLabels();
   for (std::int32_t v : excluded)
   {
@@ -130,13 +133,17 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
     const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
     if (simulated && meshed.count(l.value) == 0)
     {
-      Fail("MeshSceneLabels", "label \"" + l.name + "\" is in the image but has no element after meshing (too small "
-                              "for mesh.cell_size_mm / facet_size_mm?)");
+      Fail("MeshSceneLabels",
+           "label \"" + l.name +
+             "\" is in the image but has no element after meshing (too small "
+             "for mesh.cell_size_mm / facet_size_mm?)");
     }
     if ((l.role == LabelRole::Fixed || l.role == LabelRole::Hollow) && walls.count(l.value) == 0)
     {
-      Fail("MeshSceneLabels", "the wall of label \"" + l.name + "\" is missing from the mesh (is it touching the "
-                              "simulated tissue?)");
+      Fail("MeshSceneLabels",
+           "the wall of label \"" + l.name +
+             "\" is missing from the mesh (is it touching the "
+             "simulated tissue?)");
     }
   }
   return mesh;
@@ -157,7 +164,7 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
     {
       for (std::int32_t node : NodesOnBoundary(mesh, label))
       {
-        double       d[3], r = 0.0;
+        double d[3], r = 0.0;
         for (int c = 0; c < 3; ++c)
         {
           d[c] = mesh.points[3 * node + c] - load.center[c];
@@ -189,8 +196,9 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
         const double * x2 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 2]];
         const double   a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
         const double   b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
-        const double   areaNormal[3] = { 0.5 * (a[1] * b[2] - a[2] * b[1]), 0.5 * (a[2] * b[0] - a[0] * b[2]),
-                                       0.5 * (a[0] * b[1] - a[1] * b[0]) };
+        const double   areaNormal[3] = { 0.5 * (a[1] * b[2] - a[2] * b[1]),
+                                         0.5 * (a[2] * b[0] - a[0] * b[2]),
+                                         0.5 * (a[0] * b[1] - a[1] * b[0]) };
         for (int k = 0; k < 3; ++k)
         {
           for (int c = 0; c < 3; ++c)

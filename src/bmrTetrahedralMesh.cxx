@@ -24,10 +24,8 @@
 #include <numeric>
 #include <sstream>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 /** Local node numbers of the four faces of a positively oriented element,
  * ordered so that each face's normal (right-hand rule) points outward. */
 constexpr int FaceNodes[4][3] = { { 1, 2, 3 }, { 0, 3, 2 }, { 0, 1, 3 }, { 0, 2, 1 } };
@@ -66,7 +64,7 @@ FaceNeighbours(const TetrahedralMesh & mesh)
   struct Key
   {
     std::array<std::int32_t, 3> nodes;
-    std::int64_t                 face;
+    std::int64_t                face;
   };
   std::vector<Key> keys(4 * M);
   for (std::size_t e = 0; e < M; ++e)
@@ -128,14 +126,15 @@ ComputeMeshQuality(const TetrahedralMesh & mesh)
   }
   q.minimumDihedralAngleDegrees = 180.0;
   q.minimumRadiusRatio = 1.0;
-  double      sumRatio = 0.0, sumEdge = 0.0;
+  double       sumRatio = 0.0, sumEdge = 0.0;
   const double degrees = 180.0 / 3.14159265358979323846;
   for (std::size_t e = 0; e < M; ++e)
   {
     const std::int32_t * t = &mesh.tetrahedra[4 * e];
-    const double *       x[4] = { &mesh.points[3 * t[0]], &mesh.points[3 * t[1]], &mesh.points[3 * t[2]],
-                            &mesh.points[3 * t[3]] };
-    const double         V = TetrahedronVolume(mesh, e);
+    const double *       x[4] = {
+            &mesh.points[3 * t[0]], &mesh.points[3 * t[1]], &mesh.points[3 * t[2]], &mesh.points[3 * t[3]]
+    };
+    const double V = TetrahedronVolume(mesh, e);
     q.volume += V;
     // Outward face normals (unnormalised: length = 2 area).
     Vec    n[4];
@@ -159,7 +158,8 @@ ComputeMeshQuality(const TetrahedralMesh & mesh)
     const Vec    a = Sub(x[1], x[0]), b = Sub(x[2], x[0]), c = Sub(x[3], x[0]);
     const Vec    bc = Cross(b, c), ca = Cross(c, a), ab = Cross(a, b);
     const double a2 = Dot(a, a), b2 = Dot(b, b), c2 = Dot(c, c);
-    const Vec    w{ a2 * bc.x + b2 * ca.x + c2 * ab.x, a2 * bc.y + b2 * ca.y + c2 * ab.y,
+    const Vec    w{ a2 * bc.x + b2 * ca.x + c2 * ab.x,
+                 a2 * bc.y + b2 * ca.y + c2 * ab.y,
                  a2 * bc.z + b2 * ca.z + c2 * ab.z };
     const double circumradius = Norm(w) / (12.0 * std::abs(V));
     const double inradius = 3.0 * std::abs(V) / area;
@@ -239,7 +239,7 @@ TetrahedralMesh
 ExtractSubmesh(const TetrahedralMesh & full, const std::vector<std::int32_t> & excluded)
 {
   const std::size_t M = full.GetNumberOfTetrahedra();
-  auto isExcluded = [&excluded](std::int32_t label) {
+  auto              isExcluded = [&excluded](std::int32_t label) {
     return std::find(excluded.begin(), excluded.end(), label) != excluded.end();
   };
   const std::vector<std::int64_t> neighbour = FaceNeighbours(full);

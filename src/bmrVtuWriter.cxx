@@ -30,10 +30,8 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
-namespace bmr
-{
-namespace
-{
+namespace bmr {
+namespace {
 void
 AddArrays(const std::vector<DataArray> & arrays, std::size_t count, vtkDataSetAttributes * target, const char * kind)
 {
@@ -71,14 +69,15 @@ WriteVtu(const std::string &            fileName,
   grid->Allocate(static_cast<vtkIdType>(mesh.GetNumberOfTetrahedra()));
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
-    const vtkIdType ids[4] = { mesh.tetrahedra[4 * e], mesh.tetrahedra[4 * e + 1], mesh.tetrahedra[4 * e + 2],
-                               mesh.tetrahedra[4 * e + 3] };
+    const vtkIdType ids[4] = {
+      mesh.tetrahedra[4 * e], mesh.tetrahedra[4 * e + 1], mesh.tetrahedra[4 * e + 2], mesh.tetrahedra[4 * e + 3]
+    };
     grid->InsertNextCell(VTK_TETRA, 4, ids);
   }
   AddArrays(pointData, mesh.GetNumberOfPoints(), grid->GetPointData(), "point");
   AddArrays(cellData, mesh.GetNumberOfTetrahedra(), grid->GetCellData(), "cell");
 
-  const std::string                     tmp = TemporaryPathFor(fileName);
+  const std::string                    tmp = TemporaryPathFor(fileName);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetFileName(tmp.c_str());
   writer->SetInputData(grid);

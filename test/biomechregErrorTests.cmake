@@ -69,7 +69,7 @@ file(WRITE ${TEMP}/absent.json "${bad}")
 expect_error(absent_label "contains label 2, which the scene does not describe" simulate --moving-labels ${labels}
   --scene ${TEMP}/absent.json --out ${TEMP}/s8)
 
-string(REGEX REPLACE "\"loads\": \\[[^]]*\\]" "\"loads\": []" bad "${scene}")
+string(JSON bad REMOVE "${scene}" loads)
 file(WRITE ${TEMP}/rigid.json "${bad}")
 expect_error(rigid_body "rigid-body motion" simulate --moving-labels ${labels} --scene ${TEMP}/rigid.json --out ${TEMP}/s9)
 

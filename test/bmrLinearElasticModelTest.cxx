@@ -23,8 +23,7 @@
 #include <cmath>
 #include <cstdlib>
 
-namespace
-{
+namespace {
 double
 RelativeDifference(const std::vector<double> & a, const std::vector<double> & b)
 {
@@ -128,7 +127,7 @@ bmrLinearElasticModelTest(int, char *[])
         {
           v *= 2.0;
         }
-        const double factoriseBefore = model.GetTimings().factorise;
+        const double        factoriseBefore = model.GetTimings().factorise;
         std::vector<double> u2 = model.Solve(f2);
         for (double & v : u2)
         {
@@ -143,52 +142,81 @@ bmrLinearElasticModelTest(int, char *[])
   }
 
   // 3. Error paths, each with a message naming the cause.
-  const bmr::TetrahedralMesh cube = bmr::test::StructuredCube(2, 1.0, 2);
+  const bmr::TetrahedralMesh                            cube = bmr::test::StructuredCube(2, 1.0, 2);
   const std::map<std::int32_t, bmr::MaterialParameters> good{ { 1, { 10, 0.3 } }, { 2, { 20, 0.3 } } };
-  ok &= ExpectException("nu = 0.5", [&] { bmr::LinearElasticModel m(cube, { { 1, { 10, 0.5 } }, { 2, { 20, 0.3 } } }); },
-                        "label 1: Poisson's ratio");
-  ok &= ExpectException("E = 0", [&] { bmr::LinearElasticModel m(cube, { { 1, { 10, 0.3 } }, { 2, { 0, 0.3 } } }); },
-                        "label 2: Young's modulus");
-  ok &= ExpectException("E = NaN", [&] { bmr::LinearElasticModel m(cube, { { 1, { NAN, 0.3 } }, { 2, { 1, 0.3 } } }); },
-                        "label 1: Young's modulus");
-  ok &= ExpectException("missing material", [&] { bmr::LinearElasticModel m(cube, { { 1, { 10, 0.3 } } }); },
-                        "has label 2, which has no material");
-  ok &= ExpectException("no Dirichlet", [&] {
-    bmr::LinearElasticModel m(cube, good);
-    m.Solve({});
-  }, "rigid-body motion");
-  ok &= ExpectException("collinear Dirichlet", [&] {
-    bmr::LinearElasticModel m(cube, good);
-    m.SetDirichletConditions({ 0, 1, 2 }, {}); // three nodes on the x axis
-    m.Solve({});
-  }, "rigid-body motion");
+  ok &= ExpectException(
+    "nu = 0.5",
+    [&] {
+      bmr::LinearElasticModel m(cube, { { 1, { 10, 0.5 } }, { 2, { 20, 0.3 } } });
+    },
+    "label 1: Poisson's ratio");
+  ok &= ExpectException(
+    "E = 0",
+    [&] {
+      bmr::LinearElasticModel m(cube, { { 1, { 10, 0.3 } }, { 2, { 0, 0.3 } } });
+    },
+    "label 2: Young's modulus");
+  ok &= ExpectException(
+    "E = NaN",
+    [&] {
+      bmr::LinearElasticModel m(cube, { { 1, { NAN, 0.3 } }, { 2, { 1, 0.3 } } });
+    },
+    "label 1: Young's modulus");
+  ok &= ExpectException(
+    "missing material",
+    [&] {
+      bmr::LinearElasticModel m(cube, { { 1, { 10, 0.3 } } });
+    },
+    "has label 2, which has no material");
+  ok &= ExpectException(
+    "no Dirichlet",
+    [&] {
+      bmr::LinearElasticModel m(cube, good);
+      m.Solve({});
+    },
+    "rigid-body motion");
+  ok &= ExpectException(
+    "collinear Dirichlet",
+    [&] {
+      bmr::LinearElasticModel m(cube, good);
+      m.SetDirichletConditions({ 0, 1, 2 }, {}); // three nodes on the x axis
+      m.Solve({});
+    },
+    "rigid-body motion");
   {
     bmr::TetrahedralMesh inverted = cube;
     std::swap(inverted.tetrahedra[4 * 5], inverted.tetrahedra[4 * 5 + 1]);
-    ok &= ExpectException("inverted element", [&] { bmr::LinearElasticModel m(inverted, good); },
-                          "element 5 (label 1) is inverted");
+    ok &= ExpectException(
+      "inverted element", [&] { bmr::LinearElasticModel m(inverted, good); }, "element 5 (label 1) is inverted");
     bmr::TetrahedralMesh degenerate = cube;
     degenerate.tetrahedra[4 * 3 + 1] = degenerate.tetrahedra[4 * 3];
-    ok &= ExpectException("degenerate element", [&] { bmr::LinearElasticModel m(degenerate, good); },
-                          "element 3 (label 1) is degenerate");
+    ok &= ExpectException(
+      "degenerate element", [&] { bmr::LinearElasticModel m(degenerate, good); }, "element 3 (label 1) is degenerate");
     bmr::TetrahedralMesh orphan = cube;
     orphan.points.insert(orphan.points.end(), { 50.0, 50.0, 50.0 });
-    ok &= ExpectException("orphan node", [&] { bmr::LinearElasticModel m(orphan, good); }, "belongs to no element");
+    ok &= ExpectException(
+      "orphan node", [&] { bmr::LinearElasticModel m(orphan, good); }, "belongs to no element");
     bmr::TetrahedralMesh nanPoint = cube;
     nanPoint.points[4] = NAN;
-    ok &= ExpectException("NaN coordinate", [&] { bmr::LinearElasticModel m(nanPoint, good); },
-                          "node 1 has a non-finite coordinate");
+    ok &= ExpectException(
+      "NaN coordinate", [&] { bmr::LinearElasticModel m(nanPoint, good); }, "node 1 has a non-finite coordinate");
   }
-  ok &= ExpectException("bad Dirichlet node", [&] {
-    bmr::LinearElasticModel m(cube, good);
-    m.SetDirichletConditions({ 999 }, {});
-  }, "Dirichlet node index 999");
-  ok &= ExpectException("NaN force", [&] {
-    bmr::LinearElasticModel m(cube, good);
-    m.SetDirichletConditions({ 0, 1, 3, 9 }, {});
-    std::vector<double> f(cube.points.size(), 0.0);
-    f.back() = NAN;
-    m.Solve(f);
-  }, "is not finite");
+  ok &= ExpectException(
+    "bad Dirichlet node",
+    [&] {
+      bmr::LinearElasticModel m(cube, good);
+      m.SetDirichletConditions({ 999 }, {});
+    },
+    "Dirichlet node index 999");
+  ok &= ExpectException(
+    "NaN force",
+    [&] {
+      bmr::LinearElasticModel m(cube, good);
+      m.SetDirichletConditions({ 0, 1, 3, 9 }, {});
+      std::vector<double> f(cube.points.size(), 0.0);
+      f.back() = NAN;
+      m.Solve(f);
+    },
+    "is not finite");
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -26,8 +26,7 @@
 #include <utility>
 #include <vector>
 
-namespace
-{
+namespace {
 
 constexpr double Pi = 3.14159265358979323846;
 

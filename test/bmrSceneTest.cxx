@@ -21,8 +21,7 @@
 
 #include <cstdlib>
 
-namespace
-{
+namespace {
 const char * const ValidScene = R"({
   "units": {"length": "mm", "modulus": "kPa", "force": "mN"},
   "labels": [
@@ -69,36 +68,52 @@ bmrSceneTest(int, char *[])
   ok = ok && bmr::SceneToJson(again) == bmr::SceneToJson(s);
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
 
-  auto parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
+  auto              parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
   const std::string v = ValidScene;
-  ok &= ExpectException("nu = 0.5", parse(Replace(v, "\"poisson_ratio\": 0.35", "\"poisson_ratio\": 0.5")),
+  ok &= ExpectException("nu = 0.5",
+                        parse(Replace(v, "\"poisson_ratio\": 0.35", "\"poisson_ratio\": 0.5")),
                         "labels[soft_tissue].poisson_ratio");
-  ok &= ExpectException("E <= 0", parse(Replace(v, "\"youngs_modulus_kPa\": 10", "\"youngs_modulus_kPa\": 0")),
+  ok &= ExpectException("E <= 0",
+                        parse(Replace(v, "\"youngs_modulus_kPa\": 10", "\"youngs_modulus_kPa\": 0")),
                         "labels[soft_tissue].youngs_modulus_kPa");
-  ok &= ExpectException("unknown key", parse(Replace(v, "\"gauge\"", "\"gauge_typo\": 1, \"gauge\"")),
-                        "scene.gauge_typo: unknown key");
-  ok &= ExpectException("wrong type", parse(Replace(v, "\"margin_mm\": 20", "\"margin_mm\": \"20\"")),
+  ok &= ExpectException(
+    "unknown key", parse(Replace(v, "\"gauge\"", "\"gauge_typo\": 1, \"gauge\"")), "scene.gauge_typo: unknown key");
+  ok &= ExpectException("wrong type",
+                        parse(Replace(v, "\"margin_mm\": 20", "\"margin_mm\": \"20\"")),
                         "region_of_interest.margin_mm: must be a number");
-  ok &= ExpectException("unknown role", parse(Replace(v, "\"role\": \"hollow\"", "\"role\": \"empty\"")),
-                        "labels[3].role");
-  ok &= ExpectException("undefined objective label", parse(Replace(v, "{\"label\": \"bladder\"}", "{\"label\": \"liver\"}")),
+  ok &=
+    ExpectException("unknown role", parse(Replace(v, "\"role\": \"hollow\"", "\"role\": \"empty\"")), "labels[3].role");
+  ok &= ExpectException("undefined objective label",
+                        parse(Replace(v, "{\"label\": \"bladder\"}", "{\"label\": \"liver\"}")),
                         "objective[1].label: \"liver\" is not a label");
-  ok &= ExpectException("loads on a material", parse(Replace(v, "\"surface\": \"bladder\"", "\"surface\": \"prostate\"")),
+  ok &= ExpectException("loads on a material",
+                        parse(Replace(v, "\"surface\": \"bladder\"", "\"surface\": \"prostate\"")),
                         "loads[0].surface");
   ok &= ExpectException("bounds", parse(Replace(v, "[30, 300]", "[60, 300]")), "labels[prostate].bounds_kPa");
   ok &= ExpectException("duplicate value", parse(Replace(v, "\"value\": 5", "\"value\": 3")), "labels[bone].value");
   ok &= ExpectException("broken JSON", parse("{\"labels\": ["), "bad.json: JSON");
-  ok &= ExpectException("wrong unit", parse(Replace(v, "\"modulus\": \"kPa\"", "\"modulus\": \"Pa\"")), "units.modulus");
+  ok &=
+    ExpectException("wrong unit", parse(Replace(v, "\"modulus\": \"kPa\"", "\"modulus\": \"Pa\"")), "units.modulus");
   // Nothing against rigid-body motion: no fixed label, no displacement load, free boundary.
-  ok &= ExpectException(
-    "rigid body",
-    parse(Replace(Replace(v, "\"role\": \"fixed\"", "\"role\": \"hollow\""), "radial_displacement\", \"center_mm\": [0, -5, 30], \"magnitude_mm\": 6", "pressure\", \"pressure_kPa\": 1")),
-    "nothing prevents rigid-body motion");
+  ok &= ExpectException("rigid body",
+                        parse(Replace(Replace(v, "\"role\": \"fixed\"", "\"role\": \"hollow\""),
+                                      "radial_displacement\", \"center_mm\": [0, -5, 30], \"magnitude_mm\": 6",
+                                      "pressure\", \"pressure_kPa\": 1")),
+                        "nothing prevents rigid-body motion");
   // Against the labels of an image.
-  ok &= ExpectException("label absent from the image", [&] { s.ValidateAgainstLabels({ 0, 1, 3, 5 }, "img.nrrd"); },
-                        "labels[prostate]: label \"prostate\" (value 2) is absent from img.nrrd");
-  ok &= ExpectException("undescribed image label", [&] { s.ValidateAgainstLabels({ 0, 1, 2, 3, 5, 9 }, "img.nrrd"); },
-                        "img.nrrd contains label 9");
-  ok &= ExpectException("missing file", [] { bmr::ReadScene("/nonexistent/scene.json"); }, "cannot open scene file");
+  ok &= ExpectException(
+    "label absent from the image",
+    [&] {
+      s.ValidateAgainstLabels({ 0, 1, 3, 5 }, "img.nrrd");
+    },
+    "labels[prostate]: label \"prostate\" (value 2) is absent from img.nrrd");
+  ok &= ExpectException(
+    "undescribed image label",
+    [&] {
+      s.ValidateAgainstLabels({ 0, 1, 2, 3, 5, 9 }, "img.nrrd");
+    },
+    "img.nrrd contains label 9");
+  ok &= ExpectException(
+    "missing file", [] { bmr::ReadScene("/nonexistent/scene.json"); }, "cannot open scene file");
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -25,10 +25,8 @@
 #include <iostream>
 #include <string>
 
-namespace bmr
-{
-namespace test
-{
+namespace bmr {
+namespace test {
 
 /** Cube [0, n*h]^3 split into n^3 voxels of 6 Kuhn tetrahedra each (a conforming
  * mesh without CGAL); label 1 for x < n*h/2, \a rightLabel otherwise. */

@@ -30,18 +30,17 @@
 #include <cmath>
 #include <cstdlib>
 
-namespace
-{
+namespace {
 using CTType = itk::Image<float, 3>;
 using LabelType = itk::Image<std::int32_t, 3>;
 using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
 
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 FromBuffer(const bmr::GridGeometry & g, const std::vector<typename TImage::PixelType> & values)
 {
-  auto                 image = TImage::New();
-  itk::Size<3>         size = { { g.size[0], g.size[1], g.size[2] } };
+  auto         image = TImage::New();
+  itk::Size<3> size = { { g.size[0], g.size[1], g.size[2] } };
   image->SetRegions(itk::ImageRegion<3>(size));
   image->SetSpacing(g.spacing.data());
   image->SetOrigin(g.origin.data());
@@ -50,7 +49,7 @@ FromBuffer(const bmr::GridGeometry & g, const std::vector<typename TImage::Pixel
   return image;
 }
 
-template <typename TImage>
+template<typename TImage>
 void
 Write(const TImage * image, const std::string & path)
 {
@@ -62,10 +61,14 @@ Write(const TImage * image, const std::string & path)
 }
 
 /** Largest absolute difference per scalar component; -1 when the grids differ. */
-template <typename TImage, typename TValue>
+template<typename TImage, typename TValue>
 double
-MaxDifference(const TImage * a, const std::string & baselinePath, TValue (*component)(const typename TImage::PixelType &, unsigned int),
-              unsigned int components, std::size_t & differing, double tolerance)
+MaxDifference(const TImage *      a,
+              const std::string & baselinePath,
+              TValue (*component)(const typename TImage::PixelType &, unsigned int),
+              unsigned int  components,
+              std::size_t & differing,
+              double        tolerance)
 {
   auto reader = itk::ImageFileReader<TImage>::New();
   reader->SetFileName(baselinePath);
@@ -141,7 +144,7 @@ itkBiomechanicalRegressionTest(int argc, char * argv[])
     "loads": [{"surface": "outside", "type": "radial_displacement", "center_mm": [0, 0, 0], "magnitude_mm": -1.5}],
     "mesh": {"cell_size_mm": 5, "facet_size_mm": 4, "facet_distance_mm": 0.8}})",
                                            "regression scene");
-  auto mesher = itk::LabelImageToTetrahedralMeshFilter<LabelType>::New();
+  auto             mesher = itk::LabelImageToTetrahedralMeshFilter<LabelType>::New();
   mesher->SetInput(labels);
   mesher->SetScene(scene);
   mesher->Update();
@@ -193,18 +196,18 @@ itkBiomechanicalRegressionTest(int argc, char * argv[])
   for (const char * name : { "field", "forward_field" })
   {
     const FieldType * f = std::string(name) == "field" ? pull->GetOutput() : push->GetOutput();
-    const double      d = MaxDifference<FieldType, double>(f, baseline + "/spheres_" + name + ".nrrd", VectorComponent, 3,
-                                                      differing, 1e-6);
+    const double      d =
+      MaxDifference<FieldType, double>(f, baseline + "/spheres_" + name + ".nrrd", VectorComponent, 3, differing, 1e-6);
     std::cout << name << ": max component difference " << d << " mm, " << differing << " voxels above 1e-6 mm"
               << std::endl;
     ok = ok && d >= 0.0 && differing == 0;
   }
-  double d = MaxDifference<CTType, float>(ctWarper->GetOutput(), baseline + "/spheres_warped_ct.nrrd", Scalar, 1,
-                                          differing, 1e-3);
+  double d = MaxDifference<CTType, float>(
+    ctWarper->GetOutput(), baseline + "/spheres_warped_ct.nrrd", Scalar, 1, differing, 1e-3);
   std::cout << "warped CT: max difference " << d << " HU, " << differing << " voxels above 1e-3 HU" << std::endl;
   ok = ok && d >= 0.0 && differing == 0;
-  d = MaxDifference<LabelType, std::int32_t>(labelWarper->GetOutput(), baseline + "/spheres_warped_labels.nrrd", Label,
-                                             1, differing, 0.5);
+  d = MaxDifference<LabelType, std::int32_t>(
+    labelWarper->GetOutput(), baseline + "/spheres_warped_labels.nrrd", Label, 1, differing, 0.5);
   std::cout << "warped labels: " << differing << " voxels differ" << std::endl;
   ok = ok && d >= 0.0 && differing == 0;
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;

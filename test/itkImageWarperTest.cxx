@@ -30,10 +30,10 @@ itkImageWarperTest(int, char *[])
   using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
   bool ok = true;
 
-  auto          image = ImageType::New();
-  auto          labels = LabelType::New();
-  itk::Size<3>  size = { { 24, 20, 10 } };
-  const double  spacing[3] = { 1.0, 1.5, 2.0 };
+  auto         image = ImageType::New();
+  auto         labels = LabelType::New();
+  itk::Size<3> size = { { 24, 20, 10 } };
+  const double spacing[3] = { 1.0, 1.5, 2.0 };
   for (itk::ImageBase<3> * im : { static_cast<itk::ImageBase<3> *>(image), static_cast<itk::ImageBase<3> *>(labels) })
   {
     im->SetRegions(itk::ImageRegion<3>(size));

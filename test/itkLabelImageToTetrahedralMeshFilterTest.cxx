@@ -25,8 +25,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace
-{
+namespace {
 using LabelImageType = itk::Image<short, 3>;
 const double Pi = 3.14159265358979323846;
 
@@ -36,17 +35,23 @@ const double Pi = 3.14159265358979323846;
 LabelImageType::Pointer
 MakeImage(const std::array<double, 3> & C)
 {
-  auto                    image = LabelImageType::New();
+  auto                     image = LabelImageType::New();
   LabelImageType::SizeType size = { { 90, 90, 30 } };
   image->SetRegions(LabelImageType::RegionType(size));
   const double spacing[3] = { 1.0, 1.0, 3.0 };
   image->SetSpacing(spacing);
-  const double a = 30 * Pi / 180, b = 10 * Pi / 180;
+  const double                  a = 30 * Pi / 180, b = 10 * Pi / 180;
   LabelImageType::DirectionType Rz, Rx;
   Rz.SetIdentity();
   Rx.SetIdentity();
-  Rz(0, 0) = std::cos(a); Rz(0, 1) = -std::sin(a); Rz(1, 0) = std::sin(a); Rz(1, 1) = std::cos(a);
-  Rx(1, 1) = std::cos(b); Rx(1, 2) = -std::sin(b); Rx(2, 1) = std::sin(b); Rx(2, 2) = std::cos(b);
+  Rz(0, 0) = std::cos(a);
+  Rz(0, 1) = -std::sin(a);
+  Rz(1, 0) = std::sin(a);
+  Rz(1, 1) = std::cos(a);
+  Rx(1, 1) = std::cos(b);
+  Rx(1, 2) = -std::sin(b);
+  Rx(2, 1) = std::sin(b);
+  Rx(2, 2) = std::cos(b);
   image->SetDirection(Rz * Rx);
   // Put the grid's centre on C.
   LabelImageType::PointType origin;
@@ -68,10 +73,11 @@ MakeImage(const std::array<double, 3> & C)
   }
   image->SetOrigin(origin);
   image->Allocate();
-  for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(image, image->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it)
+  for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(image, image->GetLargestPossibleRegion()); !it.IsAtEnd();
+       ++it)
   {
     image->TransformIndexToPhysicalPoint(it.GetIndex(), p);
-    auto dist = [&](double dx) { return std::hypot(p[0] - C[0] - dx, p[1] - C[1], p[2] - C[2]); };
+    auto  dist = [&](double dx) { return std::hypot(p[0] - C[0] - dx, p[1] - C[1], p[2] - C[2]); };
     short v = 0;
     if (std::hypot(p[0] - C[0], p[1] - C[1], p[2] - C[2]) < 30 && std::abs(p[2] - C[2]) < 36)
       v = 1;
@@ -180,16 +186,20 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
   empty->Allocate(true);
   auto bad = FilterType::New();
   bad->SetInput(empty);
-  ok &= bmr::test::ExpectException("empty label image", [&] { bad->Update(); }, "no non-zero label");
+  ok &= bmr::test::ExpectException(
+    "empty label image", [&] { bad->Update(); }, "no non-zero label");
   auto badSpacing = LabelImageType::New();
   badSpacing->SetRegions(image->GetLargestPossibleRegion());
   badSpacing->Allocate(true);
   const double zero[3] = { 1.0, 0.0, 1.0 };
   // ITK itself refuses a zero spacing when it is set; either way the error names the spacing.
-  ok &= bmr::test::ExpectException("zero spacing", [&] {
-    badSpacing->SetSpacing(zero);
-    bad->SetInput(badSpacing);
-    bad->Update();
-  }, "spacing");
+  ok &= bmr::test::ExpectException(
+    "zero spacing",
+    [&] {
+      badSpacing->SetSpacing(zero);
+      bad->SetInput(badSpacing);
+      bad->Update();
+    },
+    "spacing");
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

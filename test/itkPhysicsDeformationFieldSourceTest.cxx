@@ -25,13 +25,16 @@
 
 #include <cmath>
 
-namespace
-{
+namespace {
 using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
 using SourceType = itk::PhysicsDeformationFieldSource<FieldType>;
 
 FieldType::Pointer
-Run(const itk::TetrahedralMeshObject * mesh, const itk::ImageBase<3> * reference, bool pull, int threads, bool fill = true)
+Run(const itk::TetrahedralMeshObject * mesh,
+    const itk::ImageBase<3> *          reference,
+    bool                               pull,
+    int                                threads,
+    bool                               fill = true)
 {
   auto source = SourceType::New();
   source->SetMesh(mesh);
@@ -76,25 +79,30 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   auto push = Run(meshObject, reference, false, 2, false);
   // (I + A)^{-1} by Cramer's rule.
   const double M[9] = { 1 + A[0][0], A[0][1], A[0][2], A[1][0], 1 + A[1][1], A[1][2], A[2][0], A[2][1], 1 + A[2][2] };
-  const double det = M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) + M[2] * (M[3] * M[7] - M[4] * M[6]);
-  const double Mi[9] = { (M[4] * M[8] - M[5] * M[7]) / det, (M[2] * M[7] - M[1] * M[8]) / det, (M[1] * M[5] - M[2] * M[4]) / det,
-                         (M[5] * M[6] - M[3] * M[8]) / det, (M[0] * M[8] - M[2] * M[6]) / det, (M[2] * M[3] - M[0] * M[5]) / det,
-                         (M[3] * M[7] - M[4] * M[6]) / det, (M[1] * M[6] - M[0] * M[7]) / det, (M[0] * M[4] - M[1] * M[3]) / det };
-  double      pullError = 0.0, pushError = 0.0;
-  std::size_t covered = 0;
-  for (itk::ImageRegionConstIteratorWithIndex<FieldType> it(pull, pull->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it)
+  const double det =
+    M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) + M[2] * (M[3] * M[7] - M[4] * M[6]);
+  const double Mi[9] = { (M[4] * M[8] - M[5] * M[7]) / det, (M[2] * M[7] - M[1] * M[8]) / det,
+                         (M[1] * M[5] - M[2] * M[4]) / det, (M[5] * M[6] - M[3] * M[8]) / det,
+                         (M[0] * M[8] - M[2] * M[6]) / det, (M[2] * M[3] - M[0] * M[5]) / det,
+                         (M[3] * M[7] - M[4] * M[6]) / det, (M[1] * M[6] - M[0] * M[7]) / det,
+                         (M[0] * M[4] - M[1] * M[3]) / det };
+  double       pullError = 0.0, pushError = 0.0;
+  std::size_t  covered = 0;
+  for (itk::ImageRegionConstIteratorWithIndex<FieldType> it(pull, pull->GetLargestPossibleRegion()); !it.IsAtEnd();
+       ++it)
   {
     FieldType::PointType x;
     pull->TransformIndexToPhysicalPoint(it.GetIndex(), x);
-    const auto d = it.Get();
-    const auto u = push->GetPixel(it.GetIndex());
+    const auto   d = it.Get();
+    const auto   u = push->GetPixel(it.GetIndex());
     const double y[3] = { x[0] - b[0], x[1] - b[1], x[2] - b[2] };
-    const bool  inDeformed = d.GetNorm() > 0.0;
+    const bool   inDeformed = d.GetNorm() > 0.0;
     if (inDeformed)
     {
       ++covered;
       for (int r = 0; r < 3; ++r)
-        pullError = std::max(pullError, std::abs(Mi[3 * r] * y[0] + Mi[3 * r + 1] * y[1] + Mi[3 * r + 2] * y[2] - x[r] - d[r]));
+        pullError =
+          std::max(pullError, std::abs(Mi[3 * r] * y[0] + Mi[3 * r + 1] * y[1] + Mi[3 * r + 2] * y[2] - x[r] - d[r]));
     }
     if (x[0] >= 0 && x[0] <= 20 && x[1] >= 0 && x[1] <= 20 && x[2] >= 0 && x[2] <= 20)
       for (int r = 0; r < 3; ++r)
@@ -114,8 +122,8 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
     mesh.displacement[3 * n + 2] = 0.02 * X[0] * X[1] / 4.0;
   }
   meshObject->Set(mesh);
-  auto pull1 = Run(meshObject, reference, true, 1);
-  auto pull2 = Run(meshObject, reference, true, 2);
+  auto                    pull1 = Run(meshObject, reference, true, 1);
+  auto                    pull2 = Run(meshObject, reference, true, 2);
   const bmr::PointLocator locator(mesh.points, mesh.tetrahedra);
   std::vector<double>     deformedPoints(mesh.points);
   for (std::size_t i = 0; i < deformedPoints.size(); ++i)
@@ -123,10 +131,11 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
     deformedPoints[i] += mesh.displacement[i];
   }
   const bmr::PointLocator deformedLocator(deformedPoints, mesh.tetrahedra);
-  double      roundTrip = 0.0;
-  std::size_t checked = 0, differing = 0;
-  bool        finite = true;
-  for (itk::ImageRegionConstIteratorWithIndex<FieldType> it(pull1, pull1->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it)
+  double                  roundTrip = 0.0;
+  std::size_t             checked = 0, differing = 0;
+  bool                    finite = true;
+  for (itk::ImageRegionConstIteratorWithIndex<FieldType> it(pull1, pull1->GetLargestPossibleRegion()); !it.IsAtEnd();
+       ++it)
   {
     const auto d = it.Get();
     differing += d != pull2->GetPixel(it.GetIndex());
@@ -181,7 +190,7 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   bmr::TetrahedralMesh bare = bmr::test::StructuredCube(2, 1.0);
   auto                 bareObject = itk::TetrahedralMeshObject::New();
   bareObject->Set(bare);
-  ok &= bmr::test::ExpectException("no displacement", [&] { Run(bareObject, reference, true, 1); },
-                                   "carries no nodal displacement");
+  ok &= bmr::test::ExpectException(
+    "no displacement", [&] { Run(bareObject, reference, true, 1); }, "carries no nodal displacement");
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
