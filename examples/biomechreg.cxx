@@ -362,10 +362,10 @@ PelvisScene(double prostateE, bool unknown)
   s.forceSurfaces = { "bladder", "rectum" };
   s.objective = { { "prostate", 1.0 }, { "bladder", 1.0 }, { "rectum", 1.0 } };
   s.roiMargin = 25.0;
-  s.mesh.cellSize = 8.0;
+  s.mesh.cellSize = 7.0;
   s.mesh.facetSize = 6.0;
   s.mesh.facetDistance = 1.5;
-  s.mesh.cellSizePerLabel[bmr::PelvisProstate] = 5.0;
+  s.mesh.cellSizePerLabel[bmr::PelvisProstate] = 4.5;
   return s;
 }
 

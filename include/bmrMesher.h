@@ -48,7 +48,8 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
   std::map<std::int32_t, double> cellSizePerLabel;
   bool                           optimize{ true };
   bool                           exude{ false };
-  unsigned int                   randomSeed{ 0 };
+  double       sliverBound{ 5.0 }; ///< degrees: perturbation works on elements below this dihedral angle
+  unsigned int randomSeed{ 0 };
 };
 
 /** Meshes every non-zero label of a label volume with CGAL Mesh_3
