@@ -506,6 +506,37 @@ PrintTimings(const StageTimer & timer)
   std::cout << "  " << std::left << std::setw(36) << "total" << std::right << std::setw(8) << total << std::endl;
 }
 
+/** Warps the moving labels (nearest neighbour) and CT (linear, if given) through the pull-back
+ * field and writes mesh.vtu, field.nrrd, forward_field.nrrd and the warped images into \a out.
+ * Returns the warped labels. */
+LabelImageType::Pointer
+WarpAndWrite(const std::string &       out,
+             const SimulationOutputs & sim,
+             const LabelImageType *    labels,
+             const CTImageType *       ct,
+             StageTimer &              timer)
+{
+  timer.Begin("warp (CT linear, labels nearest)");
+  auto                 warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
+  CTImageType::Pointer warpedCT;
+  if (ct)
+  {
+    warpedCT = Warp<CTImageType>(ct, sim.pullBack, false, -1000.0f);
+  }
+  timer.End();
+  timer.Begin("write outputs");
+  WriteMesh(out + "/mesh.vtu", sim);
+  WriteImage<FieldType>(sim.pullBack, out + "/field.nrrd");
+  WriteImage<FieldType>(sim.push, out + "/forward_field.nrrd");
+  WriteImage<LabelImageType>(warpedLabels, out + "/warped_labels.nrrd");
+  if (ct)
+  {
+    WriteImage<CTImageType>(warpedCT, out + "/warped_ct.nrrd");
+  }
+  timer.End();
+  return warpedLabels;
+}
+
 // ----------------------------------------------------------------- phantom
 
 struct PhantomOptions
@@ -776,24 +807,7 @@ SimulateCommand(const Arguments & args)
   timer.End();
   MakeDirectory(out);
   SimulationOutputs sim = RunSimulation(labels, scene, reference, timer);
-  timer.Begin("warp (CT linear, labels nearest)");
-  auto                 warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
-  CTImageType::Pointer warpedCT;
-  if (ct)
-  {
-    warpedCT = Warp<CTImageType>(ct, sim.pullBack, false, -1000.0f);
-  }
-  timer.End();
-  timer.Begin("write outputs");
-  WriteMesh(out + "/mesh.vtu", sim);
-  WriteImage<FieldType>(sim.pullBack, out + "/field.nrrd");
-  WriteImage<FieldType>(sim.push, out + "/forward_field.nrrd");
-  WriteImage<LabelImageType>(warpedLabels, out + "/warped_labels.nrrd");
-  if (ct)
-  {
-    WriteImage<CTImageType>(warpedCT, out + "/warped_ct.nrrd");
-  }
-  timer.End();
+  WarpAndWrite(out, sim, labels, ct, timer);
   PrintTimings(timer);
   return EXIT_SUCCESS;
 }
@@ -824,17 +838,7 @@ DemoCommand()
   const std::string out = dir + "/simulate";
   MakeDirectory(out);
   SimulationOutputs sim = RunSimulation(labels, scene, labels, run);
-  run.Begin("warp CT and labels");
-  auto warpedCT = Warp<CTImageType>(ct, sim.pullBack, false, -1000.0f);
-  auto warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
-  run.End();
-  run.Begin("write outputs");
-  WriteMesh(out + "/mesh.vtu", sim);
-  WriteImage<FieldType>(sim.pullBack, out + "/field.nrrd");
-  WriteImage<FieldType>(sim.push, out + "/forward_field.nrrd");
-  WriteImage<CTImageType>(warpedCT, out + "/warped_ct.nrrd");
-  WriteImage<LabelImageType>(warpedLabels, out + "/warped_labels.nrrd");
-  run.End();
+  auto              warpedLabels = WarpAndWrite(out, sim, labels, ct, run);
 
   // Agreement of the simulated warp with the truth-mesh warp: Dice per organ.
   std::cout << "\n  Dice of warped moving labels vs fixed labels (coarse estimation mesh vs finer truth mesh):\n";
