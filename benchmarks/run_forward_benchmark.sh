@@ -33,7 +33,7 @@ PY
     nodes=$(grep -o '[0-9]* nodes' "$log" | head -1 | cut -d' ' -f1)
     awk -v h="$h" -v r="$r" -v t="$tets" -v n="$nodes" -v m="$rss" '
       /^  stage/ {table=1; next}
-      table && NF>=2 && $1!="total" { s=$0; sub(/^ +/, "", s); v=$NF; sub(/ +[0-9.]+$/, "", s); print h "," r "," t "," n "," s "," v "," m }' \
+      table && NF>=2 && $1!="total" { s=$0; sub(/^ +/, "", s); v=$NF; sub(/ +[0-9.]+$/, "", s); gsub(/,/, ";", s); print h "," r "," t "," n "," s "," v "," m }' \
       "$log" >> "$out/forward_runs.csv"
   done
 done

@@ -10,7 +10,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 out = sys.argv[1]
-rows = list(csv.DictReader(open(f"{out}/forward_runs.csv")))
+fields = ["cell_size_mm", "run", "tetrahedra", "nodes", "stage", "seconds", "peak_rss_MB"]
+rows = []
+with open(f"{out}/forward_runs.csv") as f:
+    for raw in list(csv.reader(f))[1:]:
+        # A stage name may contain commas: the first four and last two fields are fixed.
+        rows.append(dict(zip(fields, raw[:4] + [",".join(raw[4:-2]).strip()] + raw[-2:])))
 times = defaultdict(list)
 meta = {}
 for r in rows:

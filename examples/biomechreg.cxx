@@ -516,7 +516,7 @@ WarpAndWrite(const std::string &       out,
              const CTImageType *       ct,
              StageTimer &              timer)
 {
-  timer.Begin("warp (CT linear, labels nearest)");
+  timer.Begin("warp (CT linear; labels nearest)");
   auto                 warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
   CTImageType::Pointer warpedCT;
   if (ct)

@@ -126,8 +126,8 @@ private:
   std::vector<std::int32_t>         m_CellElements;
 };
 
-/** FE displacement u(X) [mm] at an undeformed point X (PullBack-free helper):
- * returns false when X is outside the mesh. */
+/** FE displacement u(X) [mm] at an undeformed (moving-space) point X, located with a
+ * PointLocator built on the undeformed nodes; returns false when X is outside the mesh. */
 BiomechanicalRegistration_EXPORT bool
 InterpolateDisplacement(const PointLocator &          undeformedLocator,
                         const TetrahedralMesh &       mesh,

@@ -57,6 +57,8 @@ struct BiomechanicalRegistration_EXPORT SolverTimings
  * Dirichlet set invalidates it (the symbolic analysis is kept when only a
  * modulus changes). Reaction forces are r = K u - f at the constrained nodes.
  *
+ * The model keeps a reference to the mesh, which must outlive it.
+ *
  * Errors (itk::ExceptionObject): an element label without material, E <= 0 or
  * not finite, nu outside (-1, 0.5), a degenerate or inverted element (named),
  * a connected component of the mesh that no Dirichlet condition holds against

@@ -70,6 +70,8 @@ DisplacementFieldRasterizer::DisplacementFieldRasterizer(const TetrahedralMesh &
   }
   const std::size_t M = mesh.GetNumberOfTetrahedra();
   m_Elements.reserve(M);
+  double       unusedInverse[9];
+  const double gridHandedness = Invert3(grid.direction.data(), unusedInverse);
   for (std::size_t e = 0; e < M; ++e)
   {
     Element el;
@@ -97,9 +99,7 @@ DisplacementFieldRasterizer::DisplacementFieldRasterizer(const TetrahedralMesh &
     const double det = Invert3(m, el.inv);
     // The orientation in index space flips with a left-handed direction matrix; only a sign change
     // relative to the grid's own handedness (or a collapsed element) means inversion.
-    double       dir[9];
-    const double gridDet = Invert3(grid.direction.data(), dir);
-    if (!(det * gridDet > 0.0) || !std::isfinite(det))
+    if (!(det * gridHandedness > 0.0) || !std::isfinite(det))
     {
       ++m_Inverted;
       continue;
