@@ -98,13 +98,18 @@ IsDirectory(const std::string & path)
 void
 MakeDirectory(const std::string & path)
 {
-  if (IsDirectory(path))
+  // Like mkdir -p: every missing parent is created too.
+  for (std::size_t pos = path.find('/', 1);; pos = path.find('/', pos + 1))
   {
-    return;
-  }
-  if (::mkdir(path.c_str(), 0755) != 0)
-  {
-    throw std::runtime_error("cannot create output directory \"" + path + "\"");
+    const std::string prefix = path.substr(0, pos);
+    if (!prefix.empty() && !IsDirectory(prefix) && ::mkdir(prefix.c_str(), 0755) != 0 && !IsDirectory(prefix))
+    {
+      throw std::runtime_error("cannot create output directory \"" + path + "\"");
+    }
+    if (pos == std::string::npos)
+    {
+      break;
+    }
   }
 }
 

@@ -46,10 +46,23 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
   grid.Validate("moving label image");
   const std::size_t               n = grid.GetNumberOfVoxels();
   const std::vector<std::int32_t> outside = scene.OutsideLabels();
-  std::set<std::int32_t>          present;
+  // Labels come in long runs: only a change of value needs a set look-up.
+  std::set<std::int32_t> present;
   for (std::size_t v = 0; v < n; ++v)
   {
-    present.insert(labels[v]);
+    if (v == 0 || labels[v] != labels[v - 1])
+    {
+      present.insert(labels[v]);
+    }
+  }
+  // Labels that define the region of interest (neither plain known material nor outside).
+  std::set<std::int32_t> roiLabels;
+  for (const auto & l : scene.labels)
+  {
+    if (l.role != LabelRole::Material && l.role != LabelRole::Outside)
+    {
+      roiLabels.insert(l.value);
+    }
   }
   scene.ValidateAgainstLabels(present, "the moving label image");
 
@@ -65,8 +78,7 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
       for (std::size_t j = 0; j < grid.size[1]; ++j)
         for (std::size_t i = 0; i < grid.size[0]; ++i)
         {
-          const SceneLabel * l = scene.FindLabelValue(labels[i + grid.size[0] * (j + grid.size[1] * k)]);
-          if (l && l->role != LabelRole::Material && l->role != LabelRole::Outside)
+          if (roiLabels.count(labels[i + grid.size[0] * (j + grid.size[1] * k)]) > 0)
           {
             const std::int64_t idx[3] = { static_cast<std::int64_t>(i),
                                           static_cast<std::int64_t>(j),
