@@ -209,41 +209,6 @@ WriteImage(const TImage * image, const std::string & path)
   bmr::CommitTemporaryFile(tmp, path);
 }
 
-template<typename TImage, typename TValue>
-typename TImage::Pointer
-ImageFromBuffer(const bmr::GridGeometry & grid, const std::vector<TValue> & values)
-{
-  auto                           image = TImage::New();
-  typename TImage::RegionType    region;
-  typename TImage::SpacingType   spacing;
-  typename TImage::PointType     origin;
-  typename TImage::DirectionType direction;
-  for (unsigned int i = 0; i < 3; ++i)
-  {
-    region.SetSize(i, grid.size[i]);
-    spacing[i] = grid.spacing[i];
-    origin[i] = grid.origin[i];
-    for (unsigned int j = 0; j < 3; ++j)
-    {
-      direction(i, j) = grid.direction[3 * i + j];
-    }
-  }
-  image->SetRegions(region);
-  image->SetSpacing(spacing);
-  image->SetOrigin(origin);
-  image->SetDirection(direction);
-  image->Allocate();
-  std::copy(values.begin(), values.end(), image->GetBufferPointer());
-  return image;
-}
-
-std::vector<std::int32_t>
-LabelBuffer(const LabelImageType * image)
-{
-  const auto * p = image->GetBufferPointer();
-  return std::vector<std::int32_t>(p, p + image->GetBufferedRegion().GetNumberOfPixels());
-}
-
 // ------------------------------------------------------------ argument parsing
 
 class Arguments
@@ -620,8 +585,8 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   }
   truth.Validate();
 
-  auto              movingCT = ImageFromBuffer<CTImageType>(moving.grid, moving.ct);
-  auto              movingLabels = ImageFromBuffer<LabelImageType>(moving.grid, moving.labels);
+  auto              movingCT = itk::MakeImageOnGrid<CTImageType>(moving.grid, moving.ct);
+  auto              movingLabels = itk::MakeImageOnGrid<LabelImageType>(moving.grid, moving.labels);
   SimulationOutputs sim = RunSimulation(movingLabels, truth, movingLabels, timer);
 
   timer.Begin("warp to the fixed volume");

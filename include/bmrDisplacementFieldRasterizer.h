@@ -95,8 +95,9 @@ private:
  * border of the grid, then interpolates the coarse solution trilinearly into
  * every uncovered fine voxel. Hollow organs (lumens) thus get the harmonic
  * interpolation of their wall motion, bone interiors (enclosed by u = 0) get
- * ~0, and the field decays to zero towards the image border. Continuous up to
- * the coarse interpolation error at the mesh boundary; deterministic. */
+ * ~0, and the field decays to zero towards the image border. Then Gauss-Seidel sweeps of the fine-grid
+ * Laplacian on the uncovered voxels within 2 coarsening + 2 voxels of the mesh remove the coarse
+ * interpolation's mismatch at the mesh boundary. Deterministic (fixed sweep order). */
 BiomechanicalRegistration_EXPORT void
 FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned char * inside, unsigned int coarsening);
 

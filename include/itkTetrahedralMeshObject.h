@@ -19,8 +19,7 @@
 #define itkTetrahedralMeshObject_h
 
 #include "bmrTetrahedralMesh.h"
-#include "bmrGridGeometry.h"
-#include "itkImageBase.h"
+#include "itkGridGeometryConversion.h"
 #include "itkSimpleDataObjectDecorator.h"
 
 #include <ostream>
@@ -57,27 +56,6 @@ namespace itk {
  */
 using TetrahedralMeshObject = SimpleDataObjectDecorator<bmr::TetrahedralMesh>;
 
-/** Geometry of the largest possible region of an ITK image, 0-based: the origin
- * is the physical point of the region's start index. */
-inline bmr::GridGeometry
-GridGeometryOf(const ImageBase<3> * image)
-{
-  bmr::GridGeometry                g;
-  const auto                       region = image->GetLargestPossibleRegion();
-  typename ImageBase<3>::PointType origin;
-  image->TransformIndexToPhysicalPoint(region.GetIndex(), origin);
-  for (unsigned int i = 0; i < 3; ++i)
-  {
-    g.size[i] = region.GetSize(i);
-    g.origin[i] = origin[i];
-    g.spacing[i] = image->GetSpacing()[i];
-    for (unsigned int j = 0; j < 3; ++j)
-    {
-      g.direction[3 * i + j] = image->GetDirection()(i, j);
-    }
-  }
-  return g;
-}
 } // namespace itk
 
 #endif

@@ -21,6 +21,7 @@
 // With BMR_WRITE_BASELINES=1 in the environment the baselines are (re)written instead.
 #include "bmrPhantom.h"
 #include "bmrSimulation.h"
+#include "itkGridGeometryConversion.h"
 #include "itkImageFileReader.h"
 #include "itkImageFileWriter.h"
 #include "itkImageWarper.h"
@@ -34,20 +35,6 @@ namespace {
 using CTType = itk::Image<float, 3>;
 using LabelType = itk::Image<std::int32_t, 3>;
 using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
-
-template<typename TImage>
-typename TImage::Pointer
-FromBuffer(const bmr::GridGeometry & g, const std::vector<typename TImage::PixelType> & values)
-{
-  auto         image = TImage::New();
-  itk::Size<3> size = { { g.size[0], g.size[1], g.size[2] } };
-  image->SetRegions(itk::ImageRegion<3>(size));
-  image->SetSpacing(g.spacing.data());
-  image->SetOrigin(g.origin.data());
-  image->Allocate();
-  std::copy(values.begin(), values.end(), image->GetBufferPointer());
-  return image;
-}
 
 template<typename TImage>
 void
@@ -134,8 +121,8 @@ itkBiomechanicalRegressionTest(int argc, char * argv[])
   p.grid.spacing = { { 2.0, 2.0, 2.0 } };
   p.grid.origin = { { -39.0, -39.0, -39.0 } };
   const bmr::PhantomVolume phantom = bmr::MakeSpherePhantom(p);
-  auto                     ct = FromBuffer<CTType>(phantom.grid, phantom.ct);
-  auto                     labels = FromBuffer<LabelType>(phantom.grid, phantom.labels);
+  auto                     ct = itk::MakeImageOnGrid<CTType>(phantom.grid, phantom.ct);
+  auto                     labels = itk::MakeImageOnGrid<LabelType>(phantom.grid, phantom.labels);
 
   const bmr::Scene scene = bmr::ParseScene(R"({
     "labels": [{"name": "outside", "value": 0, "role": "outside"},
