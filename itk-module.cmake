@@ -13,6 +13,7 @@ itk_module(BiomechanicalRegistration
     ITKTransform
     ITKDisplacementField
     ITKDistanceMap
+    ITKOptimizersv4
     ITKImageIntensity
     ITKIOImageBase
   COMPILE_DEPENDS

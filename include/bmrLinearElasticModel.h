@@ -95,6 +95,19 @@ public:
   std::vector<double>
   Solve(const std::vector<double> & forces);
 
+  /** As Solve(), but with the prescribed displacements taken from \a prescribed
+   * (3N [mm]; read at the constrained dofs only) instead of those given to
+   * SetDirichletConditions(). The constrained set, and so the factorisation, is
+   * unchanged: this is the cheap path for many boundary displacements on one
+   * model (u_f = K_ff^{-1} (f_f - K_fp g)). */
+  std::vector<double>
+  Solve(const std::vector<double> & forces, const std::vector<double> & prescribed);
+
+  /** Khat_m u at every dof [mN per kPa]: the derivative of K(E) u with respect to
+   * the modulus of material \a label, dK/dE_m u. */
+  std::vector<double>
+  ComputeMaterialStiffnessProduct(std::int32_t label, const std::vector<double> & u) const;
+
   /** K u at every dof [mN]: with Solve()'s u this is f on free dofs and f + reaction on constrained ones. */
   std::vector<double>
   ComputeInternalForces(const std::vector<double> & u) const;

@@ -30,6 +30,7 @@
 #include <numeric>
 #include <set>
 #include <sstream>
+#include <utility>
 
 namespace bmr {
 namespace {
@@ -119,6 +120,12 @@ struct LinearElasticModel::Impl
   UpdateValues();
   void
   SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const;
+  static void
+  SymmetricProduct(const std::vector<std::int64_t> & start,
+                   const std::vector<std::int32_t> & rows,
+                   const std::vector<double> &       vals,
+                   const std::vector<double> &       x,
+                   std::vector<double> &             y);
 };
 
 void
@@ -270,16 +277,27 @@ LinearElasticModel::Impl::UpdateValues()
 void
 LinearElasticModel::Impl::SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
 {
-  y.assign(ndof, 0.0);
-  for (std::size_t col = 0; col < ndof; ++col)
+  SymmetricProduct(colStart, rowIndex, values, x, y);
+}
+
+void
+LinearElasticModel::Impl::SymmetricProduct(const std::vector<std::int64_t> & start,
+                                           const std::vector<std::int32_t> & rows,
+                                           const std::vector<double> &       vals,
+                                           const std::vector<double> &       x,
+                                           std::vector<double> &             y)
+{
+  const std::size_t n = start.size() - 1;
+  y.assign(n, 0.0);
+  for (std::size_t col = 0; col < n; ++col)
   {
-    for (std::int64_t k = colStart[col]; k < colStart[col + 1]; ++k)
+    for (std::int64_t k = start[col]; k < start[col + 1]; ++k)
     {
-      const std::size_t row = static_cast<std::size_t>(rowIndex[k]);
-      y[row] += values[k] * x[col];
+      const std::size_t row = static_cast<std::size_t>(rows[k]);
+      y[row] += vals[k] * x[col];
       if (row != col)
       {
-        y[col] += values[k] * x[row];
+        y[col] += vals[k] * x[row];
       }
     }
   }
@@ -538,15 +556,38 @@ LinearElasticModel::IsFactorized() const
 std::vector<double>
 LinearElasticModel::Solve(const std::vector<double> & forces)
 {
+  return Solve(forces, m_Impl->prescribed);
+}
+
+std::vector<double>
+LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<double> & prescribedAll)
+{
   Impl & d = *m_Impl;
   if (!forces.empty() && forces.size() != d.ndof)
   {
     Fail("LinearElasticModel::Solve", "the force vector must hold 3 values per node");
   }
+  if (prescribedAll.size() != d.ndof)
+  {
+    Fail("LinearElasticModel::Solve", "the prescribed displacement vector must hold 3 values per node");
+  }
+  std::vector<double> prescribed(d.ndof, 0.0);
+  for (std::size_t i = 0; i < d.ndof; ++i)
+  {
+    if (d.constrained[i])
+    {
+      if (!std::isfinite(prescribedAll[i]))
+      {
+        Fail("LinearElasticModel::Solve", "prescribed displacement at degree of freedom " + std::to_string(i) +
+                                            " is not finite");
+      }
+      prescribed[i] = prescribedAll[i];
+    }
+  }
   Factorize();
   const auto          t0 = Clock::now();
   std::vector<double> Kg;
-  d.SymmetricProduct(d.prescribed, Kg);
+  d.SymmetricProduct(prescribed, Kg);
   Eigen::VectorXd b(static_cast<Eigen::Index>(d.nfree));
   for (std::size_t i = 0; i < d.ndof; ++i)
   {
@@ -561,7 +602,7 @@ LinearElasticModel::Solve(const std::vector<double> & forces)
       b[f] = fi - Kg[i];
     }
   }
-  std::vector<double> u(d.prescribed);
+  std::vector<double> u(std::move(prescribed));
   if (d.nfree > 0)
   {
     const Eigen::VectorXd x = d.solver.solve(b);
@@ -591,6 +632,23 @@ LinearElasticModel::ComputeInternalForces(const std::vector<double> & u) const
   m_Impl->UpdateValues();
   std::vector<double> y;
   m_Impl->SymmetricProduct(u, y);
+  return y;
+}
+
+std::vector<double>
+LinearElasticModel::ComputeMaterialStiffnessProduct(std::int32_t label, const std::vector<double> & u) const
+{
+  if (u.size() != m_Impl->ndof)
+  {
+    Fail("LinearElasticModel::ComputeMaterialStiffnessProduct", "the displacement vector must hold 3 values per node");
+  }
+  const auto it = m_Impl->unitValues.find(label);
+  if (it == m_Impl->unitValues.end())
+  {
+    Fail("LinearElasticModel::ComputeMaterialStiffnessProduct", "label " + std::to_string(label) + " has no material");
+  }
+  std::vector<double> y;
+  Impl::SymmetricProduct(m_Impl->colStart, m_Impl->rowIndex, it->second, u, y);
   return y;
 }
 

@@ -1,0 +1,512 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// Shared pieces of the biomechreg command-line tool: stage timer, image I/O,
+// argument parsing, the phantom scenes and the forward simulation pipeline.
+#ifndef biomechregCommon_h
+#define biomechregCommon_h
+
+#include "bmrAtomicFile.h"
+#include "bmrDisplacementFieldRasterizer.h"
+#include "bmrPhantom.h"
+#include "bmrSimulation.h"
+#include "bmrVtuWriter.h"
+#include "itkGDCMImageIO.h"
+#include "itkGDCMSeriesFileNames.h"
+#include "itkImageFileReader.h"
+#include "itkImageFileWriter.h"
+#include "itkImageRegionIterator.h"
+#include "itkImageSeriesReader.h"
+#include "itkImageWarper.h"
+#include "itkLabelImageToTetrahedralMeshFilter.h"
+#include "itkPhysicsDeformationFieldSource.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <sys/stat.h>
+
+
+namespace bmrcli {
+using CTImageType = itk::Image<float, 3>;
+using LabelImageType = itk::Image<std::int32_t, 3>;
+using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
+using Clock = std::chrono::steady_clock;
+
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+/** Wall time of the stages of a run, printed as the summary table. */
+struct StageTimer
+{
+  std::vector<std::pair<std::string, double>> stages;
+  Clock::time_point                           start;
+  std::string                                 current;
+
+  void
+  Begin(const std::string & name)
+  {
+    current = name;
+    std::cout << "  " << std::left << std::setw(34) << (name + " ...") << std::flush;
+    start = Clock::now();
+  }
+  void
+  End(const std::string & detail = std::string())
+  {
+    const double s = std::chrono::duration<double>(Clock::now() - start).count();
+    stages.emplace_back(current, s);
+    std::cout << std::fixed << std::setprecision(2) << std::setw(7) << s << " s" << (detail.empty() ? "" : "  ")
+              << detail << std::endl;
+  }
+  void
+  Add(const std::string & name, double seconds)
+  {
+    stages.emplace_back(name, seconds);
+  }
+};
+
+// ---------------------------------------------------------------- image I/O
+
+inline bool
+IsDirectory(const std::string & path)
+{
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+inline void
+MakeDirectory(const std::string & path)
+{
+  // Like mkdir -p: every missing parent is created too.
+  for (std::size_t pos = path.find('/', 1);; pos = path.find('/', pos + 1))
+  {
+    const std::string prefix = path.substr(0, pos);
+    if (!prefix.empty() && !IsDirectory(prefix) && ::mkdir(prefix.c_str(), 0755) != 0 && !IsDirectory(prefix))
+    {
+      throw std::runtime_error("cannot create output directory \"" + path + "\"");
+    }
+    if (pos == std::string::npos)
+    {
+      break;
+    }
+  }
+}
+
+/** Captures what a library prints on std::cerr while it lives (restores it after). Some image IOs
+ * (MetaIO) report a truncated file only there and return a half-read image without throwing. */
+class CerrCapture
+{
+public:
+  CerrCapture()
+    : m_Old(std::cerr.rdbuf(m_Text.rdbuf()))
+  {}
+  ~CerrCapture() { std::cerr.rdbuf(m_Old); }
+  std::string
+  FirstLine() const
+  {
+    std::string t = m_Text.str();
+    t.erase(0, std::min(t.size(), t.find_first_not_of(" \n\t")));
+    return t.substr(0, t.find('\n'));
+  }
+
+private:
+  std::ostringstream m_Text;
+  std::streambuf *   m_Old;
+};
+
+/** Reads a 3-D image from any file ITK reads, or a DICOM series directory (GDCM). */
+template<typename TImage>
+typename TImage::Pointer
+ReadImage(const std::string & path, const std::string & what)
+{
+  typename TImage::Pointer image;
+  CerrCapture              diagnostics;
+  try
+  {
+    if (IsDirectory(path))
+    {
+      auto names = itk::GDCMSeriesFileNames::New();
+      names->SetUseSeriesDetails(true);
+      names->SetDirectory(path);
+      const auto & series = names->GetSeriesUIDs();
+      if (series.empty())
+      {
+        throw std::runtime_error(what + " \"" + path + "\" is a directory without a DICOM series");
+      }
+      auto reader = itk::ImageSeriesReader<TImage>::New();
+      reader->SetImageIO(itk::GDCMImageIO::New());
+      reader->SetFileNames(names->GetFileNames(series.front()));
+      reader->Update();
+      image = reader->GetOutput();
+    }
+    else
+    {
+      auto reader = itk::ImageFileReader<TImage>::New();
+      reader->SetFileName(path);
+      reader->UpdateOutputInformation();
+      const unsigned int dim = reader->GetImageIO()->GetNumberOfDimensions();
+      if (dim != 3)
+      {
+        throw std::runtime_error(what + " \"" + path + "\" is " + std::to_string(dim) + "-D; a 3-D image is required");
+      }
+      reader->Update();
+      image = reader->GetOutput();
+    }
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    std::string description = e.GetDescription();
+    const auto  nl = description.find('\n');
+    throw std::runtime_error("cannot read " + what + " \"" + path + "\": " + description.substr(0, nl));
+  }
+  if (!diagnostics.FirstLine().empty())
+  {
+    throw std::runtime_error("cannot read " + what + " \"" + path + "\": " + diagnostics.FirstLine());
+  }
+  itk::GridGeometryOf(image).Validate((what + " \"" + path + "\"").c_str());
+  return image;
+}
+
+template<typename TImage>
+void
+WriteImage(const TImage * image, const std::string & path)
+{
+  const std::string tmp = bmr::TemporaryPathFor(path);
+  auto              writer = itk::ImageFileWriter<TImage>::New();
+  writer->SetInput(image);
+  writer->SetFileName(tmp);
+  writer->UseCompressionOn();
+  try
+  {
+    writer->Update();
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot write \"" + path + "\": " + e.GetDescription());
+  }
+  bmr::CommitTemporaryFile(tmp, path);
+}
+
+// ------------------------------------------------------------ argument parsing
+
+class Arguments
+{
+public:
+  Arguments(int argc, char * argv[], int first)
+  {
+    for (int i = first; i < argc; ++i)
+    {
+      std::string key = argv[i];
+      if (key.rfind("--", 0) != 0)
+      {
+        throw UsageError("unexpected argument \"" + key + "\"");
+      }
+      if (i + 1 >= argc)
+      {
+        throw UsageError("option " + key + " needs a value");
+      }
+      m_Values[key] = argv[++i];
+    }
+  }
+  bool
+  Has(const std::string & key) const
+  {
+    return m_Values.count(key) > 0;
+  }
+  std::string
+  Get(const std::string & key, const std::string & fallback = std::string()) const
+  {
+    m_Used.insert(key);
+    auto it = m_Values.find(key);
+    return it == m_Values.end() ? fallback : it->second;
+  }
+  std::string
+  Require(const std::string & key) const
+  {
+    if (!Has(key))
+    {
+      throw UsageError("missing required option " + key);
+    }
+    return Get(key);
+  }
+  double
+  Number(const std::string & key, double fallback) const
+  {
+    if (!Has(key))
+    {
+      m_Used.insert(key);
+      return fallback;
+    }
+    const std::string text = Get(key);
+    char *            end = nullptr;
+    const double      v = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(v))
+    {
+      throw UsageError("option " + key + " expects a number, got \"" + text + "\"");
+    }
+    return v;
+  }
+  std::array<double, 3>
+  Triple(const std::string & key, const std::array<double, 3> & fallback) const
+  {
+    if (!Has(key))
+    {
+      m_Used.insert(key);
+      return fallback;
+    }
+    std::array<double, 3> v;
+    const std::string     text = Get(key);
+    std::istringstream    in(text);
+    char                  comma1 = 0, comma2 = 0;
+    if (!(in >> v[0] >> comma1 >> v[1] >> comma2 >> v[2]) || comma1 != ',' || comma2 != ',' || !in.eof())
+    {
+      throw UsageError("option " + key + " expects three comma-separated numbers, got \"" + text + "\"");
+    }
+    return v;
+  }
+  void
+  CheckAllUsed() const
+  {
+    for (const auto & kv : m_Values)
+    {
+      if (m_Used.count(kv.first) == 0)
+      {
+        throw UsageError("unknown option " + kv.first);
+      }
+    }
+  }
+
+private:
+  std::map<std::string, std::string> m_Values;
+  mutable std::set<std::string>      m_Used;
+};
+
+// ------------------------------------------------------------------ scenes
+
+/** The scene the estimator sees for the pelvis phantom: prostate modulus unknown. */
+inline bmr::Scene
+PelvisScene(double prostateE, bool unknown)
+{
+  bmr::Scene s;
+  s.name = "pelvis phantom";
+  using R = bmr::LabelRole;
+  bmr::SceneLabel air{ "air", bmr::PelvisAir, R::Outside };
+  bmr::SceneLabel tissue{ "soft_tissue", bmr::PelvisSoftTissue, R::Material, 10.0, 0.35 };
+  bmr::SceneLabel prostate{
+    "prostate", bmr::PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, 0.40
+  };
+  if (unknown)
+  {
+    prostate.lowerBound = 30.0;
+    prostate.upperBound = 300.0;
+  }
+  s.labels = { air,
+               tissue,
+               prostate,
+               { "bladder", bmr::PelvisBladder, R::Hollow },
+               { "rectum", bmr::PelvisRectum, R::Hollow },
+               { "bone", bmr::PelvisBone, R::Fixed } };
+  s.gauge = "soft_tissue";
+  s.forceSurfaces = { "bladder", "rectum" };
+  s.objective = { { "prostate", 1.0 }, { "bladder", 1.0 }, { "rectum", 1.0 } };
+  s.roiMargin = 25.0;
+  s.mesh.cellSize = 7.0;
+  s.mesh.facetSize = 6.0;
+  s.mesh.facetDistance = 1.5;
+  s.mesh.cellSizePerLabel[bmr::PelvisProstate] = 4.5;
+  return s;
+}
+
+inline bmr::Scene
+SpheresScene(double innerE, bool unknown)
+{
+  bmr::Scene s;
+  s.name = "concentric spheres";
+  using R = bmr::LabelRole;
+  bmr::SceneLabel inner{ "inner", bmr::SphereInnerCore, unknown ? R::UnknownMaterial : R::Material, innerE, 0.40 };
+  if (unknown)
+  {
+    inner.lowerBound = 30.0;
+    inner.upperBound = 300.0;
+  }
+  s.labels = { { "outside", bmr::SphereOutside, R::Outside },
+               { "outer", bmr::SphereOuterShell, R::Material, 10.0, 0.35 },
+               inner };
+  s.gauge = "outer";
+  s.forceSurfaces = { "outside" };
+  s.objective = { { "inner", 1.0 }, { "outer", 1.0 } };
+  s.mesh.cellSize = 4.0;
+  s.mesh.facetSize = 3.0;
+  s.mesh.facetDistance = 0.5;
+  return s;
+}
+
+// -------------------------------------------------------------- simulation
+
+struct SimulationOutputs
+{
+  bmr::TetrahedralMesh   mesh;
+  bmr::ForwardSimulation simulation;
+  FieldType::Pointer     pullBack;
+  FieldType::Pointer     push;
+};
+
+/** Mesh -> FEM -> fields, timing each stage. */
+inline SimulationOutputs
+RunSimulation(const LabelImageType *    movingLabels,
+              const bmr::Scene &        scene,
+              const itk::ImageBase<3> * fixedReference,
+              StageTimer &              timer)
+{
+  SimulationOutputs out;
+  timer.Begin("mesh (CGAL Mesh_3)");
+  auto mesher = itk::LabelImageToTetrahedralMeshFilter<LabelImageType>::New();
+  mesher->SetInput(movingLabels);
+  mesher->SetScene(scene);
+  mesher->Update();
+  out.mesh = mesher->GetOutput()->Get();
+  const bmr::MeshQuality q = mesher->GetMeshQuality();
+  std::ostringstream     detail;
+  detail << out.mesh.GetNumberOfTetrahedra() << " tetrahedra, " << out.mesh.GetNumberOfPoints()
+         << " nodes, min dihedral " << std::setprecision(1) << q.minimumDihedralAngleDegrees << " deg";
+  timer.End(detail.str());
+
+  timer.Begin("FEM (assemble, factorise, solve)");
+  out.simulation = bmr::SimulateScene(scene, out.mesh);
+  out.mesh.displacement = out.simulation.displacement;
+  out.mesh.force = out.simulation.force;
+  double umax = 0.0;
+  for (std::size_t n = 0; n < out.mesh.GetNumberOfPoints(); ++n)
+  {
+    umax = std::max(
+      umax,
+      std::hypot(out.mesh.displacement[3 * n], out.mesh.displacement[3 * n + 1], out.mesh.displacement[3 * n + 2]));
+  }
+  std::ostringstream fem;
+  fem << "max |u| " << std::setprecision(2) << umax << " mm";
+  timer.End(fem.str());
+  const bmr::SolverTimings & t = out.simulation.timings;
+  timer.stages.pop_back();
+  timer.Add("assemble", t.assemble);
+  timer.Add("factorise", t.analyse + t.factorise);
+  timer.Add("solve", t.solve);
+
+  auto meshObject = itk::TetrahedralMeshObject::New();
+  meshObject->Set(out.mesh);
+  timer.Begin("pull-back field (fixed -> moving)");
+  auto pull = itk::PhysicsDeformationFieldSource<FieldType>::New();
+  pull->SetMesh(meshObject);
+  pull->SetReferenceImage(fixedReference);
+  pull->Update();
+  out.pullBack = pull->GetOutput();
+  timer.End();
+  timer.Begin("push field (moving -> fixed)");
+  auto push = itk::PhysicsDeformationFieldSource<FieldType>::New();
+  push->SetMesh(meshObject);
+  push->SetReferenceImage(movingLabels);
+  push->SetFieldDirection(itk::PhysicsDeformationFieldSource<FieldType>::FieldDirectionEnum::MovingToFixed);
+  push->Update();
+  out.push = push->GetOutput();
+  timer.End();
+  return out;
+}
+
+inline void
+WriteMesh(const std::string & path, const SimulationOutputs & s)
+{
+  std::vector<double> dirichlet(s.simulation.dirichlet.begin(), s.simulation.dirichlet.end());
+  std::vector<double> labels(s.mesh.labels.begin(), s.mesh.labels.end());
+  bmr::WriteVtu(
+    path,
+    s.mesh,
+    { { "displacement", 3, s.mesh.displacement }, { "force", 3, s.mesh.force }, { "dirichlet", 1, dirichlet } },
+    { { "label", 1, labels },
+      { "youngs_modulus", 1, s.simulation.youngsModulus },
+      { "poisson_ratio", 1, s.simulation.poissonRatio },
+      { "von_mises", 1, s.simulation.vonMises } });
+}
+
+template<typename TImage>
+typename TImage::Pointer
+Warp(const TImage * image, const FieldType * field, bool labels, typename TImage::PixelType outside)
+{
+  auto warper = itk::ImageWarper<TImage, FieldType>::New();
+  warper->SetInput(image);
+  warper->SetDisplacementField(field);
+  warper->SetInterpolation(labels ? itk::ImageWarper<TImage, FieldType>::InterpolationEnum::NearestNeighbor
+                                  : itk::ImageWarper<TImage, FieldType>::InterpolationEnum::Linear);
+  warper->SetDefaultPixelValue(outside);
+  warper->Update();
+  return warper->GetOutput();
+}
+
+inline void
+PrintTimings(const StageTimer & timer)
+{
+  std::cout << "\n  stage                               wall [s]\n";
+  double total = 0.0;
+  for (const auto & s : timer.stages)
+  {
+    std::cout << "  " << std::left << std::setw(36) << s.first << std::right << std::fixed << std::setprecision(3)
+              << std::setw(8) << s.second << "\n";
+    total += s.second;
+  }
+  std::cout << "  " << std::left << std::setw(36) << "total" << std::right << std::setw(8) << total << std::endl;
+}
+
+/** Warps the moving labels (nearest neighbour) and CT (linear, if given) through the pull-back
+ * field and writes mesh.vtu, field.nrrd, forward_field.nrrd and the warped images into \a out.
+ * Returns the warped labels. */
+inline LabelImageType::Pointer
+WarpAndWrite(const std::string &       out,
+             const SimulationOutputs & sim,
+             const LabelImageType *    labels,
+             const CTImageType *       ct,
+             StageTimer &              timer)
+{
+  timer.Begin("warp (CT linear; labels nearest)");
+  auto                 warpedLabels = Warp<LabelImageType>(labels, sim.pullBack, true, 0);
+  CTImageType::Pointer warpedCT;
+  if (ct)
+  {
+    warpedCT = Warp<CTImageType>(ct, sim.pullBack, false, -1000.0f);
+  }
+  timer.End();
+  timer.Begin("write outputs");
+  WriteMesh(out + "/mesh.vtu", sim);
+  WriteImage<FieldType>(sim.pullBack, out + "/field.nrrd");
+  WriteImage<FieldType>(sim.push, out + "/forward_field.nrrd");
+  WriteImage<LabelImageType>(warpedLabels, out + "/warped_labels.nrrd");
+  if (ct)
+  {
+    WriteImage<CTImageType>(warpedCT, out + "/warped_ct.nrrd");
+  }
+  timer.End();
+  return warpedLabels;
+}
+
+} // namespace bmrcli
+
+#endif

@@ -1,0 +1,243 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkFEMElasticityOptimizer_h
+#define itkFEMElasticityOptimizer_h
+
+#include "BiomechanicalRegistrationExport.h"
+#include "bmrScene.h"
+#include "itkImage.h"
+#include "itkProcessObject.h"
+#include "itkTetrahedralMeshObject.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace itk {
+
+/** \class FEMElasticityOptimizer
+ * \brief Joint estimation of boundary loads and Young's moduli by FEM simulation
+ * (H.-P. Lee 2012, chapter 3).
+ *
+ * The moving anatomy is the tetrahedral mesh (input "Mesh", from
+ * LabelImageToTetrahedralMeshFilter with the same scene); the fixed anatomy is
+ * given by one signed distance map [mm] per objective label of the scene
+ * (SetDistanceMap(); negative inside, as SignedMaurerDistanceMapImageFilter
+ * makes them, see SceneDistanceMaps()). The unknowns are the loads on the
+ * scene's force surfaces (bladder and rectum walls) and the moduli of the
+ * labels with the role unknown_material. The objective is
+ * \f[ \Phi(E, F) = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l(E, F))^2 \f]
+ * with K(E) u = F (linear elasticity, u = 0 on fixed walls).
+ *
+ * Nested optimisation:
+ * - inner: \f$\Phi^*(E) = \min_F \Phi(E, F)\f$ by L-BFGS (itk::LBFGS2Optimizerv4,
+ *   More-Thuente line search) with the adjoint gradient. The loads are
+ *   parameterised by the wall displacements d they cause (F = S(E) d with S the
+ *   Schur complement on the walls, an exact change of variables, so Phi* is
+ *   unchanged) and measured in mm, which makes the inner problem well
+ *   conditioned and its gradient of the same size as the outer one;
+ * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the scene's bounds by
+ *   itk::LBFGSBOptimizerv4, with the envelope-theorem gradient
+ *   \f$ d\Phi^{*} / d\log E_m = -E_m \lambda^T \hat K_m u \f$ at the inner optimum;
+ * - initial loads by surface matching (dissertation 5.3.1.1); initial E from a
+ *   sweep of Phi*(E) over the bounds (log-spaced) on the coarse mesh (input
+ *   "CoarseMesh"; the fine mesh when none is given), refined by a parabola
+ *   through the three best samples, then coarse-to-fine on the fine mesh.
+ *
+ * Stopping rules (dissertation): inner when \f$\|\partial\Phi/\partial d\| \le
+ * \epsilon_F \max(1, \|d\|)\f$ (InnerGradientTolerance, default 1e-5) or after
+ * MaximumNumberOfInnerIterations; outer when the projected gradient in log E
+ * falls below OuterGradientTolerance times Phi* of the sweep minimum, the
+ * relative decrease stalls, or after MaximumNumberOfOuterIterations.
+ *
+ * Gauge: only ratios of moduli are identifiable without measured forces; the
+ * scene's gauge label keeps its modulus (GetGaugeLabel()).
+ * Identifiability: the sweep Phi*(E) is reported (GetSweep()); when its
+ * relative variation over the bounds is below FlatnessThreshold, or its
+ * minimum lies on a bound, IsIdentifiable() is false with a message.
+ *
+ * Output: the mesh with nodal displacement [mm] and the estimated wall forces
+ * [mN]; the estimated moduli [kPa]; the history of every outer iteration; the
+ * surface distances [mm]. An IterationEvent is invoked after every inner
+ * solve (GetCurrentValue(), GetCurrentYoungsModuli()).
+ * Deterministic: sequential, no random numbers.
+ * \ingroup BiomechanicalRegistration
+ */
+class BiomechanicalRegistration_EXPORT FEMElasticityOptimizer : public ProcessObject
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(FEMElasticityOptimizer);
+
+  using Self = FEMElasticityOptimizer;
+  using Superclass = ProcessObject;
+  using Pointer = SmartPointer<Self>;
+  using ConstPointer = SmartPointer<const Self>;
+  using DistanceMapType = Image<float, 3>;
+  using MeshObjectType = TetrahedralMeshObject;
+
+  itkNewMacro(Self);
+  itkTypeMacro(FEMElasticityOptimizer, ProcessObject);
+
+  /** One inner solve: stage ("sweep" or "fine"), E [kPa] of the unknown labels,
+   * Phi* [mm^2], |dPhi/dd| [mm] at the inner optimum, dPhi* / dlogE [mm^2], inner iterations. */
+  struct IterationRecord
+  {
+    std::string         stage;
+    unsigned int        iteration{ 0 };
+    std::vector<double> youngsModuli;
+    double              value{ 0.0 };
+    double              wallGradientNorm{ 0.0 };
+    std::vector<double> logModulusGradient;
+    unsigned int        innerIterations{ 0 };
+    double              seconds{ 0.0 };
+  };
+  struct SurfaceDistance
+  {
+    std::string name;
+    double      rms{ 0.0 };     ///< mm
+    double      maximum{ 0.0 }; ///< mm
+  };
+
+  void
+  SetMesh(const MeshObjectType * mesh);
+  const MeshObjectType *
+  GetMesh() const;
+  /** Optional coarser mesh of the same anatomy for the initial sweep of E. */
+  void
+  SetCoarseMesh(const MeshObjectType * mesh);
+  const MeshObjectType *
+  GetCoarseMesh() const;
+  /** Signed distance map [mm] of objective label \a labelName in the fixed image. */
+  void
+  SetDistanceMap(const std::string & labelName, const DistanceMapType * map);
+  const DistanceMapType *
+  GetDistanceMap(const std::string & labelName) const;
+
+  void
+  SetScene(const bmr::Scene & scene);
+  const bmr::Scene &
+  GetScene() const
+  {
+    return m_Scene;
+  }
+
+  itkSetMacro(NumberOfSweepSamples, unsigned int);
+  itkGetConstMacro(NumberOfSweepSamples, unsigned int);
+  itkSetMacro(MaximumNumberOfInnerIterations, unsigned int);
+  itkGetConstMacro(MaximumNumberOfInnerIterations, unsigned int);
+  itkSetMacro(MaximumNumberOfOuterIterations, unsigned int);
+  itkGetConstMacro(MaximumNumberOfOuterIterations, unsigned int);
+  itkSetMacro(InnerGradientTolerance, double);
+  itkGetConstMacro(InnerGradientTolerance, double);
+  itkSetMacro(OuterGradientTolerance, double);
+  itkGetConstMacro(OuterGradientTolerance, double);
+  itkSetMacro(FlatnessThreshold, double);
+  itkGetConstMacro(FlatnessThreshold, double);
+  /** Skip the fine-mesh outer optimisation and keep the sweep's estimate (for speed studies). */
+  itkSetMacro(SweepOnly, bool);
+  itkGetConstMacro(SweepOnly, bool);
+  itkBooleanMacro(SweepOnly);
+
+  /** The mesh with displacement [mm] and estimated wall forces [mN]. */
+  MeshObjectType *
+  GetOutput();
+
+  /** Estimated moduli [kPa] by label name (unknown labels only). */
+  const std::map<std::string, double> &
+  GetEstimatedYoungsModuli() const
+  {
+    return m_EstimatedYoungsModuli;
+  }
+  const std::string &
+  GetGaugeLabel() const
+  {
+    return m_GaugeLabel;
+  }
+  const std::vector<IterationRecord> &
+  GetSweep() const
+  {
+    return m_Sweep;
+  }
+  const std::vector<IterationRecord> &
+  GetHistory() const
+  {
+    return m_History;
+  }
+  const std::vector<SurfaceDistance> &
+  GetSurfaceDistances() const
+  {
+    return m_SurfaceDistances;
+  }
+  itkGetConstMacro(FinalValue, double);
+  itkGetConstMacro(Identifiable, bool);
+  const std::string &
+  GetIdentifiabilityMessage() const
+  {
+    return m_IdentifiabilityMessage;
+  }
+  /** Wall time [s] of the stages: "sweep", "initial loads", "fine". */
+  const std::map<std::string, double> &
+  GetTimings() const
+  {
+    return m_Timings;
+  }
+  /** Last inner solve, for observers of IterationEvent. */
+  const IterationRecord &
+  GetCurrentRecord() const
+  {
+    return m_CurrentRecord;
+  }
+
+protected:
+  FEMElasticityOptimizer();
+  ~FEMElasticityOptimizer() override = default;
+  void
+  PrintSelf(std::ostream & os, Indent indent) const override;
+  void
+  VerifyPreconditions() ITKv5_CONST override;
+  void
+  GenerateData() override;
+
+private:
+  void
+  Record(const IterationRecord & record, std::vector<IterationRecord> & list);
+
+  bmr::Scene                    m_Scene;
+  std::vector<std::string>      m_DistanceMapNames;
+  unsigned int                  m_NumberOfSweepSamples{ 8 };
+  unsigned int                  m_MaximumNumberOfInnerIterations{ 2000 };
+  unsigned int                  m_MaximumNumberOfOuterIterations{ 30 };
+  double                        m_InnerGradientTolerance{ 1e-5 };
+  double                        m_OuterGradientTolerance{ 1e-6 };
+  double                        m_FlatnessThreshold{ 0.01 };
+  bool                          m_SweepOnly{ false };
+  std::map<std::string, double> m_EstimatedYoungsModuli;
+  std::string                   m_GaugeLabel;
+  std::vector<IterationRecord>  m_Sweep;
+  std::vector<IterationRecord>  m_History;
+  std::vector<SurfaceDistance>  m_SurfaceDistances;
+  double                        m_FinalValue{ 0.0 };
+  bool                          m_Identifiable{ true };
+  std::string                   m_IdentifiabilityMessage;
+  std::map<std::string, double> m_Timings;
+  IterationRecord               m_CurrentRecord;
+};
+
+} // namespace itk
+
+#endif

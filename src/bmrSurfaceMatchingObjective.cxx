@@ -1,0 +1,469 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrSurfaceMatchingObjective.h"
+
+#include "bmrError.h"
+#include "bmrSimulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+#include <utility>
+
+namespace bmr {
+namespace {
+/** Nodes of the wall of an excluded label, or of the surface of a simulated one. */
+std::vector<std::int32_t>
+SurfaceNodes(const Scene & scene, const TetrahedralMesh & mesh, const SceneLabel & label)
+{
+  const bool simulated = label.role == LabelRole::Material || label.role == LabelRole::UnknownMaterial;
+  if (simulated)
+  {
+    return NodesOnLabelSurface(mesh, label.value);
+  }
+  // Outside labels are mapped to 0 before meshing: their wall is the outer boundary.
+  const bool outside = label.role == LabelRole::Outside;
+  (void)scene;
+  return NodesOnBoundary(mesh, outside ? 0 : label.value);
+}
+} // namespace
+
+std::vector<ObjectiveSurface>
+SceneObjectiveSurfaces(const Scene &                                                                 scene,
+                       const TetrahedralMesh &                                                       mesh,
+                       const std::map<std::int32_t, std::shared_ptr<const SignedDistanceSampler>> & maps)
+{
+  std::vector<ObjectiveSurface> surfaces;
+  for (const ObjectiveTerm & term : scene.objective)
+  {
+    const SceneLabel * label = scene.FindLabel(term.label);
+    if (label == nullptr)
+    {
+      Fail("SceneObjectiveSurfaces", "objective label \"" + term.label + "\" is not defined in the scene");
+    }
+    const auto map = maps.find(label->value);
+    if (map == maps.end() || !map->second)
+    {
+      Fail("SceneObjectiveSurfaces", "no distance map was given for objective label \"" + term.label + "\"");
+    }
+    ObjectiveSurface s;
+    s.name = term.label;
+    s.label = label->value;
+    s.weight = term.weight;
+    s.nodes = SurfaceNodes(scene, mesh, *label);
+    s.distance = map->second;
+    if (s.nodes.empty())
+    {
+      Fail("SceneObjectiveSurfaces", "objective label \"" + term.label + "\" has no surface node in the mesh");
+    }
+    surfaces.push_back(std::move(s));
+  }
+  return surfaces;
+}
+
+struct SurfaceMatchingObjective::Impl
+{
+  const TetrahedralMesh &       mesh;
+  std::vector<ObjectiveSurface> surfaces;
+  BoundaryConditions            bc;
+  std::vector<std::int32_t>     controlNodes;
+  std::vector<std::int32_t>     unknownLabels;
+  std::vector<double>           basePrescribed; // 3N: fixed walls' values
+  std::unique_ptr<LinearElasticModel> model;
+
+  explicit Impl(const TetrahedralMesh & m)
+    : mesh(m)
+  {}
+
+  std::vector<double>
+  Prescribed(const std::vector<double> & d) const
+  {
+    if (d.size() != 3 * controlNodes.size())
+    {
+      std::ostringstream msg;
+      msg << "expected " << 3 * controlNodes.size() << " wall displacement values (3 per control node), got "
+          << d.size();
+      Fail("SurfaceMatchingObjective", msg.str());
+    }
+    std::vector<double> p = basePrescribed;
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        p[3 * static_cast<std::size_t>(controlNodes[k]) + c] = d[3 * k + c];
+      }
+    }
+    return p;
+  }
+};
+
+SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &       mesh,
+                                                   const Scene &                 scene,
+                                                   std::vector<ObjectiveSurface> surfaces)
+  : m_Impl(new Impl(mesh))
+{
+  Impl & d = *m_Impl;
+  if (surfaces.empty())
+  {
+    Fail("SurfaceMatchingObjective", "the scene's objective is empty: nothing to match");
+  }
+  d.surfaces = std::move(surfaces);
+  d.bc = SceneBoundaryConditions(scene, mesh);
+  const std::size_t N = mesh.GetNumberOfPoints();
+  std::vector<char> held(N, 0);
+  for (std::int32_t n : d.bc.dirichletNodes)
+  {
+    held[n] = 1;
+  }
+  std::set<std::int32_t> control;
+  for (const std::string & name : scene.forceSurfaces)
+  {
+    const SceneLabel * label = scene.FindLabel(name);
+    if (label == nullptr)
+    {
+      Fail("SurfaceMatchingObjective", "force surface \"" + name + "\" is not defined in the scene");
+    }
+    const std::vector<std::int32_t> wall = SurfaceNodes(scene, mesh, *label);
+    std::size_t                     added = 0;
+    for (std::int32_t n : wall)
+    {
+      if (!held[n])
+      {
+        control.insert(n);
+        ++added;
+      }
+    }
+    if (added == 0)
+    {
+      Fail("SurfaceMatchingObjective", "force surface \"" + name + "\" has no free wall node in the mesh");
+    }
+  }
+  d.controlNodes.assign(control.begin(), control.end());
+  for (const auto & l : scene.labels)
+  {
+    if (l.role == LabelRole::UnknownMaterial)
+    {
+      d.unknownLabels.push_back(l.value);
+    }
+  }
+  if (d.controlNodes.empty() && d.unknownLabels.empty())
+  {
+    Fail("SurfaceMatchingObjective",
+         "the scene has neither an unknown modulus (role unknown_material) nor a force surface: nothing to estimate");
+  }
+  d.basePrescribed.assign(3 * N, 0.0);
+  for (std::size_t k = 0; k < d.bc.dirichletNodes.size(); ++k)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      d.basePrescribed[3 * static_cast<std::size_t>(d.bc.dirichletNodes[k]) + c] = d.bc.dirichletValues[3 * k + c];
+    }
+  }
+  std::vector<std::int32_t> constrained = d.bc.dirichletNodes;
+  constrained.insert(constrained.end(), d.controlNodes.begin(), d.controlNodes.end());
+  std::sort(constrained.begin(), constrained.end());
+  d.model.reset(new LinearElasticModel(mesh, SceneMaterials(scene)));
+  d.model->SetDirichletConditions(constrained, {});
+}
+
+SurfaceMatchingObjective::~SurfaceMatchingObjective() = default;
+
+const std::vector<std::int32_t> &
+SurfaceMatchingObjective::GetControlNodes() const
+{
+  return m_Impl->controlNodes;
+}
+
+std::size_t
+SurfaceMatchingObjective::GetNumberOfControlValues() const
+{
+  return 3 * m_Impl->controlNodes.size();
+}
+
+const std::vector<std::int32_t> &
+SurfaceMatchingObjective::GetUnknownLabels() const
+{
+  return m_Impl->unknownLabels;
+}
+
+const std::vector<ObjectiveSurface> &
+SurfaceMatchingObjective::GetSurfaces() const
+{
+  return m_Impl->surfaces;
+}
+
+void
+SurfaceMatchingObjective::SetYoungsModuli(const std::vector<double> & moduli)
+{
+  if (moduli.size() != m_Impl->unknownLabels.size())
+  {
+    Fail("SurfaceMatchingObjective::SetYoungsModuli", "expected one modulus per unknown material");
+  }
+  for (std::size_t m = 0; m < moduli.size(); ++m)
+  {
+    m_Impl->model->SetYoungsModulus(m_Impl->unknownLabels[m], moduli[m]);
+  }
+}
+
+std::vector<double>
+SurfaceMatchingObjective::GetYoungsModuli() const
+{
+  std::vector<double> E;
+  for (std::int32_t l : m_Impl->unknownLabels)
+  {
+    E.push_back(m_Impl->model->GetYoungsModulus(l));
+  }
+  return E;
+}
+
+double
+SurfaceMatchingObjective::Evaluate(const std::vector<double> & dWall,
+                                   std::vector<double> *       gradientD,
+                                   std::vector<double> *       gradientLogE)
+{
+  Impl &                    d = *m_Impl;
+  const std::vector<double> u = d.model->Solve(d.bc.forces, d.Prescribed(dWall));
+  const bool                wantGradient = gradientD != nullptr || gradientLogE != nullptr;
+  std::vector<double>       g(wantGradient ? u.size() : 0, 0.0);
+  double                    phiSum = 0.0;
+  for (const ObjectiveSurface & s : d.surfaces)
+  {
+    for (std::int32_t n : s.nodes)
+    {
+      const double x[3] = { d.mesh.points[3 * n] + u[3 * n],
+                            d.mesh.points[3 * n + 1] + u[3 * n + 1],
+                            d.mesh.points[3 * n + 2] + u[3 * n + 2] };
+      double       grad[3];
+      const double phi = s.distance->Evaluate(x, grad);
+      phiSum += 0.5 * s.weight * phi * phi;
+      if (wantGradient)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          g[3 * n + c] += s.weight * phi * grad[c];
+        }
+      }
+    }
+  }
+  if (!wantGradient)
+  {
+    return phiSum;
+  }
+  // Adjoint: K_ff lambda_f = g_f, lambda = 0 on every constrained dof.
+  const std::vector<double> lambda = d.model->Solve(g, std::vector<double>(u.size(), 0.0));
+  if (gradientD != nullptr)
+  {
+    const std::vector<double> Klambda = d.model->ComputeInternalForces(lambda);
+    gradientD->assign(3 * d.controlNodes.size(), 0.0);
+    for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        const std::size_t dof = 3 * static_cast<std::size_t>(d.controlNodes[k]) + c;
+        (*gradientD)[3 * k + c] = g[dof] - Klambda[dof];
+      }
+    }
+  }
+  if (gradientLogE != nullptr)
+  {
+    gradientLogE->assign(d.unknownLabels.size(), 0.0);
+    for (std::size_t m = 0; m < d.unknownLabels.size(); ++m)
+    {
+      const std::vector<double> Ku = d.model->ComputeMaterialStiffnessProduct(d.unknownLabels[m], u);
+      double                    dot = 0.0;
+      for (std::size_t i = 0; i < u.size(); ++i)
+      {
+        dot += lambda[i] * Ku[i];
+      }
+      (*gradientLogE)[m] = -d.model->GetYoungsModulus(d.unknownLabels[m]) * dot;
+    }
+  }
+  return phiSum;
+}
+
+std::vector<double>
+SurfaceMatchingObjective::ComputeDisplacement(const std::vector<double> & dWall)
+{
+  return m_Impl->model->Solve(m_Impl->bc.forces, m_Impl->Prescribed(dWall));
+}
+
+std::vector<double>
+SurfaceMatchingObjective::ComputeBoundaryForces(const std::vector<double> & u) const
+{
+  const std::vector<double> Ku = m_Impl->model->ComputeInternalForces(u);
+  std::vector<double>       F(Ku.size(), 0.0);
+  for (std::int32_t n : m_Impl->controlNodes)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
+      F[dof] = Ku[dof] - m_Impl->bc.forces[dof];
+    }
+  }
+  return F;
+}
+
+std::vector<SurfaceDistanceStatistics>
+SurfaceMatchingObjective::ComputeSurfaceDistances(const std::vector<double> & u) const
+{
+  const TetrahedralMesh &                mesh = m_Impl->mesh;
+  std::vector<SurfaceDistanceStatistics> stats;
+  for (const ObjectiveSurface & s : m_Impl->surfaces)
+  {
+    SurfaceDistanceStatistics st;
+    st.name = s.name;
+    st.nodes = s.nodes.size();
+    double sum = 0.0;
+    for (std::int32_t n : s.nodes)
+    {
+      const double x[3] = { mesh.points[3 * n] + u[3 * n],
+                            mesh.points[3 * n + 1] + u[3 * n + 1],
+                            mesh.points[3 * n + 2] + u[3 * n + 2] };
+      const double phi = std::abs(s.distance->Evaluate(x, nullptr));
+      sum += phi * phi;
+      st.maximum = std::max(st.maximum, phi);
+    }
+    st.rms = std::sqrt(sum / static_cast<double>(s.nodes.size()));
+    stats.push_back(st);
+  }
+  return stats;
+}
+
+std::vector<double>
+SurfaceMatchingObjective::MatchSurfaces(unsigned int iterations) const
+{
+  const Impl &      d = *m_Impl;
+  const std::size_t N = d.mesh.GetNumberOfPoints();
+  // Which surfaces each node is on, and its neighbours along element edges on a common surface.
+  std::vector<std::vector<std::size_t>> onSurface(N);
+  for (std::size_t s = 0; s < d.surfaces.size(); ++s)
+  {
+    for (std::int32_t n : d.surfaces[s].nodes)
+    {
+      onSurface[n].push_back(s);
+    }
+  }
+  const auto shareSurface = [&](std::int32_t a, std::int32_t b) {
+    for (std::size_t s : onSurface[a])
+    {
+      if (std::find(onSurface[b].begin(), onSurface[b].end(), s) != onSurface[b].end())
+      {
+        return true;
+      }
+    }
+    return false;
+  };
+  std::vector<std::vector<std::int32_t>> neighbours(N);
+  for (std::size_t e = 0; e < d.mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    const std::int32_t * t = &d.mesh.tetrahedra[4 * e];
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = 0; b < 4; ++b)
+      {
+        if (a != b && !onSurface[t[a]].empty() && shareSurface(t[a], t[b]))
+        {
+          neighbours[t[a]].push_back(t[b]);
+        }
+      }
+    }
+  }
+  std::vector<std::int32_t> active;
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    auto & nb = neighbours[n];
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    if (!onSurface[n].empty())
+    {
+      active.push_back(static_cast<std::int32_t>(n));
+    }
+  }
+  std::vector<char> held(N, 0);
+  for (std::int32_t n : d.bc.dirichletNodes)
+  {
+    held[n] = 1;
+  }
+  // alpha: fraction of the distance closed per step; beta: spring stiffness towards the neighbours' mean.
+  const double        alpha = 0.5, beta = 0.25;
+  std::vector<double> v(3 * N, 0.0), next(3 * N, 0.0);
+  for (unsigned int it = 0; it < iterations; ++it)
+  {
+    for (std::int32_t n : active)
+    {
+      if (held[n])
+      {
+        continue;
+      }
+      double pull[3] = { 0.0, 0.0, 0.0 };
+      for (std::size_t s : onSurface[n])
+      {
+        const double x[3] = { d.mesh.points[3 * n] + v[3 * n],
+                              d.mesh.points[3 * n + 1] + v[3 * n + 1],
+                              d.mesh.points[3 * n + 2] + v[3 * n + 2] };
+        double       grad[3];
+        const double phi = d.surfaces[s].distance->Evaluate(x, grad);
+        for (int c = 0; c < 3; ++c)
+        {
+          pull[c] -= phi * grad[c] / static_cast<double>(onSurface[n].size());
+        }
+      }
+      double mean[3] = { 0.0, 0.0, 0.0 };
+      for (std::int32_t m : neighbours[n])
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          mean[c] += v[3 * m + c] / static_cast<double>(neighbours[n].size());
+        }
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        const double vc = v[3 * n + c];
+        next[3 * n + c] = vc + alpha * pull[c] + (neighbours[n].empty() ? 0.0 : beta * (mean[c] - vc));
+      }
+    }
+    for (std::int32_t n : active)
+    {
+      if (!held[n])
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          v[3 * n + c] = next[3 * n + c];
+        }
+      }
+    }
+  }
+  std::vector<double> dWall(3 * d.controlNodes.size(), 0.0);
+  for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      dWall[3 * k + c] = v[3 * static_cast<std::size_t>(d.controlNodes[k]) + c];
+    }
+  }
+  return dWall;
+}
+
+LinearElasticModel &
+SurfaceMatchingObjective::GetModel()
+{
+  return *m_Impl->model;
+}
+
+} // namespace bmr

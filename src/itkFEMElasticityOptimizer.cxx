@@ -1,0 +1,566 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkFEMElasticityOptimizer.h"
+
+#include "bmrError.h"
+#include "bmrSurfaceMatchingObjective.h"
+#include "itkGridGeometryConversion.h"
+#include "itkLBFGS2Optimizerv4.h"
+#include "itkLBFGSBOptimizerv4.h"
+#include "itkObjectToObjectMetricBase.h"
+
+#include <algorithm>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <cmath>
+#include <sstream>
+
+namespace itk {
+namespace {
+using Clock = std::chrono::steady_clock;
+double
+Seconds(Clock::time_point start)
+{
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double
+Norm(const std::vector<double> & v)
+{
+  double s = 0.0;
+  for (double x : v)
+  {
+    s += x * x;
+  }
+  return std::sqrt(s);
+}
+
+/** Adapts a function with gradient to ITK's v4 metric interface, which v4
+ * optimizers minimise; by ITK's convention the "derivative" handed to the
+ * optimizer is the negative gradient. */
+class FunctionMetric : public ObjectToObjectMetricBaseTemplate<double>
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(FunctionMetric);
+  using Self = FunctionMetric;
+  using Superclass = ObjectToObjectMetricBaseTemplate<double>;
+  using Pointer = SmartPointer<Self>;
+  itkNewMacro(Self);
+  itkTypeMacro(FunctionMetric, ObjectToObjectMetricBaseTemplate);
+
+  /** value(x, gradient or null) */
+  using FunctionType = std::function<double(const std::vector<double> &, std::vector<double> *)>;
+  FunctionType m_Function;
+
+  void
+  Initialize() override
+  {}
+  MeasureType
+  GetValue() const override
+  {
+    this->m_Value = m_Function(AsVector(), nullptr);
+    return this->m_Value;
+  }
+  void
+  GetDerivative(DerivativeType & derivative) const override
+  {
+    MeasureType value;
+    GetValueAndDerivative(value, derivative);
+  }
+  void
+  GetValueAndDerivative(MeasureType & value, DerivativeType & derivative) const override
+  {
+    std::vector<double> gradient;
+    value = m_Function(AsVector(), &gradient);
+    this->m_Value = value;
+    if (derivative.GetSize() != gradient.size())
+    {
+      derivative.SetSize(static_cast<unsigned int>(gradient.size()));
+    }
+    for (std::size_t i = 0; i < gradient.size(); ++i)
+    {
+      derivative[static_cast<unsigned int>(i)] = -gradient[i];
+    }
+  }
+  NumberOfParametersType
+  GetNumberOfParameters() const override
+  {
+    return m_Parameters.GetSize();
+  }
+  NumberOfParametersType
+  GetNumberOfLocalParameters() const override
+  {
+    return m_Parameters.GetSize();
+  }
+  void
+  SetParameters(ParametersType & parameters) override
+  {
+    m_Parameters = parameters;
+  }
+  const ParametersType &
+  GetParameters() const override
+  {
+    return m_Parameters;
+  }
+  bool
+  HasLocalSupport() const override
+  {
+    return false;
+  }
+  void
+  UpdateTransformParameters(const DerivativeType & update, ParametersValueType factor) override
+  {
+    for (unsigned int i = 0; i < m_Parameters.GetSize(); ++i)
+    {
+      m_Parameters[i] += factor * update[i];
+    }
+  }
+  std::vector<double>
+  AsVector() const
+  {
+    return std::vector<double>(m_Parameters.begin(), m_Parameters.end());
+  }
+
+protected:
+  FunctionMetric() = default;
+  ~FunctionMetric() override = default;
+
+private:
+  ParametersType m_Parameters;
+};
+
+/** Result of an inner solve at fixed E. */
+struct InnerSolution
+{
+  double              value{ 0.0 };
+  std::vector<double> wall;
+  std::vector<double> logModulusGradient;
+  double              wallGradientNorm{ 0.0 };
+  unsigned int        iterations{ 0 };
+  std::string         stop;
+};
+
+/** min_d Phi(E, d) from \a start by L-BFGS (libLBFGS through ITK), then the gradients at the optimum. */
+InnerSolution
+SolveInner(bmr::SurfaceMatchingObjective & objective,
+           const std::vector<double> &     moduli,
+           const std::vector<double> &     start,
+           unsigned int                    maximumIterations,
+           double                          tolerance)
+{
+  objective.SetYoungsModuli(moduli);
+  InnerSolution result;
+  result.wall = start;
+  if (objective.GetNumberOfControlValues() > 0)
+  {
+    auto metric = FunctionMetric::New();
+    metric->m_Function = [&objective](const std::vector<double> & d, std::vector<double> * g) {
+      return objective.Evaluate(d, g, nullptr);
+    };
+    FunctionMetric::ParametersType p(static_cast<unsigned int>(start.size()));
+    std::copy(start.begin(), start.end(), p.begin());
+    metric->SetParameters(p);
+    auto optimizer = LBFGS2Optimizerv4::New();
+    optimizer->SetMetric(metric);
+    optimizer->SetSolutionAccuracy(tolerance);
+    optimizer->SetMaximumIterations(static_cast<int>(maximumIterations));
+    optimizer->SetHessianApproximationAccuracy(10);
+    // Stop also when Phi has decreased by less than 1e-10 relative over 10 iterations (a flat valley).
+    optimizer->SetDeltaConvergenceDistance(10);
+    optimizer->SetDeltaConvergenceTolerance(1e-10);
+    optimizer->StartOptimization();
+    result.wall = metric->AsVector();
+    result.iterations = static_cast<unsigned int>(optimizer->GetCurrentIteration() + 1);
+    result.stop = optimizer->GetStopConditionDescription();
+  }
+  std::vector<double> gradientD;
+  result.value = objective.Evaluate(result.wall, &gradientD, &result.logModulusGradient);
+  result.wallGradientNorm = Norm(gradientD);
+  return result;
+}
+
+std::shared_ptr<const bmr::SignedDistanceSampler>
+ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string & name)
+{
+  const auto region = map->GetBufferedRegion();
+  if (region != map->GetLargestPossibleRegion() || region.GetNumberOfPixels() == 0)
+  {
+    itkGenericExceptionMacro(<< "FEMElasticityOptimizer: the distance map of \"" << name
+                             << "\" is empty or not fully buffered");
+  }
+  const float *      p = map->GetBufferPointer();
+  std::vector<float> values(p, p + region.GetNumberOfPixels());
+  const std::string  what = "distance map of \"" + name + "\"";
+  return std::make_shared<bmr::SignedDistanceSampler>(GridGeometryOf(map), std::move(values), what.c_str());
+}
+} // namespace
+
+FEMElasticityOptimizer::FEMElasticityOptimizer()
+{
+  this->SetNumberOfRequiredInputs(1);
+  this->SetNumberOfRequiredOutputs(1);
+  this->SetNthOutput(0, this->MakeOutput(0));
+  this->ProcessObject::SetNthOutput(0, MeshObjectType::New().GetPointer());
+}
+
+void
+FEMElasticityOptimizer::SetMesh(const MeshObjectType * mesh)
+{
+  this->SetNthInput(0, const_cast<MeshObjectType *>(mesh));
+}
+
+const FEMElasticityOptimizer::MeshObjectType *
+FEMElasticityOptimizer::GetMesh() const
+{
+  return itkDynamicCastInDebugMode<const MeshObjectType *>(this->GetInput(0));
+}
+
+void
+FEMElasticityOptimizer::SetCoarseMesh(const MeshObjectType * mesh)
+{
+  this->SetInput("CoarseMesh", const_cast<MeshObjectType *>(mesh));
+}
+
+const FEMElasticityOptimizer::MeshObjectType *
+FEMElasticityOptimizer::GetCoarseMesh() const
+{
+  return dynamic_cast<const MeshObjectType *>(this->GetInput("CoarseMesh"));
+}
+
+void
+FEMElasticityOptimizer::SetDistanceMap(const std::string & labelName, const DistanceMapType * map)
+{
+  if (std::find(m_DistanceMapNames.begin(), m_DistanceMapNames.end(), labelName) == m_DistanceMapNames.end())
+  {
+    m_DistanceMapNames.push_back(labelName);
+  }
+  this->SetInput("DistanceMap:" + labelName, const_cast<DistanceMapType *>(map));
+}
+
+const FEMElasticityOptimizer::DistanceMapType *
+FEMElasticityOptimizer::GetDistanceMap(const std::string & labelName) const
+{
+  return dynamic_cast<const DistanceMapType *>(this->GetInput("DistanceMap:" + labelName));
+}
+
+void
+FEMElasticityOptimizer::SetScene(const bmr::Scene & scene)
+{
+  scene.Validate();
+  m_Scene = scene;
+  this->Modified();
+}
+
+FEMElasticityOptimizer::MeshObjectType *
+FEMElasticityOptimizer::GetOutput()
+{
+  return itkDynamicCastInDebugMode<MeshObjectType *>(this->ProcessObject::GetOutput(0));
+}
+
+void
+FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
+{
+  Superclass::VerifyPreconditions();
+  if (m_Scene.labels.empty())
+  {
+    itkExceptionMacro(<< "no scene was set (SetScene)");
+  }
+  if (m_Scene.objective.empty())
+  {
+    itkExceptionMacro(<< "the scene has no objective surface");
+  }
+  for (const auto & term : m_Scene.objective)
+  {
+    if (this->GetDistanceMap(term.label) == nullptr)
+    {
+      itkExceptionMacro(<< "no distance map for objective label \"" << term.label << "\" (SetDistanceMap)");
+    }
+  }
+  if (m_NumberOfSweepSamples < 3)
+  {
+    itkExceptionMacro(<< "NumberOfSweepSamples must be at least 3, got " << m_NumberOfSweepSamples);
+  }
+  if (!(m_InnerGradientTolerance > 0.0) || !(m_OuterGradientTolerance > 0.0))
+  {
+    itkExceptionMacro(<< "the gradient tolerances must be positive");
+  }
+}
+
+void
+FEMElasticityOptimizer::Record(const IterationRecord & record, std::vector<IterationRecord> & list)
+{
+  m_CurrentRecord = record;
+  list.push_back(record);
+  this->InvokeEvent(IterationEvent());
+}
+
+void
+FEMElasticityOptimizer::GenerateData()
+{
+  m_Sweep.clear();
+  m_History.clear();
+  m_SurfaceDistances.clear();
+  m_EstimatedYoungsModuli.clear();
+  m_Timings.clear();
+  m_Identifiable = true;
+  m_IdentifiabilityMessage.clear();
+
+  // Distance maps are shared by the coarse and the fine objective.
+  std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> samplers;
+  for (const auto & term : m_Scene.objective)
+  {
+    samplers[m_Scene.FindLabel(term.label)->value] = ToSampler(this->GetDistanceMap(term.label), term.label);
+  }
+  const bmr::SceneLabel * gauge = m_Scene.gauge.empty() ? nullptr : m_Scene.FindLabel(m_Scene.gauge);
+  if (gauge == nullptr)
+  {
+    for (const auto & l : m_Scene.labels)
+    {
+      if (l.role == bmr::LabelRole::Material)
+      {
+        gauge = &l;
+        break;
+      }
+    }
+  }
+  m_GaugeLabel = gauge ? gauge->name : std::string();
+
+  std::vector<const bmr::SceneLabel *> unknown;
+  std::vector<double>                  moduli, lower, upper;
+  for (const auto & l : m_Scene.labels)
+  {
+    if (l.role == bmr::LabelRole::UnknownMaterial)
+    {
+      unknown.push_back(&l);
+      moduli.push_back(l.youngsModulus);
+      lower.push_back(l.lowerBound);
+      upper.push_back(l.upperBound);
+    }
+  }
+
+  const bmr::TetrahedralMesh & fine = this->GetMesh()->Get();
+  bmr::SurfaceMatchingObjective fineObjective(fine, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, fine, samplers));
+
+  // 1. Sweep of Phi*(E) over the bounds of the first unknown modulus, on the coarse mesh.
+  auto t0 = Clock::now();
+  if (!unknown.empty())
+  {
+    const MeshObjectType *       coarseObject = this->GetCoarseMesh();
+    const bmr::TetrahedralMesh & coarse = coarseObject ? coarseObject->Get() : fine;
+    std::unique_ptr<bmr::SurfaceMatchingObjective> coarseOwned;
+    bmr::SurfaceMatchingObjective *                sweepObjective = &fineObjective;
+    if (coarseObject)
+    {
+      coarseOwned.reset(
+        new bmr::SurfaceMatchingObjective(coarse, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, coarse, samplers)));
+      sweepObjective = coarseOwned.get();
+    }
+    std::vector<double> wall = sweepObjective->MatchSurfaces();
+    const unsigned int  n = m_NumberOfSweepSamples;
+    for (unsigned int k = 0; k < n; ++k)
+    {
+      const auto          ts = Clock::now();
+      std::vector<double> E = moduli;
+      E[0] = lower[0] * std::pow(upper[0] / lower[0], double(k) / double(n - 1));
+      // Every sample starts from the same surface-matching guess: Phi*(E) does not depend on the sweep order.
+      const InnerSolution s =
+        SolveInner(*sweepObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance);
+      IterationRecord r;
+      r.stage = "sweep";
+      r.iteration = k;
+      r.youngsModuli = E;
+      r.value = s.value;
+      r.wallGradientNorm = s.wallGradientNorm;
+      r.logModulusGradient = s.logModulusGradient;
+      r.innerIterations = s.iterations;
+      r.seconds = Seconds(ts);
+      this->Record(r, m_Sweep);
+      this->UpdateProgress(0.5f * float(k + 1) / float(n));
+    }
+    // Best sample, refined by the parabola in log E through it and its neighbours.
+    std::size_t best = 0;
+    double      vmin = m_Sweep[0].value, vmax = m_Sweep[0].value;
+    for (std::size_t k = 1; k < m_Sweep.size(); ++k)
+    {
+      if (m_Sweep[k].value < m_Sweep[best].value)
+      {
+        best = k;
+      }
+      vmin = std::min(vmin, m_Sweep[k].value);
+      vmax = std::max(vmax, m_Sweep[k].value);
+    }
+    double logE = std::log(m_Sweep[best].youngsModuli[0]);
+    if (best > 0 && best + 1 < m_Sweep.size())
+    {
+      const double h = std::log(upper[0] / lower[0]) / double(n - 1);
+      const double a = m_Sweep[best - 1].value, b = m_Sweep[best].value, c = m_Sweep[best + 1].value;
+      const double curvature = a - 2.0 * b + c;
+      if (curvature > 0.0)
+      {
+        logE += 0.5 * h * (a - c) / curvature;
+      }
+    }
+    moduli[0] = std::exp(logE);
+    const double variation = (vmax - vmin) / std::max(vmin, 1e-300);
+    std::ostringstream msg;
+    if (variation < m_FlatnessThreshold)
+    {
+      m_Identifiable = false;
+      msg << "Phi*(E) of \"" << unknown[0]->name << "\" varies by only " << 100.0 * variation << " % over ["
+          << lower[0] << ", " << upper[0] << "] kPa (threshold " << 100.0 * m_FlatnessThreshold
+          << " %): the modulus is not identifiable from these surfaces";
+    }
+    else if (best == 0 || best + 1 == m_Sweep.size())
+    {
+      m_Identifiable = false;
+      msg << "the minimum of Phi*(E) of \"" << unknown[0]->name << "\" lies on the bound "
+          << m_Sweep[best].youngsModuli[0] << " kPa: the true modulus may lie outside [" << lower[0] << ", "
+          << upper[0] << "] kPa";
+    }
+    else
+    {
+      msg << "Phi*(E) varies by " << 100.0 * variation << " % over the bounds, minimum inside";
+    }
+    m_IdentifiabilityMessage = msg.str();
+  }
+  m_Timings["sweep"] = Seconds(t0);
+
+  // 2. Initial loads on the fine mesh by surface matching.
+  t0 = Clock::now();
+  std::vector<double> wall = fineObjective.MatchSurfaces();
+  m_Timings["initial loads"] = Seconds(t0);
+
+  // 3. Fine mesh: nested optimisation, warm-started from the last inner optimum.
+  t0 = Clock::now();
+  InnerSolution last;
+  unsigned int  outerIteration = 0;
+  const auto    innerAt = [&](const std::vector<double> & E) {
+    const auto ts = Clock::now();
+    last = SolveInner(fineObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance);
+    wall = last.wall;
+    IterationRecord r;
+    r.stage = "fine";
+    r.iteration = outerIteration++;
+    r.youngsModuli = E;
+    r.value = last.value;
+    r.wallGradientNorm = last.wallGradientNorm;
+    r.logModulusGradient = last.logModulusGradient;
+    r.innerIterations = last.iterations;
+    r.seconds = Seconds(ts);
+    this->Record(r, m_History);
+    this->UpdateProgress(std::min(0.99f, 0.5f + 0.02f * float(outerIteration)));
+    return last.value;
+  };
+  std::vector<double> bestModuli = moduli;
+  double              bestValue = innerAt(moduli);
+  std::vector<double> bestWall = wall;
+  if (!unknown.empty() && !m_SweepOnly)
+  {
+    // Outer: bounded L-BFGS over log E (vnl's L-BFGS-B through ITK).
+    auto metric = FunctionMetric::New();
+    metric->m_Function = [&](const std::vector<double> & logE, std::vector<double> * g) {
+      std::vector<double> E(logE.size());
+      for (std::size_t m = 0; m < E.size(); ++m)
+      {
+        E[m] = std::exp(logE[m]);
+      }
+      const double value = innerAt(E);
+      if (value < bestValue)
+      {
+        bestValue = value;
+        bestModuli = E;
+        bestWall = wall;
+      }
+      if (g)
+      {
+        *g = last.logModulusGradient;
+      }
+      return value;
+    };
+    const unsigned int             m = static_cast<unsigned int>(unknown.size());
+    FunctionMetric::ParametersType p(m);
+    LBFGSBOptimizerv4::BoundValueType     lo(m), hi(m);
+    LBFGSBOptimizerv4::BoundSelectionType select(m);
+    for (unsigned int k = 0; k < m; ++k)
+    {
+      p[k] = std::log(moduli[k]);
+      lo[k] = std::log(lower[k]);
+      hi[k] = std::log(upper[k]);
+      select[k] = 2; // both bounds
+    }
+    metric->SetParameters(p);
+    auto optimizer = LBFGSBOptimizerv4::New();
+    optimizer->SetMetric(metric);
+    optimizer->SetLowerBound(lo);
+    optimizer->SetUpperBound(hi);
+    optimizer->SetBoundSelection(select);
+    optimizer->SetNumberOfIterations(m_MaximumNumberOfOuterIterations);
+    optimizer->SetMaximumNumberOfFunctionEvaluations(2 * m_MaximumNumberOfOuterIterations);
+    optimizer->SetGradientConvergenceTolerance(m_OuterGradientTolerance * std::max(bestValue, 1e-12));
+    optimizer->SetCostFunctionConvergenceFactor(1e7);
+    optimizer->StartOptimization();
+    if (moduli.size() == 1 && (bestModuli[0] <= lower[0] * 1.0001 || bestModuli[0] >= upper[0] * 0.9999))
+    {
+      m_Identifiable = false;
+      m_IdentifiabilityMessage += "; the estimate lies on a bound";
+    }
+  }
+  m_Timings["fine"] = Seconds(t0);
+
+  // 4. Outputs: the best point visited (L-BFGS-B may end on a trial point).
+  m_FinalValue = bestValue;
+  for (std::size_t k = 0; k < unknown.size(); ++k)
+  {
+    m_EstimatedYoungsModuli[unknown[k]->name] = bestModuli[k];
+  }
+  fineObjective.SetYoungsModuli(bestModuli);
+  bmr::TetrahedralMesh out = fine;
+  out.displacement = fineObjective.ComputeDisplacement(bestWall);
+  out.force = fineObjective.ComputeBoundaryForces(out.displacement);
+  for (const auto & s : fineObjective.ComputeSurfaceDistances(out.displacement))
+  {
+    m_SurfaceDistances.push_back({ s.name, s.rms, s.maximum });
+  }
+  this->GetOutput()->Set(out);
+  this->UpdateProgress(1.0f);
+}
+
+void
+FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
+{
+  Superclass::PrintSelf(os, indent);
+  os << indent << "Scene: " << m_Scene.name << " (" << m_Scene.labels.size() << " labels)" << std::endl;
+  os << indent << "NumberOfSweepSamples: " << m_NumberOfSweepSamples << std::endl;
+  os << indent << "MaximumNumberOfInnerIterations: " << m_MaximumNumberOfInnerIterations << std::endl;
+  os << indent << "MaximumNumberOfOuterIterations: " << m_MaximumNumberOfOuterIterations << std::endl;
+  os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
+  os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
+  os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
+  os << indent << "SweepOnly: " << m_SweepOnly << std::endl;
+  os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
+  for (const auto & kv : m_EstimatedYoungsModuli)
+  {
+    os << indent << "EstimatedYoungsModulus[" << kv.first << "]: " << kv.second << " kPa" << std::endl;
+  }
+  os << indent << "FinalValue: " << m_FinalValue << " mm^2" << std::endl;
+  os << indent << "Identifiable: " << m_Identifiable << " (" << m_IdentifiabilityMessage << ")" << std::endl;
+  os << indent << "Sweep samples: " << m_Sweep.size() << ", fine iterations: " << m_History.size() << std::endl;
+}
+
+} // namespace itk

@@ -1,0 +1,231 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The registration objective and its adjoint gradients (bmr::SurfaceMatchingObjective):
+// the Taylor remainder |Phi(p + h v) - Phi(p) - h grad(Phi).v| against central
+// finite differences must shrink as h^2 (slope in [1.9, 2.1] over four halvings)
+// for the wall displacements and for log E; the signed distance sampler must
+// reproduce an affine function exactly; bad set-ups are named.
+#include "bmrMesher.h"
+#include "bmrSurfaceMatchingObjective.h"
+#include "bmrTestUtilities.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+
+namespace {
+// Outer ball (fixed boundary) with a hollow cavity (force surface) and a stiff inclusion (unknown E).
+constexpr double OuterRadius = 20.0, CavityRadius = 6.0, InclusionRadius = 5.0;
+const double     CavityCenter[3] = { -6.0, 0.0, 0.0 }, InclusionCenter[3] = { 8.0, 0.0, 0.0 };
+
+double
+Distance(const double c[3], double x, double y, double z)
+{
+  return std::sqrt((x - c[0]) * (x - c[0]) + (y - c[1]) * (y - c[1]) + (z - c[2]) * (z - c[2]));
+}
+
+bmr::Scene
+TestScene()
+{
+  using R = bmr::LabelRole;
+  bmr::Scene      s;
+  bmr::SceneLabel inclusion{ "inclusion", 2, R::UnknownMaterial, 40.0, 0.4 };
+  inclusion.lowerBound = 10;
+  inclusion.upperBound = 400;
+  s.labels = { { "outside", 0, R::Outside }, { "tissue", 1, R::Material, 10.0, 0.35 }, inclusion, { "cavity", 3, R::Hollow } };
+  s.gauge = "tissue";
+  s.forceSurfaces = { "cavity" };
+  s.objective = { { "inclusion", 1.0 }, { "cavity", 2.0 } };
+  s.roiBoundaryFixed = true;
+  return s;
+}
+
+/** Signed distance [mm] to a sphere of radius r around c, sampled on a 1 mm oblique grid. */
+std::shared_ptr<const bmr::SignedDistanceSampler>
+SphereMap(const double c[3], double r)
+{
+  bmr::GridGeometry g;
+  g.size = { { 48, 48, 48 } };
+  g.spacing = { { 1.0, 1.0, 1.1 } };
+  const double a = 0.3; // rotation about z: the sampler must honour direction cosines
+  g.direction = { { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 } };
+  g.origin = { { 0, 0, 0 } };
+  const auto centre = g.IndexToPoint({ { 23.5, 23.5, 23.5 } });
+  for (int d = 0; d < 3; ++d)
+  {
+    g.origin[d] -= centre[d];
+  }
+  std::vector<float> v(g.GetNumberOfVoxels());
+  for (std::size_t k = 0; k < g.size[2]; ++k)
+    for (std::size_t j = 0; j < g.size[1]; ++j)
+      for (std::size_t i = 0; i < g.size[0]; ++i)
+      {
+        const auto p = g.IndexToPoint({ { double(i), double(j), double(k) } });
+        v[i + g.size[0] * (j + g.size[1] * k)] = static_cast<float>(Distance(c, p[0], p[1], p[2]) - r);
+      }
+  return std::make_shared<bmr::SignedDistanceSampler>(g, v, "test map");
+}
+
+/** Slopes log2(r(h)/r(h/2)) of the Taylor remainder along direction v, for h = h0 ... h0/16. */
+template<typename TPhi>
+bool
+CheckTaylor(const char * name, TPhi phiAt, double phi0, double slope0, double h0)
+{
+  double previous = 0.0;
+  bool   ok = true;
+  for (int k = 0; k <= 4; ++k)
+  {
+    const double h = h0 / std::pow(2.0, k);
+    const double remainder = std::abs(phiAt(h) - phi0 - h * slope0);
+    const double central = (phiAt(h) - phiAt(-h)) / (2.0 * h);
+    std::cout << name << ": h " << h << " remainder " << remainder << " central difference " << central
+              << " adjoint " << slope0;
+    if (k > 0)
+    {
+      const double slope = std::log2(previous / remainder);
+      std::cout << " slope " << slope;
+      // Tolerance: a consistent first derivative leaves an O(h^2) remainder (slope 2);
+      // [1.9, 2.1] allows the O(h^3) term at the largest step, an inconsistent gradient gives slope 1.
+      if (!(slope >= 1.9 && slope <= 2.1))
+      {
+        std::cout << "  <-- FAIL";
+        ok = false;
+      }
+    }
+    std::cout << std::endl;
+    previous = remainder;
+  }
+  return ok;
+}
+} // namespace
+
+int
+bmrSurfaceMatchingObjectiveTest(int, char *[])
+{
+  bool ok = true;
+
+  // 1. The sampler reproduces an affine function and its gradient exactly (B-spline quasi-interpolation).
+  {
+    bmr::GridGeometry g;
+    g.size = { { 8, 9, 10 } };
+    g.spacing = { { 0.7, 1.3, 2.0 } };
+    g.origin = { { -3, 2, 5 } };
+    std::vector<float> v(g.GetNumberOfVoxels());
+    const double       a[3] = { 0.25, -0.5, 0.125 };
+    for (std::size_t k = 0; k < g.size[2]; ++k)
+      for (std::size_t j = 0; j < g.size[1]; ++j)
+        for (std::size_t i = 0; i < g.size[0]; ++i)
+        {
+          const auto p = g.IndexToPoint({ { double(i), double(j), double(k) } });
+          v[i + g.size[0] * (j + g.size[1] * k)] = static_cast<float>(a[0] * p[0] + a[1] * p[1] + a[2] * p[2]);
+        }
+    const bmr::SignedDistanceSampler s(g, v, "affine");
+    double                           worst = 0.0;
+    // Two samples from the border on each side, where no clamped sample enters the stencil.
+    for (int t = 0; t < 40; ++t)
+    {
+      const auto   p = g.IndexToPoint({ { 1.0 + 0.1 * t, 1.0 + 0.11 * t, 1.0 + 0.12 * t } });
+      const double x[3] = { p[0], p[1], p[2] };
+      double       grad[3];
+      const double value = s.Evaluate(x, grad);
+      worst = std::max(worst, std::abs(value - (a[0] * x[0] + a[1] * x[1] + a[2] * x[2])));
+      for (int d = 0; d < 3; ++d)
+      {
+        worst = std::max(worst, std::abs(grad[d] - a[d]));
+      }
+    }
+    std::cout << "affine reproduction error " << worst << std::endl;
+    // float samples: relative precision 6e-8 of values up to ~5.
+    if (!(worst < 1e-5))
+    {
+      std::cerr << "FAIL: the sampler does not reproduce an affine function" << std::endl;
+      ok = false;
+    }
+  }
+
+  // 2. Adjoint gradients against finite differences.
+  bmr::MeshingParameters p;
+  p.cellSize = 3.0;
+  p.facetSize = 3.0;
+  p.facetDistance = 0.5;
+  auto labelAt = [](double x, double y, double z) -> std::int32_t {
+    if (Distance(CavityCenter, x, y, z) < CavityRadius)
+      return 3;
+    if (Distance(InclusionCenter, x, y, z) < InclusionRadius)
+      return 2;
+    return x * x + y * y + z * z < OuterRadius * OuterRadius ? 1 : 0;
+  };
+  const bmr::TetrahedralMesh mesh = bmr::ExtractSubmesh(bmr::MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 22.0, p), { 3 });
+  const bmr::Scene           scene = TestScene();
+  // Fixed surfaces: the cavity grown by 1.5 mm, the inclusion shifted by 1 mm.
+  const double                                                           movedInclusion[3] = { 7.0, 0.5, 0.0 };
+  std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> maps{
+    { 2, SphereMap(movedInclusion, InclusionRadius) }, { 3, SphereMap(CavityCenter, CavityRadius + 1.5) }
+  };
+  bmr::SurfaceMatchingObjective objective(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
+  std::cout << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << objective.GetControlNodes().size()
+            << " control nodes" << std::endl;
+  objective.SetYoungsModuli({ 40.0 });
+  std::vector<double> d = objective.MatchSurfaces();
+  std::vector<double> v(d.size());
+  for (std::size_t i = 0; i < v.size(); ++i)
+  {
+    v[i] = std::sin(0.7 * double(i) + 0.3); // a fixed, non-trivial direction [mm]
+  }
+  std::vector<double> gd, ge;
+  const double        phi0 = objective.Evaluate(d, &gd, &ge);
+  double              slopeD = 0.0;
+  for (std::size_t i = 0; i < v.size(); ++i)
+  {
+    slopeD += gd[i] * v[i];
+  }
+  ok &= CheckTaylor(
+    "d",
+    [&](double h) {
+      std::vector<double> dh(d);
+      for (std::size_t i = 0; i < dh.size(); ++i)
+        dh[i] += h * v[i];
+      return objective.Evaluate(dh, nullptr, nullptr);
+    },
+    phi0,
+    slopeD,
+    0.1);
+  ok &= CheckTaylor(
+    "log E",
+    [&](double h) {
+      objective.SetYoungsModuli({ 40.0 * std::exp(h) });
+      const double value = objective.Evaluate(d, nullptr, nullptr);
+      objective.SetYoungsModuli({ 40.0 });
+      return value;
+    },
+    phi0,
+    ge[0],
+    0.1);
+
+  // 3. Bad set-ups are named.
+  ok &= bmr::test::ExpectException(
+    "missing map", [&] { bmr::SceneObjectiveSurfaces(scene, mesh, { { 3, maps[3] } }); }, "inclusion");
+  bmr::Scene nothing = scene;
+  nothing.forceSurfaces.clear();
+  nothing.labels[2].role = bmr::LabelRole::Material;
+  ok &= bmr::test::ExpectException(
+    "nothing to estimate",
+    [&] { bmr::SurfaceMatchingObjective o(mesh, nothing, bmr::SceneObjectiveSurfaces(nothing, mesh, maps)); },
+    "nothing to estimate");
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
+}
