@@ -369,6 +369,8 @@ PrintUsage(std::ostream & os)
         "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--bladder-mm D]\n"
         "                     [--rectum-mm D] [--noise-HU S] [--seed N]\n"
         "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
+        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
+        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F]\n"
         "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n";
 }
 } // namespace
@@ -396,6 +398,10 @@ main(int argc, char * argv[])
     if (command == "simulate")
     {
       return SimulateCommand(args);
+    }
+    if (command == "register")
+    {
+      return RegisterCommand(args);
     }
     throw UsageError("unknown command \"" + command + "\" (try: biomechreg help)");
   }

@@ -373,6 +373,50 @@ struct SimulationOutputs
   FieldType::Pointer     push;
 };
 
+/** Meshes the moving labels for \a scene (CGAL Mesh_3), timing it. */
+inline bmr::TetrahedralMesh
+MeshLabels(const LabelImageType * movingLabels, const bmr::Scene & scene, StageTimer & timer, const std::string & stage)
+{
+  timer.Begin(stage);
+  auto mesher = itk::LabelImageToTetrahedralMeshFilter<LabelImageType>::New();
+  mesher->SetInput(movingLabels);
+  mesher->SetScene(scene);
+  mesher->Update();
+  bmr::TetrahedralMesh   mesh = mesher->GetOutput()->Get();
+  const bmr::MeshQuality q = mesher->GetMeshQuality();
+  std::ostringstream     detail;
+  detail << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << mesh.GetNumberOfPoints() << " nodes, min dihedral "
+         << std::setprecision(1) << q.minimumDihedralAngleDegrees << " deg";
+  timer.End(detail.str());
+  return mesh;
+}
+
+/** The pull-back field on the fixed grid and the push field on the moving grid of out.mesh's displacement. */
+inline void
+ComputeFields(SimulationOutputs &       out,
+              const itk::ImageBase<3> * fixedReference,
+              const itk::ImageBase<3> * movingReference,
+              StageTimer &              timer)
+{
+  auto meshObject = itk::TetrahedralMeshObject::New();
+  meshObject->Set(out.mesh);
+  timer.Begin("pull-back field (fixed -> moving)");
+  auto pull = itk::PhysicsDeformationFieldSource<FieldType>::New();
+  pull->SetMesh(meshObject);
+  pull->SetReferenceImage(fixedReference);
+  pull->Update();
+  out.pullBack = pull->GetOutput();
+  timer.End();
+  timer.Begin("push field (moving -> fixed)");
+  auto push = itk::PhysicsDeformationFieldSource<FieldType>::New();
+  push->SetMesh(meshObject);
+  push->SetReferenceImage(movingReference);
+  push->SetFieldDirection(itk::PhysicsDeformationFieldSource<FieldType>::FieldDirectionEnum::MovingToFixed);
+  push->Update();
+  out.push = push->GetOutput();
+  timer.End();
+}
+
 /** Mesh -> FEM -> fields, timing each stage. */
 inline SimulationOutputs
 RunSimulation(const LabelImageType *    movingLabels,
@@ -381,17 +425,7 @@ RunSimulation(const LabelImageType *    movingLabels,
               StageTimer &              timer)
 {
   SimulationOutputs out;
-  timer.Begin("mesh (CGAL Mesh_3)");
-  auto mesher = itk::LabelImageToTetrahedralMeshFilter<LabelImageType>::New();
-  mesher->SetInput(movingLabels);
-  mesher->SetScene(scene);
-  mesher->Update();
-  out.mesh = mesher->GetOutput()->Get();
-  const bmr::MeshQuality q = mesher->GetMeshQuality();
-  std::ostringstream     detail;
-  detail << out.mesh.GetNumberOfTetrahedra() << " tetrahedra, " << out.mesh.GetNumberOfPoints()
-         << " nodes, min dihedral " << std::setprecision(1) << q.minimumDihedralAngleDegrees << " deg";
-  timer.End(detail.str());
+  out.mesh = MeshLabels(movingLabels, scene, timer, "mesh (CGAL Mesh_3)");
 
   timer.Begin("FEM (assemble, factorise, solve)");
   out.simulation = bmr::SimulateScene(scene, out.mesh);
@@ -412,24 +446,7 @@ RunSimulation(const LabelImageType *    movingLabels,
   timer.Add("assemble", t.assemble);
   timer.Add("factorise", t.analyse + t.factorise);
   timer.Add("solve", t.solve);
-
-  auto meshObject = itk::TetrahedralMeshObject::New();
-  meshObject->Set(out.mesh);
-  timer.Begin("pull-back field (fixed -> moving)");
-  auto pull = itk::PhysicsDeformationFieldSource<FieldType>::New();
-  pull->SetMesh(meshObject);
-  pull->SetReferenceImage(fixedReference);
-  pull->Update();
-  out.pullBack = pull->GetOutput();
-  timer.End();
-  timer.Begin("push field (moving -> fixed)");
-  auto push = itk::PhysicsDeformationFieldSource<FieldType>::New();
-  push->SetMesh(meshObject);
-  push->SetReferenceImage(movingLabels);
-  push->SetFieldDirection(itk::PhysicsDeformationFieldSource<FieldType>::FieldDirectionEnum::MovingToFixed);
-  push->Update();
-  out.push = push->GetOutput();
-  timer.End();
+  ComputeFields(out, fixedReference, movingLabels, timer);
   return out;
 }
 
@@ -506,6 +523,42 @@ WarpAndWrite(const std::string &       out,
   timer.End();
   return warpedLabels;
 }
+
+// ---------------------------------------------------------------- register
+
+/** Inputs of a registration run (biomechreg register, the demo). */
+struct RegisterInputs
+{
+  LabelImageType::Pointer movingLabels;
+  LabelImageType::Pointer fixedLabels;
+  CTImageType::Pointer    movingCT;
+  bmr::Scene              scene;
+  std::string             out;
+  unsigned int            sweepSamples{ 8 };
+  double                  coarseFactor{ 1.6 }; ///< coarse mesh sizes = scene sizes x this (<= 1: no coarse mesh)
+  double                  wallControlSpacing{ 12.0 }; ///< mm, FEMElasticityOptimizer::SetWallControlSpacing
+  double                  wallRegularization{ 0.01 }; ///< FEMElasticityOptimizer::SetWallRegularization
+};
+
+/** What a registration run measured, as written to report.json. */
+struct RegisterReport
+{
+  std::map<std::string, double> youngsModulus; ///< kPa, unknown labels
+  std::map<std::string, double> dice;
+  double                        jacobianMinimum{ 0.0 };
+  double                        jacobianNonPositiveFraction{ 0.0 };
+  double                        finalValue{ 0.0 };
+  bool                          identifiable{ true };
+  std::string                   identifiability;
+  std::size_t                   tetrahedra{ 0 };
+};
+
+/** Distance maps -> meshes -> FEMElasticityOptimizer -> fields -> warped images -> files in inputs.out. */
+RegisterReport
+RunRegistration(const RegisterInputs & inputs, StageTimer & timer);
+
+int
+RegisterCommand(const Arguments & args);
 
 } // namespace bmrcli
 

@@ -55,6 +55,17 @@ BiomechanicalRegistration_EXPORT std::vector<ObjectiveSurface>
                                                         const TetrahedralMesh &                                               mesh,
                                                         const std::map<std::int32_t, std::shared_ptr<const SignedDistanceSampler>> & maps);
 
+/** Result of SurfaceMatchingObjective::SolveWalls(): the inner optimum at fixed E. */
+struct BiomechanicalRegistration_EXPORT WallSolution
+{
+  std::vector<double> parameters;         ///< p [mm]
+  double              value{ 0.0 };       ///< Phi* [mm^2]
+  std::vector<double> gradient;           ///< dPhi/dp at the optimum [mm]
+  std::vector<double> logModulusGradient; ///< dPhi*/dlog E (envelope theorem) [mm^2]
+  unsigned int        iterations{ 0 };
+  std::string         stop;
+};
+
 /** \brief The registration objective of dissertation chapter 3 and its adjoint gradients.
  *
  * Forward model: linear elasticity K(E) u = f with u = 0 on the walls of fixed
@@ -67,6 +78,9 @@ BiomechanicalRegistration_EXPORT std::vector<ObjectiveSurface>
  * inner problem is well conditioned whatever E is. The forces F = (K u - f) at
  * the control nodes [mN] are reported with ComputeBoundaryForces().
  *
+ * Optionally the wall displacement is spanned by a smooth reduced basis,
+ * d = W p (SetWallControlSpacing(), bmr::WallBasis).
+ *
  * Objective, over the nodes l of every objective surface s:
  * \f[ \Phi(E, d) = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l)^2 \f]
  * with \f$g = \partial\Phi/\partial u\f$, \f$g_l = w_s \phi_s \nabla\phi_s\f$.
@@ -74,6 +88,7 @@ BiomechanicalRegistration_EXPORT std::vector<ObjectiveSurface>
  * \f$\lambda\f$ = 0 on constrained dofs, then
  * \f[ \partial\Phi/\partial d = g_c - (K\lambda)_c, \qquad
  *     \partial\Phi/\partial \log E_m = -E_m\, \lambda^T \hat K_m u. \f]
+ *
  * Units: d, u in mm; E in kPa; Phi in mm^2.
  * \ingroup BiomechanicalRegistration
  */
@@ -92,9 +107,22 @@ public:
   /** Nodes whose displacement is a parameter (walls of the force surfaces), sorted. */
   const std::vector<std::int32_t> &
   GetControlNodes() const;
-  /** 3 per control node. */
+  /** Number of parameters p of the wall displacement d = W p: 3 per control
+   * point of the wall basis (3 per control node without one). */
   std::size_t
-  GetNumberOfControlValues() const;
+  GetNumberOfParameters() const;
+  /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis);
+   * 0 (default): every control node's displacement is a parameter. */
+  void
+  SetWallControlSpacing(double spacing);
+  /** Weight alpha [1] of the regulariser alpha/2 |p|^2 added to Phi (default 0).
+   * A distance objective does not see a wall sliding along itself: without it
+   * the inner optimum drifts along such near-null directions and Phi*(E)
+   * becomes noisy. The term does not depend on E, so unlike a penalty on the
+   * forces or the strain energy (both proportional to E) it does not push the
+   * moduli one way; a small alpha only picks the least-displacement optimum. */
+  void
+  SetWallRegularization(double alpha);
   /** Labels whose modulus is estimated, in scene order. */
   const std::vector<std::int32_t> &
   GetUnknownLabels() const;
@@ -107,12 +135,12 @@ public:
   std::vector<double>
   GetYoungsModuli() const;
 
-  /** Phi(E, d) [mm^2]; fills the gradients when not null (3 per control node
+  /** Phi(E, d) + R(d) [mm^2]; fills the gradients when not null (3 per control node
    * [mm], one per unknown label [mm^2 per unit log E]). */
   double
   Evaluate(const std::vector<double> & d, std::vector<double> * gradientD, std::vector<double> * gradientLogE);
 
-  /** Nodal displacement [mm] (3N) for wall displacements \a d. */
+  /** Nodal displacement [mm] (3N) for the wall parameters \a p. */
   std::vector<double>
   ComputeDisplacement(const std::vector<double> & d);
   /** Nodal forces [mN] (3N): K u - f, the loads the walls exert on the tissue,
@@ -126,9 +154,22 @@ public:
   /** Initial wall displacements by surface matching (dissertation 5.3.1.1):
    * every objective-surface node is pulled along -phi grad(phi) while springs
    * to its neighbours on the surface keep the displacement smooth,
-   * v <- v - alpha phi grad(phi) + beta (mean of neighbours - v); returns d. */
+   * v <- v - alpha phi grad(phi) + beta (mean of neighbours - v); returns the
+   * parameters p whose wall displacement W p fits the control nodes' v best. */
   std::vector<double>
   MatchSurfaces(unsigned int iterations = 200) const;
+
+  /** min_p Phi(E, p) at the current E by Levenberg-Marquardt. u is affine in p
+   * for fixed E, u = u0 + A p, so A (3 rows per objective node, one column
+   * per parameter) is computed once with one solve per parameter on the cached
+   * factorisation; every iteration then only samples the distance maps:
+   * \f$ (J^TJ + \mu\,\mathrm{diag}(J^TJ))\,\delta = -J^T r \f$ with
+   * \f$ r = \sqrt{w}\,\phi \f$, \f$ J = \sqrt{w}\,\nabla\phi^T A \f$.
+   * Stops when \f$\|J^T r\| \le\f$ tolerance max(1, |p|), when Phi no longer
+   * decreases (relative 1e-12), or after maximumIterations. Meant for the
+   * reduced wall basis (tens to hundreds of parameters). */
+  WallSolution
+  SolveWalls(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
 
   LinearElasticModel &
   GetModel();

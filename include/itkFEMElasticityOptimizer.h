@@ -146,6 +146,12 @@ public:
   itkGetConstMacro(InnerGradientTolerance, double);
   itkSetMacro(OuterGradientTolerance, double);
   itkGetConstMacro(OuterGradientTolerance, double);
+  /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node. */
+  itkSetMacro(WallControlSpacing, double);
+  itkGetConstMacro(WallControlSpacing, double);
+  /** Weight of the E-independent regulariser alpha/2 |p|^2 on the wall parameters (bmr::SurfaceMatchingObjective). */
+  itkSetMacro(WallRegularization, double);
+  itkGetConstMacro(WallRegularization, double);
   itkSetMacro(FlatnessThreshold, double);
   itkGetConstMacro(FlatnessThreshold, double);
   /** Skip the fine-mesh outer optimisation and keep the sweep's estimate (for speed studies). */
@@ -225,6 +231,8 @@ private:
   double                        m_InnerGradientTolerance{ 1e-5 };
   double                        m_OuterGradientTolerance{ 1e-6 };
   double                        m_FlatnessThreshold{ 0.01 };
+  double                        m_WallControlSpacing{ 12.0 };
+  double                        m_WallRegularization{ 0.01 };
   bool                          m_SweepOnly{ false };
   std::map<std::string, double> m_EstimatedYoungsModuli;
   std::string                   m_GaugeLabel;

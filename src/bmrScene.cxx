@@ -297,12 +297,15 @@ Scene::Validate() const
       SceneError(src, entry + ".weight", "must be > 0");
     }
   }
-  if (!fixedLabel && !roiBoundaryFixed && !displacementLoad)
+  // In an estimation (FEMElasticityOptimizer) the walls of the force surfaces are displacement-controlled,
+  // which holds the model too.
+  const bool estimatedWalls = !forceSurfaces.empty() && !objective.empty();
+  if (!fixedLabel && !roiBoundaryFixed && !displacementLoad && !estimatedWalls)
   {
     SceneError(src,
                "labels",
                "nothing prevents rigid-body motion: give a label the role fixed, set region_of_interest.boundary to "
-               "\"fixed\", or prescribe a displacement load");
+               "\"fixed\", prescribe a displacement load, or estimate the loads of force_surfaces");
   }
   const MeshingParameters &             m = mesh;
   const std::pair<const char *, double> sizes[] = { { "cell_size_mm", m.cellSize },

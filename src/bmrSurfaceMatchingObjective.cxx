@@ -19,8 +19,13 @@
 
 #include "bmrError.h"
 #include "bmrSimulation.h"
+#include "bmrWallBasis.h"
+
+#include <Eigen/Dense>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -86,6 +91,10 @@ struct SurfaceMatchingObjective::Impl
   std::vector<std::int32_t>     unknownLabels;
   std::vector<double>           basePrescribed; // 3N: fixed walls' values
   std::unique_ptr<LinearElasticModel> model;
+  // Walls as (control index, mesh node) lists, and the basis of their displacement.
+  std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> walls;
+  std::unique_ptr<WallBasis>                                      basis;
+  double                                                          regularization{ 0.0 };
 
   explicit Impl(const TetrahedralMesh & m)
     : mesh(m)
@@ -131,7 +140,9 @@ SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &      
   {
     held[n] = 1;
   }
-  std::set<std::int32_t> control;
+  std::set<std::int32_t>         control;
+  std::vector<std::set<std::int32_t>> wallOf(N); // force surfaces (by index) each node is on
+  std::size_t                    wallIndex = 0;
   for (const std::string & name : scene.forceSurfaces)
   {
     const SceneLabel * label = scene.FindLabel(name);
@@ -146,15 +157,26 @@ SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &      
       if (!held[n])
       {
         control.insert(n);
+        wallOf[n].insert(static_cast<std::int32_t>(wallIndex));
         ++added;
       }
     }
+    ++wallIndex;
     if (added == 0)
     {
       Fail("SurfaceMatchingObjective", "force surface \"" + name + "\" has no free wall node in the mesh");
     }
   }
   d.controlNodes.assign(control.begin(), control.end());
+  d.walls.assign(wallIndex, {});
+  for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+  {
+    for (std::int32_t w : wallOf[d.controlNodes[k]])
+    {
+      d.walls[w].emplace_back(static_cast<std::int32_t>(k), d.controlNodes[k]);
+    }
+  }
+  d.basis.reset(new WallBasis(mesh.points, d.walls, d.controlNodes.size(), 0.0));
   for (const auto & l : scene.labels)
   {
     if (l.role == LabelRole::UnknownMaterial)
@@ -191,9 +213,29 @@ SurfaceMatchingObjective::GetControlNodes() const
 }
 
 std::size_t
-SurfaceMatchingObjective::GetNumberOfControlValues() const
+SurfaceMatchingObjective::GetNumberOfParameters() const
 {
-  return 3 * m_Impl->controlNodes.size();
+  return 3 * m_Impl->basis->GetNumberOfControlPoints();
+}
+
+void
+SurfaceMatchingObjective::SetWallRegularization(double alpha)
+{
+  if (!(std::isfinite(alpha) && alpha >= 0.0))
+  {
+    Fail("SurfaceMatchingObjective::SetWallRegularization", "the regularisation weight must be finite and >= 0");
+  }
+  m_Impl->regularization = alpha;
+}
+
+void
+SurfaceMatchingObjective::SetWallControlSpacing(double spacing)
+{
+  if (!std::isfinite(spacing))
+  {
+    Fail("SurfaceMatchingObjective::SetWallControlSpacing", "the control point spacing must be finite");
+  }
+  m_Impl->basis.reset(new WallBasis(m_Impl->mesh.points, m_Impl->walls, m_Impl->controlNodes.size(), spacing));
 }
 
 const std::vector<std::int32_t> &
@@ -233,11 +275,17 @@ SurfaceMatchingObjective::GetYoungsModuli() const
 }
 
 double
-SurfaceMatchingObjective::Evaluate(const std::vector<double> & dWall,
+SurfaceMatchingObjective::Evaluate(const std::vector<double> & parameters,
                                    std::vector<double> *       gradientD,
                                    std::vector<double> *       gradientLogE)
 {
-  Impl &                    d = *m_Impl;
+  Impl & d = *m_Impl;
+  if (parameters.size() != GetNumberOfParameters())
+  {
+    Fail("SurfaceMatchingObjective::Evaluate", "expected " + std::to_string(GetNumberOfParameters()) +
+                                                 " parameters, got " + std::to_string(parameters.size()));
+  }
+  const std::vector<double> dWall = d.basis->Expand(parameters);
   const std::vector<double> u = d.model->Solve(d.bc.forces, d.Prescribed(dWall));
   const bool                wantGradient = gradientD != nullptr || gradientLogE != nullptr;
   std::vector<double>       g(wantGradient ? u.size() : 0, 0.0);
@@ -261,6 +309,12 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & dWall,
       }
     }
   }
+  double pp = 0.0;
+  for (double x : parameters)
+  {
+    pp += x * x;
+  }
+  phiSum += 0.5 * d.regularization * pp;
   if (!wantGradient)
   {
     return phiSum;
@@ -278,6 +332,11 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & dWall,
         const std::size_t dof = 3 * static_cast<std::size_t>(d.controlNodes[k]) + c;
         (*gradientD)[3 * k + c] = g[dof] - Klambda[dof];
       }
+    }
+    *gradientD = d.basis->ExpandTranspose(*gradientD);
+    for (std::size_t i = 0; i < parameters.size(); ++i)
+    {
+      (*gradientD)[i] += d.regularization * parameters[i];
     }
   }
   if (gradientLogE != nullptr)
@@ -298,9 +357,9 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & dWall,
 }
 
 std::vector<double>
-SurfaceMatchingObjective::ComputeDisplacement(const std::vector<double> & dWall)
+SurfaceMatchingObjective::ComputeDisplacement(const std::vector<double> & parameters)
 {
-  return m_Impl->model->Solve(m_Impl->bc.forces, m_Impl->Prescribed(dWall));
+  return m_Impl->model->Solve(m_Impl->bc.forces, m_Impl->Prescribed(m_Impl->basis->Expand(parameters)));
 }
 
 std::vector<double>
@@ -457,7 +516,156 @@ SurfaceMatchingObjective::MatchSurfaces(unsigned int iterations) const
       dWall[3 * k + c] = v[3 * static_cast<std::size_t>(d.controlNodes[k]) + c];
     }
   }
-  return dWall;
+  return d.basis->Fit(dWall);
+}
+
+WallSolution
+SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned int maximumIterations, double tolerance)
+{
+  Impl &            d = *m_Impl;
+  const std::size_t np = GetNumberOfParameters();
+  if (start.size() != np)
+  {
+    Fail("SurfaceMatchingObjective::SolveWalls", "the start holds " + std::to_string(start.size()) +
+                                                   " values, expected " + std::to_string(np));
+  }
+  // Objective entries (surface, node) and the distinct nodes they need.
+  std::vector<std::int32_t> nodes;
+  for (const ObjectiveSurface & s : d.surfaces)
+  {
+    nodes.insert(nodes.end(), s.nodes.begin(), s.nodes.end());
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  std::vector<std::int32_t> row(d.mesh.GetNumberOfPoints(), -1);
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+  {
+    row[nodes[i]] = static_cast<std::int32_t>(i);
+  }
+  // u is affine in p: u = u0 + A p. Columns of A by one solve each with the cached factorisation.
+  const std::vector<double> u0 = d.model->Solve(d.bc.forces, d.Prescribed(std::vector<double>(3 * d.controlNodes.size(), 0.0)));
+  Eigen::MatrixXd           A(static_cast<Eigen::Index>(3 * nodes.size()), static_cast<Eigen::Index>(np));
+  std::vector<double>       unit(np, 0.0), wallsOnly(u0.size(), 0.0);
+  for (std::size_t j = 0; j < np; ++j)
+  {
+    unit[j] = 1.0;
+    const std::vector<double> dj = d.basis->Expand(unit);
+    unit[j] = 0.0;
+    for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        wallsOnly[3 * static_cast<std::size_t>(d.controlNodes[k]) + c] = dj[3 * k + c];
+      }
+    }
+    const std::vector<double> uj = d.model->Solve({}, wallsOnly);
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        A(static_cast<Eigen::Index>(3 * i + c), static_cast<Eigen::Index>(j)) = uj[3 * static_cast<std::size_t>(nodes[i]) + c];
+      }
+    }
+  }
+  std::size_t entries = 0;
+  for (const ObjectiveSurface & s : d.surfaces)
+  {
+    entries += s.nodes.size();
+  }
+  // Residuals r = sqrt(w) phi(x + u) and their Jacobian J = sqrt(w) grad(phi)^T A.
+  const auto residuals = [&](const Eigen::VectorXd & p, Eigen::VectorXd & r, Eigen::MatrixXd * J) {
+    const Eigen::VectorXd u = A * p;
+    r.resize(static_cast<Eigen::Index>(entries));
+    if (J)
+    {
+      J->resize(static_cast<Eigen::Index>(entries), static_cast<Eigen::Index>(np));
+    }
+    Eigen::Index k = 0;
+    for (const ObjectiveSurface & s : d.surfaces)
+    {
+      const double sw = std::sqrt(s.weight);
+      for (std::int32_t n : s.nodes)
+      {
+        const std::size_t i = static_cast<std::size_t>(row[n]);
+        double            x[3];
+        for (int c = 0; c < 3; ++c)
+        {
+          x[c] = d.mesh.points[3 * static_cast<std::size_t>(n) + c] + u0[3 * static_cast<std::size_t>(n) + c] +
+                 u[static_cast<Eigen::Index>(3 * i + c)];
+        }
+        double grad[3];
+        r[k] = sw * s.distance->Evaluate(x, grad);
+        if (J)
+        {
+          J->row(k) = sw * (grad[0] * A.row(static_cast<Eigen::Index>(3 * i)) +
+                            grad[1] * A.row(static_cast<Eigen::Index>(3 * i + 1)) +
+                            grad[2] * A.row(static_cast<Eigen::Index>(3 * i + 2)));
+        }
+        ++k;
+      }
+    }
+    return 0.5 * r.squaredNorm() + 0.5 * d.regularization * p.squaredNorm();
+  };
+  // Levenberg-Marquardt: (J^T J + mu diag(J^T J)) delta = -J^T r; mu shrinks after a success, grows after a failure.
+  Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(start.data(), static_cast<Eigen::Index>(np));
+  Eigen::VectorXd r, rTry;
+  Eigen::MatrixXd J;
+  double          value = residuals(p, r, &J);
+  double          mu = 1e-3;
+  WallSolution    result;
+  result.stop = "maximum number of iterations";
+  unsigned int it = 0;
+  for (; it < maximumIterations; ++it)
+  {
+    const Eigen::VectorXd g = J.transpose() * r + d.regularization * p;
+    if (g.norm() <= tolerance * std::max(1.0, p.norm()))
+    {
+      result.stop = "gradient below tolerance";
+      break;
+    }
+    Eigen::MatrixXd H = J.transpose() * J;
+    H.diagonal().array() += d.regularization;
+    if (std::getenv("BMR_DEBUG") && (it % 50 == 0 || it < 10))
+      std::fprintf(stderr, "LM it %u value %.8g |g| %.3g mu %.3g |p| %.3g\n", it, value, g.norm(), mu, p.norm());
+    bool                  accepted = false;
+    for (int attempt = 0; attempt < 30 && !accepted; ++attempt)
+    {
+      Eigen::MatrixXd M = H;
+      // Marquardt scaling plus a floor of 1e-3 of the mean curvature: directions the objective hardly sees
+      // (a wall sliding along itself) get short steps instead of huge rejected ones.
+      M.diagonal().array() += mu * (H.diagonal().array() + 1e-3 * H.diagonal().mean());
+      const Eigen::VectorXd delta = M.ldlt().solve(-g);
+      const Eigen::VectorXd pTry = p + delta;
+      const double          valueTry = residuals(pTry, rTry, nullptr);
+      if (valueTry < value)
+      {
+        const double decrease = value - valueTry;
+        p = pTry;
+        value = residuals(p, r, &J);
+        mu = std::max(mu / 3.0, 1e-9);
+        accepted = true;
+        if (decrease <= 1e-10 * value)
+        {
+          attempt = 30;
+          it = maximumIterations; // converged in value
+          result.stop = "no further decrease";
+        }
+      }
+      else
+      {
+        mu *= 4.0;
+      }
+    }
+    if (!accepted)
+    {
+      result.stop = "no descent";
+      break;
+    }
+  }
+  result.iterations = std::min(it + 1, maximumIterations);
+  result.parameters.assign(p.data(), p.data() + np);
+  result.value = Evaluate(result.parameters, &result.gradient, &result.logModulusGradient);
+  return result;
 }
 
 LinearElasticModel &

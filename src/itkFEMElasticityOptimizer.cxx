@@ -156,18 +156,31 @@ struct InnerSolution
   std::string         stop;
 };
 
-/** min_d Phi(E, d) from \a start by L-BFGS (libLBFGS through ITK), then the gradients at the optimum. */
+/** min_p Phi(E, p) from \a start: Levenberg-Marquardt in the reduced wall basis, or L-BFGS
+ * (libLBFGS through ITK) with one parameter per wall node; then the gradients at the optimum. */
 InnerSolution
 SolveInner(bmr::SurfaceMatchingObjective & objective,
            const std::vector<double> &     moduli,
            const std::vector<double> &     start,
            unsigned int                    maximumIterations,
-           double                          tolerance)
+           double                          tolerance,
+           bool                            gaussNewton)
 {
   objective.SetYoungsModuli(moduli);
   InnerSolution result;
   result.wall = start;
-  if (objective.GetNumberOfControlValues() > 0)
+  if (gaussNewton && objective.GetNumberOfParameters() > 0)
+  {
+    const bmr::WallSolution w = objective.SolveWalls(start, maximumIterations, tolerance);
+    result.wall = w.parameters;
+    result.value = w.value;
+    result.logModulusGradient = w.logModulusGradient;
+    result.wallGradientNorm = Norm(w.gradient);
+    result.iterations = w.iterations;
+    result.stop = w.stop;
+    return result;
+  }
+  if (objective.GetNumberOfParameters() > 0)
   {
     auto metric = FunctionMetric::New();
     metric->m_Function = [&objective](const std::vector<double> & d, std::vector<double> * g) {
@@ -356,6 +369,11 @@ FEMElasticityOptimizer::GenerateData()
 
   const bmr::TetrahedralMesh & fine = this->GetMesh()->Get();
   bmr::SurfaceMatchingObjective fineObjective(fine, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, fine, samplers));
+  fineObjective.SetWallControlSpacing(m_WallControlSpacing);
+  fineObjective.SetWallRegularization(m_WallRegularization);
+
+  // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
+  const bool gaussNewton = m_WallControlSpacing > 0.0;
 
   // 1. Sweep of Phi*(E) over the bounds of the first unknown modulus, on the coarse mesh.
   auto t0 = Clock::now();
@@ -370,6 +388,8 @@ FEMElasticityOptimizer::GenerateData()
       coarseOwned.reset(
         new bmr::SurfaceMatchingObjective(coarse, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, coarse, samplers)));
       sweepObjective = coarseOwned.get();
+      sweepObjective->SetWallControlSpacing(m_WallControlSpacing);
+      sweepObjective->SetWallRegularization(m_WallRegularization);
     }
     std::vector<double> wall = sweepObjective->MatchSurfaces();
     const unsigned int  n = m_NumberOfSweepSamples;
@@ -380,7 +400,7 @@ FEMElasticityOptimizer::GenerateData()
       E[0] = lower[0] * std::pow(upper[0] / lower[0], double(k) / double(n - 1));
       // Every sample starts from the same surface-matching guess: Phi*(E) does not depend on the sweep order.
       const InnerSolution s =
-        SolveInner(*sweepObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance);
+        SolveInner(*sweepObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
       IterationRecord r;
       r.stage = "sweep";
       r.iteration = k;
@@ -452,7 +472,7 @@ FEMElasticityOptimizer::GenerateData()
   unsigned int  outerIteration = 0;
   const auto    innerAt = [&](const std::vector<double> & E) {
     const auto ts = Clock::now();
-    last = SolveInner(fineObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance);
+    last = SolveInner(fineObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
     wall = last.wall;
     IterationRecord r;
     r.stage = "fine";
@@ -552,6 +572,8 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
   os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
+  os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
+  os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
   os << indent << "SweepOnly: " << m_SweepOnly << std::endl;
   os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
   for (const auto & kv : m_EstimatedYoungsModuli)

@@ -94,9 +94,11 @@ bmrSceneTest(int, char *[])
   ok &= ExpectException("broken JSON", parse("{\"labels\": ["), "bad.json: JSON");
   ok &=
     ExpectException("wrong unit", parse(Replace(v, "\"modulus\": \"kPa\"", "\"modulus\": \"Pa\"")), "units.modulus");
-  // Nothing against rigid-body motion: no fixed label, no displacement load, free boundary.
+  // Nothing against rigid-body motion: no fixed label, no displacement load, free boundary, no estimated walls.
   ok &= ExpectException("rigid body",
-                        parse(Replace(Replace(v, "\"role\": \"fixed\"", "\"role\": \"hollow\""),
+                        parse(Replace(Replace(Replace(v, "\"role\": \"fixed\"", "\"role\": \"hollow\""),
+                                              "\"force_surfaces\": [\"bladder\"]",
+                                              "\"force_surfaces\": []"),
                                       "radial_displacement\", \"center_mm\": [0, -5, 30], \"magnitude_mm\": 6",
                                       "pressure\", \"pressure_kPa\": 1")),
                         "nothing prevents rigid-body motion");

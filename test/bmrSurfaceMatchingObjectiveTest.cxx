@@ -178,8 +178,8 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     { 2, SphereMap(movedInclusion, InclusionRadius) }, { 3, SphereMap(CavityCenter, CavityRadius + 1.5) }
   };
   bmr::SurfaceMatchingObjective objective(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
-  std::cout << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << objective.GetControlNodes().size()
-            << " control nodes" << std::endl;
+  std::cout << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << objective.GetNumberOfParameters()
+            << " parameters" << std::endl;
   objective.SetYoungsModuli({ 40.0 });
   std::vector<double> d = objective.MatchSurfaces();
   std::vector<double> v(d.size());

@@ -1,0 +1,370 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// biomechreg register: joint estimation of boundary loads and elasticity
+// (FEMElasticityOptimizer) and the displacement fields, warped images and
+// report that come out of it.
+#include "biomechregCommon.h"
+#include "itkDisplacementFieldJacobianDeterminantFilter.h"
+#include "itkFEMElasticityOptimizer.h"
+#include "itkSceneDistanceMaps.h"
+
+#include "itkCommand.h"
+
+#include <algorithm>
+#include <fstream>
+#include <limits>
+
+namespace bmrcli {
+namespace {
+
+/** Prints one line per inner solve (the optimizer's IterationEvent). */
+class ProgressPrinter : public itk::Command
+{
+public:
+  using Self = ProgressPrinter;
+  using Pointer = itk::SmartPointer<Self>;
+  itkNewMacro(Self);
+  void
+  Execute(itk::Object * caller, const itk::EventObject & event) override
+  {
+    Execute(static_cast<const itk::Object *>(caller), event);
+  }
+  void
+  Execute(const itk::Object * caller, const itk::EventObject & event) override
+  {
+    if (!itk::IterationEvent().CheckEvent(&event))
+    {
+      return;
+    }
+    const auto & r = static_cast<const itk::FEMElasticityOptimizer *>(caller)->GetCurrentRecord();
+    std::cout << "    " << std::left << std::setw(6) << r.stage << std::right << std::setw(3) << r.iteration;
+    for (double E : r.youngsModuli)
+    {
+      std::cout << "  E " << std::fixed << std::setprecision(2) << std::setw(8) << E << " kPa";
+    }
+    std::cout << "  Phi* " << std::scientific << std::setprecision(5) << r.value << " mm^2";
+    for (double g : r.logModulusGradient)
+    {
+      std::cout << "  dPhi/dlogE " << std::setprecision(2) << std::setw(9) << g;
+    }
+    std::cout << "  |dPhi/dd| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4)
+              << r.innerIterations << "  " << std::fixed << std::setprecision(2) << r.seconds << " s" << std::endl;
+  }
+
+protected:
+  ProgressPrinter() = default;
+};
+
+bmr::Scene
+Coarsened(bmr::Scene scene, double factor)
+{
+  scene.mesh.cellSize *= factor;
+  scene.mesh.facetSize *= factor;
+  scene.mesh.facetDistance *= factor;
+  for (auto & kv : scene.mesh.cellSizePerLabel)
+  {
+    kv.second *= factor;
+  }
+  return scene;
+}
+
+std::string
+HistoryCsv(const std::vector<itk::FEMElasticityOptimizer::IterationRecord> & records,
+           const std::vector<std::string> &                                  unknownNames)
+{
+  std::ostringstream o;
+  o << "# Phi* [mm^2] at the inner optimum; |dPhi/dd| [mm]; dPhi/dlogE [mm^2]; E [kPa]\nstage,iteration";
+  for (const auto & n : unknownNames)
+  {
+    o << ",E_" << n << "_kPa";
+  }
+  o << ",phi_mm2,wall_gradient_norm_mm";
+  for (const auto & n : unknownNames)
+  {
+    o << ",dphi_dlogE_" << n << "_mm2";
+  }
+  o << ",inner_iterations,seconds\n" << std::setprecision(10);
+  for (const auto & r : records)
+  {
+    o << r.stage << "," << r.iteration;
+    for (double E : r.youngsModuli)
+    {
+      o << "," << E;
+    }
+    o << "," << r.value << "," << r.wallGradientNorm;
+    for (double g : r.logModulusGradient)
+    {
+      o << "," << g;
+    }
+    o << "," << r.innerIterations << "," << r.seconds << "\n";
+  }
+  return o.str();
+}
+
+std::string
+JsonString(const std::string & s)
+{
+  std::string o = "\"";
+  for (char c : s)
+  {
+    if (c == '"' || c == '\\')
+    {
+      o += '\\';
+    }
+    o += c;
+  }
+  return o + "\"";
+}
+} // namespace
+
+RegisterReport
+RunRegistration(const RegisterInputs & in, StageTimer & timer)
+{
+  using Optimizer = itk::FEMElasticityOptimizer;
+  MakeDirectory(in.out);
+  in.scene.Validate();
+
+  timer.Begin("distance maps (fixed labels)");
+  const auto maps = itk::ComputeSceneDistanceMaps(in.fixedLabels.GetPointer(), in.scene);
+  timer.End(std::to_string(maps.size()) + " organs");
+
+  SimulationOutputs sim;
+  sim.mesh = MeshLabels(in.movingLabels, in.scene, timer, "mesh (CGAL Mesh_3)");
+  bool hasUnknown = false;
+  for (const auto & l : in.scene.labels)
+  {
+    hasUnknown |= l.role == bmr::LabelRole::UnknownMaterial;
+  }
+  auto optimizer = Optimizer::New();
+  auto fine = itk::TetrahedralMeshObject::New();
+  fine->Set(sim.mesh);
+  optimizer->SetMesh(fine);
+  // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
+  if (hasUnknown && in.coarseFactor > 1.0)
+  {
+    auto coarse = itk::TetrahedralMeshObject::New();
+    coarse->Set(MeshLabels(in.movingLabels, Coarsened(in.scene, in.coarseFactor), timer, "coarse mesh (sweep)"));
+    optimizer->SetCoarseMesh(coarse);
+  }
+  optimizer->SetScene(in.scene);
+  for (const auto & kv : maps)
+  {
+    optimizer->SetDistanceMap(kv.first, kv.second);
+  }
+  optimizer->SetNumberOfSweepSamples(in.sweepSamples);
+  optimizer->SetWallControlSpacing(in.wallControlSpacing);
+  optimizer->SetWallRegularization(in.wallRegularization);
+  optimizer->AddObserver(itk::IterationEvent(), ProgressPrinter::New());
+  std::cout << "  estimation (sweep of E on the coarse mesh, then nested L-BFGS on the fine mesh):" << std::endl;
+  optimizer->Update();
+  for (const auto & kv : optimizer->GetTimings())
+  {
+    timer.Add("estimation: " + kv.first, kv.second);
+  }
+  sim.mesh = optimizer->GetOutput()->Get();
+
+  // Per-element moduli, stress and the Dirichlet flags of the estimated state, for mesh.vtu.
+  auto materials = bmr::SceneMaterials(in.scene);
+  for (const auto & l : in.scene.labels)
+  {
+    const auto it = optimizer->GetEstimatedYoungsModuli().find(l.name);
+    if (it != optimizer->GetEstimatedYoungsModuli().end())
+    {
+      materials[l.value].youngsModulus = it->second;
+    }
+  }
+  const bmr::LinearElasticModel model(sim.mesh, materials);
+  sim.simulation.displacement = sim.mesh.displacement;
+  sim.simulation.force = sim.mesh.force;
+  sim.simulation.vonMises = model.ComputeVonMisesStress(sim.mesh.displacement);
+  sim.simulation.youngsModulus = model.GetElementYoungsModuli();
+  sim.simulation.poissonRatio = model.GetElementPoissonRatios();
+  sim.simulation.dirichlet.assign(sim.mesh.GetNumberOfPoints(), 0);
+  for (std::int32_t n : bmr::SceneBoundaryConditions(in.scene, sim.mesh).dirichletNodes)
+  {
+    sim.simulation.dirichlet[n] = 1;
+  }
+
+  ComputeFields(sim, in.fixedLabels, in.movingLabels, timer);
+  const auto warpedLabels = WarpAndWrite(in.out, sim, in.movingLabels, in.movingCT, timer);
+
+  timer.Begin("report (Dice, Jacobian)");
+  RegisterReport report;
+  report.youngsModulus = optimizer->GetEstimatedYoungsModuli();
+  report.finalValue = optimizer->GetFinalValue();
+  report.identifiable = optimizer->GetIdentifiable();
+  report.identifiability = optimizer->GetIdentifiabilityMessage();
+  report.tetrahedra = sim.mesh.GetNumberOfTetrahedra();
+  const auto *      a = warpedLabels->GetBufferPointer();
+  const auto *      b = in.fixedLabels->GetBufferPointer();
+  const std::size_t n = in.fixedLabels->GetBufferedRegion().GetNumberOfPixels();
+  for (const auto & l : in.scene.labels)
+  {
+    if (l.role == bmr::LabelRole::Outside)
+    {
+      continue;
+    }
+    std::size_t na = 0, nb = 0, both = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      na += a[i] == l.value;
+      nb += b[i] == l.value;
+      both += a[i] == l.value && b[i] == l.value;
+    }
+    if (na + nb > 0)
+    {
+      report.dice[l.name] = 2.0 * double(both) / double(na + nb);
+    }
+  }
+  using JacobianFilter = itk::DisplacementFieldJacobianDeterminantFilter<FieldType, float>;
+  auto jacobian = JacobianFilter::New();
+  jacobian->SetInput(sim.pullBack);
+  jacobian->SetUseImageSpacingOn();
+  jacobian->Update();
+  const float *     J = jacobian->GetOutput()->GetBufferPointer();
+  const std::size_t nJ = jacobian->GetOutput()->GetBufferedRegion().GetNumberOfPixels();
+  double            jmin = std::numeric_limits<double>::max();
+  std::size_t       nonPositive = 0;
+  for (std::size_t i = 0; i < nJ; ++i)
+  {
+    jmin = std::min(jmin, double(J[i]));
+    nonPositive += J[i] <= 0.0f;
+  }
+  report.jacobianMinimum = jmin;
+  report.jacobianNonPositiveFraction = double(nonPositive) / double(nJ);
+  timer.End();
+
+  timer.Begin("write history and report");
+  std::vector<std::string> unknownNames;
+  for (const auto & l : in.scene.labels)
+  {
+    if (l.role == bmr::LabelRole::UnknownMaterial)
+    {
+      unknownNames.push_back(l.name);
+    }
+  }
+  bmr::WriteTextFileAtomically(in.out + "/history.csv", HistoryCsv(optimizer->GetHistory(), unknownNames));
+  if (!optimizer->GetSweep().empty())
+  {
+    bmr::WriteTextFileAtomically(in.out + "/sweep.csv", HistoryCsv(optimizer->GetSweep(), unknownNames));
+  }
+  timer.End();
+
+  std::ostringstream j;
+  j << std::setprecision(8) << "{\n  \"units\": {\"length\": \"mm\", \"modulus\": \"kPa\", \"force\": \"mN\", "
+    << "\"phi\": \"mm^2\", \"time\": \"s\"},\n  \"youngs_modulus_kPa\": {";
+  bool first = true;
+  for (const auto & kv : report.youngsModulus)
+  {
+    j << (first ? "" : ", ") << JsonString(kv.first) << ": " << kv.second;
+    first = false;
+  }
+  const bmr::SceneLabel * gauge = in.scene.FindLabel(optimizer->GetGaugeLabel());
+  j << "},\n  \"gauge\": {\"label\": " << JsonString(optimizer->GetGaugeLabel())
+    << ", \"youngs_modulus_kPa\": " << (gauge ? gauge->youngsModulus : 0.0) << "},\n"
+    << "  \"identifiable\": " << (report.identifiable ? "true" : "false")
+    << ",\n  \"identifiability\": " << JsonString(report.identifiability) << ",\n  \"final_phi_mm2\": "
+    << report.finalValue << ",\n  \"surface_distance_mm\": {";
+  first = true;
+  for (const auto & s : optimizer->GetSurfaceDistances())
+  {
+    j << (first ? "" : ", ") << JsonString(s.name) << ": {\"rms\": " << s.rms << ", \"max\": " << s.maximum << "}";
+    first = false;
+  }
+  j << "},\n  \"dice\": {";
+  first = true;
+  for (const auto & kv : report.dice)
+  {
+    j << (first ? "" : ", ") << JsonString(kv.first) << ": " << kv.second;
+    first = false;
+  }
+  j << "},\n  \"jacobian_determinant\": {\"minimum\": " << report.jacobianMinimum
+    << ", \"fraction_nonpositive\": " << report.jacobianNonPositiveFraction << "},\n"
+    << "  \"mesh\": {\"tetrahedra\": " << sim.mesh.GetNumberOfTetrahedra()
+    << ", \"nodes\": " << sim.mesh.GetNumberOfPoints() << "},\n  \"iterations\": {\"sweep\": "
+    << optimizer->GetSweep().size() << ", \"fine\": " << optimizer->GetHistory().size()
+    << "},\n  \"wall_time_s\": {";
+  first = true;
+  double total = 0.0;
+  for (const auto & s : timer.stages)
+  {
+    j << (first ? "" : ", ") << JsonString(s.first) << ": " << s.second;
+    total += s.second;
+    first = false;
+  }
+  j << ", \"total\": " << total << "}\n}\n";
+  bmr::WriteTextFileAtomically(in.out + "/report.json", j.str());
+  return report;
+}
+
+int
+RegisterCommand(const Arguments & args)
+{
+  RegisterInputs in;
+  const std::string movingCT = args.Require("--moving-ct");
+  const std::string movingLabels = args.Require("--moving-labels");
+  const std::string fixedCT = args.Require("--fixed-ct");
+  const std::string fixedLabels = args.Require("--fixed-labels");
+  const std::string scenePath = args.Require("--scene");
+  in.out = args.Require("--out");
+  const double samples = args.Number("--sweep-samples", 8);
+  if (!(samples >= 3 && samples <= 100 && samples == std::floor(samples)))
+  {
+    throw UsageError("--sweep-samples must be an integer in [3, 100]");
+  }
+  in.sweepSamples = static_cast<unsigned int>(samples);
+  in.coarseFactor = args.Number("--coarse-factor", 1.6);
+  if (!(in.coarseFactor > 0.0 && in.coarseFactor <= 10.0))
+  {
+    throw UsageError("--coarse-factor must lie in (0, 10] (1 or less: sweep on the fine mesh)");
+  }
+  in.wallControlSpacing = args.Number("--wall-spacing-mm", in.wallControlSpacing);
+  in.wallRegularization = args.Number("--wall-regularization", in.wallRegularization);
+  if (!(in.wallRegularization >= 0.0))
+  {
+    throw UsageError("--wall-regularization must be >= 0");
+  }
+  if (!(in.wallControlSpacing >= 0.0))
+  {
+    throw UsageError("--wall-spacing-mm must be >= 0 (0: every wall node free)");
+  }
+  args.CheckAllUsed();
+
+  StageTimer timer;
+  std::cout << "biomechreg register -> " << in.out << std::endl;
+  timer.Begin("read inputs");
+  in.scene = bmr::ReadScene(scenePath);
+  in.movingCT = ReadImage<CTImageType>(movingCT, "moving CT");
+  in.movingLabels = ReadImage<LabelImageType>(movingLabels, "moving label image");
+  // The fixed CT is read to check it; the fixed label image defines the output grid.
+  ReadImage<CTImageType>(fixedCT, "fixed CT");
+  in.fixedLabels = ReadImage<LabelImageType>(fixedLabels, "fixed label image");
+  timer.End();
+  const RegisterReport report = RunRegistration(in, timer);
+  std::cout << "\n  recovered Young's moduli:";
+  for (const auto & kv : report.youngsModulus)
+  {
+    std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa";
+  }
+  std::cout << (report.identifiable ? "" : "\n  warning: ") << (report.identifiable ? "" : report.identifiability)
+            << std::endl;
+  PrintTimings(timer);
+  return EXIT_SUCCESS;
+}
+
+} // namespace bmrcli
