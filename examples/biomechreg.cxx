@@ -16,7 +16,8 @@
  *
  *=========================================================================*/
 // biomechreg: physics-based registration of segmented CT from the command line.
-//   biomechreg                      demo: pelvis phantom -> forward simulation -> fields -> warped images
+//   biomechreg                      demo: pelvis phantom -> estimation of loads and E -> fields -> warped images
+//   biomechreg register ...         joint estimation of wall loads and Young's moduli (FEMElasticityOptimizer)
 //   biomechreg phantom ...          synthetic moving/fixed pair with ground truth
 //   biomechreg simulate ...         forward simulation of a scene on a moving label map
 // Every error is one line on stderr and a non-zero exit; outputs are written to
@@ -36,6 +37,7 @@ struct PhantomOptions
   std::string       out;
   bmr::GridGeometry grid;
   double            prostateE{ 50.0 };
+  double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
   double            bladderMM{ 4.0 };
   double            rectumMM{ 3.0 };
   double            noiseHU{ 10.0 };
@@ -81,7 +83,7 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   timer.End();
 
   // Truth: known moduli and wall displacements, on a finer mesh with another random seed.
-  bmr::Scene truth = pelvis ? PelvisScene(o.prostateE, false) : SpheresScene(o.prostateE, false);
+  bmr::Scene truth = pelvis ? PelvisScene(o.prostateE, false, o.prostateNu) : SpheresScene(o.prostateE, false);
   truth.mesh.cellSize *= o.truthRefinement;
   truth.mesh.facetSize *= o.truthRefinement;
   truth.mesh.facetDistance *= o.truthRefinement;
@@ -251,6 +253,7 @@ PhantomCommand(const Arguments & args)
   o.grid = GridFromArguments(
     args, o.scene == "pelvis" ? bmr::PelvisPhantomParameters().grid : bmr::SpherePhantomParameters().grid);
   o.prostateE = args.Number("--true-E-kPa", 50.0);
+  o.prostateNu = args.Number("--true-nu", 0.40);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
   o.noiseHU = args.Number("--noise-HU", 10.0);
@@ -309,54 +312,56 @@ int
 DemoCommand()
 {
   const std::string dir = "biomechreg-demo";
-  std::cout << "biomechreg demo: pelvis phantom -> forward simulation -> displacement fields -> warped images\n"
+  const double      trueE = 100.0;
+  std::cout << "biomechreg demo: pelvis phantom -> joint estimation of wall loads and prostate modulus -> "
+               "displacement fields -> warped images -> report\n"
             << "(outputs in ./" << dir << "; run 'biomechreg help' for the subcommands)\n\n";
   StageTimer     timer;
   PhantomOptions o;
   o.out = dir;
+  // 1 mm voxels and a bladder filling of 8 mm: the prostate's shape change is then several voxels of
+  // surface motion, which the label maps resolve (at 1.25 x 1.25 x 2.5 mm and 4 mm it is not; see README).
   o.grid = bmr::PelvisPhantomParameters().grid;
-  std::cout << "1. phantom pair with known truth (prostate 50 kPa, tissue 10 kPa, bladder +4 mm, rectum +3 mm)\n";
+  o.grid.size = { { 200, 160, 160 } };
+  o.grid.spacing = { { 1.0, 1.0, 1.0 } };
+  o.bladderMM = 8.0;
+  o.rectumMM = 4.0;
+  o.prostateE = trueE;
+  std::cout << "1. phantom pair with known truth (prostate " << trueE
+            << " kPa, tissue 10 kPa, bladder +8 mm, rectum +4 mm, 1 mm voxels; fixed scan from a finer, "
+               "independent mesh)\n";
   MakePhantom(o, timer);
 
-  std::cout << "\n2. forward simulation of the truth scene on the estimation mesh\n";
-  bmr::Scene scene = bmr::ReadScene(dir + "/truth_scene.json");
-  bmr::Scene coarse = PelvisScene(50.0, false);
-  scene.mesh = coarse.mesh; // the estimation mesh sizes, not the truth mesh's
-  auto              labels = ReadImage<LabelImageType>(dir + "/moving_labels.nrrd", "moving label image");
-  auto              ct = ReadImage<CTImageType>(dir + "/moving_ct.nrrd", "moving CT");
-  auto              fixedLabels = ReadImage<LabelImageType>(dir + "/fixed_labels.nrrd", "fixed label image");
-  StageTimer        run;
-  const std::string out = dir + "/simulate";
-  MakeDirectory(out);
-  SimulationOutputs sim = RunSimulation(labels, scene, labels, run);
-  auto              warpedLabels = WarpAndWrite(out, sim, labels, ct, run);
+  std::cout << "\n2. registration: the estimator sees the scans, the label maps and scene.json (prostate E unknown)\n";
+  RegisterInputs in;
+  in.scene = bmr::ReadScene(dir + "/scene.json");
+  in.movingLabels = ReadImage<LabelImageType>(dir + "/moving_labels.nrrd", "moving label image");
+  in.movingCT = ReadImage<CTImageType>(dir + "/moving_ct.nrrd", "moving CT");
+  in.fixedLabels = ReadImage<LabelImageType>(dir + "/fixed_labels.nrrd", "fixed label image");
+  in.out = dir + "/register";
+  StageTimer           run;
+  const RegisterReport report = RunRegistration(in, run);
 
-  // Agreement of the simulated warp with the truth-mesh warp: Dice per organ.
-  std::cout << "\n  Dice of warped moving labels vs fixed labels (coarse estimation mesh vs finer truth mesh):\n";
-  const auto *      a = warpedLabels->GetBufferPointer();
-  const auto *      b = fixedLabels->GetBufferPointer();
-  const std::size_t n = fixedLabels->GetBufferedRegion().GetNumberOfPixels();
-  for (std::int32_t l : { 2, 3, 4 })
+  const double recovered = report.youngsModulus.at("prostate");
+  std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
+            << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
+            << std::noshowpos << " %), gauge soft_tissue 10 kPa" << (report.identifiable ? "" : "\n  warning: ")
+            << (report.identifiable ? "" : report.identifiability) << "\n  Dice after warping:";
+  for (const auto & kv : report.dice)
   {
-    std::size_t na = 0, nb = 0, both = 0;
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      na += a[i] == l;
-      nb += b[i] == l;
-      both += a[i] == l && b[i] == l;
-    }
-    std::cout << "    " << std::left << std::setw(10)
-              << (l == 2   ? "prostate"
-                  : l == 3 ? "bladder"
-                           : "rectum")
-              << std::fixed << std::setprecision(4) << 2.0 * both / std::max<std::size_t>(1, na + nb) << "\n";
+    std::cout << "  " << kv.first << " " << std::setprecision(4) << kv.second;
   }
+  std::cout << "\n  pull-back Jacobian determinant: minimum " << std::setprecision(3) << report.jacobianMinimum
+            << ", fraction <= 0: " << report.jacobianNonPositiveFraction << "\n";
   std::cout << "\nPhantom generation:";
   PrintTimings(timer);
-  std::cout << "\nSimulation on the estimation mesh:";
+  std::cout << "\nRegistration (" << report.tetrahedra << " tetrahedra):";
   PrintTimings(run);
   std::cout << "\nWrote " << dir << "/{moving,fixed}_{ct,labels}.nrrd, scene.json, truth.json, landmarks_*.csv, and "
-            << out << "/{mesh.vtu, field.nrrd, forward_field.nrrd, warped_ct.nrrd, warped_labels.nrrd}" << std::endl;
+            << in.out
+            << "/{field.nrrd, forward_field.nrrd, warped_ct.nrrd, warped_labels.nrrd, mesh.vtu, history.csv, "
+               "sweep.csv, report.json}"
+            << std::endl;
   return EXIT_SUCCESS;
 }
 
@@ -366,7 +371,7 @@ PrintUsage(std::ostream & os)
   os << "usage:\n"
         "  biomechreg                      run the demo into ./biomechreg-demo\n"
         "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
-        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--bladder-mm D]\n"
+        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
         "                     [--rectum-mm D] [--noise-HU S] [--seed N]\n"
         "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
         "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"

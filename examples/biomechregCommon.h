@@ -307,7 +307,7 @@ private:
 
 /** The scene the estimator sees for the pelvis phantom: prostate modulus unknown. */
 inline bmr::Scene
-PelvisScene(double prostateE, bool unknown)
+PelvisScene(double prostateE, bool unknown, double prostateNu = 0.40)
 {
   bmr::Scene s;
   s.name = "pelvis phantom";
@@ -315,12 +315,13 @@ PelvisScene(double prostateE, bool unknown)
   bmr::SceneLabel air{ "air", bmr::PelvisAir, R::Outside };
   bmr::SceneLabel tissue{ "soft_tissue", bmr::PelvisSoftTissue, R::Material, 10.0, 0.35 };
   bmr::SceneLabel prostate{
-    "prostate", bmr::PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, 0.40
+    "prostate", bmr::PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, prostateNu
   };
   if (unknown)
   {
-    prostate.lowerBound = 30.0;
-    prostate.upperBound = 300.0;
+    // Wide enough for the dissertation's range (50-350 kPa) with room on both sides.
+    prostate.lowerBound = 20.0;
+    prostate.upperBound = 600.0;
   }
   s.labels = { air,
                tissue,
@@ -534,8 +535,8 @@ struct RegisterInputs
   CTImageType::Pointer    movingCT;
   bmr::Scene              scene;
   std::string             out;
-  unsigned int            sweepSamples{ 8 };
-  double                  coarseFactor{ 1.6 }; ///< coarse mesh sizes = scene sizes x this (<= 1: no coarse mesh)
+  unsigned int            sweepSamples{ 10 };
+  double                  coarseFactor{ 1.6 };        ///< coarse mesh sizes = scene sizes x this (<= 1: no coarse mesh)
   double                  wallControlSpacing{ 12.0 }; ///< mm, FEMElasticityOptimizer::SetWallControlSpacing
   double                  wallRegularization{ 0.01 }; ///< FEMElasticityOptimizer::SetWallRegularization
 };

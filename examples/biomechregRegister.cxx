@@ -170,8 +170,21 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   optimizer->SetWallControlSpacing(in.wallControlSpacing);
   optimizer->SetWallRegularization(in.wallRegularization);
   optimizer->AddObserver(itk::IterationEvent(), ProgressPrinter::New());
-  std::cout << "  estimation (sweep of E on the coarse mesh, then nested L-BFGS on the fine mesh):" << std::endl;
+  std::cout << "  estimation (sweep of E on the coarse mesh, then L-BFGS-B over log E on the fine mesh):" << std::endl;
   optimizer->Update();
+  for (const auto & r : optimizer->GetOuterIterations())
+  {
+    std::cout << "    outer " << std::setw(3) << r.iteration << "  E";
+    for (double E : r.youngsModuli)
+    {
+      std::cout << " " << std::fixed << std::setprecision(2) << E << " kPa";
+    }
+    std::cout << "  Phi* " << std::scientific << std::setprecision(6) << r.value << std::endl;
+  }
+  if (!optimizer->GetOuterStopCondition().empty())
+  {
+    std::cout << "    outer stop: " << optimizer->GetOuterStopCondition() << std::endl;
+  }
   for (const auto & kv : optimizer->GetTimings())
   {
     timer.Add("estimation: " + kv.first, kv.second);
@@ -258,7 +271,10 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
       unknownNames.push_back(l.name);
     }
   }
-  bmr::WriteTextFileAtomically(in.out + "/history.csv", HistoryCsv(optimizer->GetHistory(), unknownNames));
+  // Every fine-mesh inner solve (stage "fine"), then the accepted outer iterates (stage "outer").
+  auto history = optimizer->GetHistory();
+  history.insert(history.end(), optimizer->GetOuterIterations().begin(), optimizer->GetOuterIterations().end());
+  bmr::WriteTextFileAtomically(in.out + "/history.csv", HistoryCsv(history, unknownNames));
   if (!optimizer->GetSweep().empty())
   {
     bmr::WriteTextFileAtomically(in.out + "/sweep.csv", HistoryCsv(optimizer->GetSweep(), unknownNames));
@@ -278,8 +294,8 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   j << "},\n  \"gauge\": {\"label\": " << JsonString(optimizer->GetGaugeLabel())
     << ", \"youngs_modulus_kPa\": " << (gauge ? gauge->youngsModulus : 0.0) << "},\n"
     << "  \"identifiable\": " << (report.identifiable ? "true" : "false")
-    << ",\n  \"identifiability\": " << JsonString(report.identifiability) << ",\n  \"final_phi_mm2\": "
-    << report.finalValue << ",\n  \"surface_distance_mm\": {";
+    << ",\n  \"identifiability\": " << JsonString(report.identifiability)
+    << ",\n  \"final_phi_mm2\": " << report.finalValue << ",\n  \"surface_distance_mm\": {";
   first = true;
   for (const auto & s : optimizer->GetSurfaceDistances())
   {
@@ -296,9 +312,9 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   j << "},\n  \"jacobian_determinant\": {\"minimum\": " << report.jacobianMinimum
     << ", \"fraction_nonpositive\": " << report.jacobianNonPositiveFraction << "},\n"
     << "  \"mesh\": {\"tetrahedra\": " << sim.mesh.GetNumberOfTetrahedra()
-    << ", \"nodes\": " << sim.mesh.GetNumberOfPoints() << "},\n  \"iterations\": {\"sweep\": "
-    << optimizer->GetSweep().size() << ", \"fine\": " << optimizer->GetHistory().size()
-    << "},\n  \"wall_time_s\": {";
+    << ", \"nodes\": " << sim.mesh.GetNumberOfPoints()
+    << "},\n  \"iterations\": {\"sweep\": " << optimizer->GetSweep().size()
+    << ", \"fine\": " << optimizer->GetHistory().size() << "},\n  \"wall_time_s\": {";
   first = true;
   double total = 0.0;
   for (const auto & s : timer.stages)
@@ -315,14 +331,14 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
 int
 RegisterCommand(const Arguments & args)
 {
-  RegisterInputs in;
+  RegisterInputs    in;
   const std::string movingCT = args.Require("--moving-ct");
   const std::string movingLabels = args.Require("--moving-labels");
   const std::string fixedCT = args.Require("--fixed-ct");
   const std::string fixedLabels = args.Require("--fixed-labels");
   const std::string scenePath = args.Require("--scene");
   in.out = args.Require("--out");
-  const double samples = args.Number("--sweep-samples", 8);
+  const double samples = args.Number("--sweep-samples", in.sweepSamples);
   if (!(samples >= 3 && samples <= 100 && samples == std::floor(samples)))
   {
     throw UsageError("--sweep-samples must be an integer in [3, 100]");

@@ -51,8 +51,8 @@ struct BiomechanicalRegistration_EXPORT SurfaceDistanceStatistics
  * wall. \a maps gives the distance map of every objective label (by value).
  * Throws when a map is missing or a surface has no node. */
 BiomechanicalRegistration_EXPORT std::vector<ObjectiveSurface>
-                                 SceneObjectiveSurfaces(const Scene &                                                         scene,
-                                                        const TetrahedralMesh &                                               mesh,
+                                 SceneObjectiveSurfaces(const Scene &                                                                scene,
+                                                        const TetrahedralMesh &                                                      mesh,
                                                         const std::map<std::int32_t, std::shared_ptr<const SignedDistanceSampler>> & maps);
 
 /** Result of SurfaceMatchingObjective::SolveWalls(): the inner optimum at fixed E. */

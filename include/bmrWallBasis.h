@@ -56,10 +56,10 @@ public:
    * (into the parameter-node list of size \a numberOfNodes) and mesh node ids of
    * its nodes; a node may belong to several walls (it then blends all their
    * control points). spacing <= 0 gives the identity basis (one control per node). */
-  WallBasis(const std::vector<double> &                                           points,
+  WallBasis(const std::vector<double> &                                             points,
             const std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> & walls,
-            std::size_t                                                           numberOfNodes,
-            double                                                                spacing);
+            std::size_t                                                             numberOfNodes,
+            double                                                                  spacing);
 
   /** Number of control points (3 parameters each). */
   std::size_t

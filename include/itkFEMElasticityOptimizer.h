@@ -62,8 +62,12 @@ namespace itk {
  * Stopping rules (dissertation): inner when \f$\|\partial\Phi/\partial d\| \le
  * \epsilon_F \max(1, \|d\|)\f$ (InnerGradientTolerance, default 1e-5) or after
  * MaximumNumberOfInnerIterations; outer when the projected gradient in log E
- * falls below OuterGradientTolerance times Phi* of the sweep minimum, the
- * relative decrease stalls, or after MaximumNumberOfOuterIterations.
+ * falls below OuterGradientTolerance (default 1e-4) times Phi* at the start of
+ * the fine stage, the relative decrease stalls, or after
+ * MaximumNumberOfOuterIterations function evaluations. The envelope gradient
+ * is only as accurate as the inner solve (about 1e-3 mm^2 on the pelvis), so a
+ * tighter outer tolerance only makes L-BFGS-B repeat its line search at the
+ * optimum; 1e-4 Phi* corresponds to well under 1 % in E there.
  *
  * Gauge: only ratios of moduli are identifiable without measured forces; the
  * scene's gauge label keeps its modulus (GetGaugeLabel()).
@@ -184,6 +188,17 @@ public:
   {
     return m_History;
   }
+  /** The accepted iterates of the outer L-BFGS-B (Phi* at each, E); empty without unknown moduli. */
+  const std::vector<IterationRecord> &
+  GetOuterIterations() const
+  {
+    return m_OuterIterations;
+  }
+  const std::string &
+  GetOuterStopCondition() const
+  {
+    return m_OuterStopCondition;
+  }
   const std::vector<SurfaceDistance> &
   GetSurfaceDistances() const
   {
@@ -225,11 +240,11 @@ private:
 
   bmr::Scene                    m_Scene;
   std::vector<std::string>      m_DistanceMapNames;
-  unsigned int                  m_NumberOfSweepSamples{ 8 };
+  unsigned int                  m_NumberOfSweepSamples{ 10 };
   unsigned int                  m_MaximumNumberOfInnerIterations{ 2000 };
-  unsigned int                  m_MaximumNumberOfOuterIterations{ 30 };
+  unsigned int                  m_MaximumNumberOfOuterIterations{ 20 };
   double                        m_InnerGradientTolerance{ 1e-5 };
-  double                        m_OuterGradientTolerance{ 1e-6 };
+  double                        m_OuterGradientTolerance{ 1e-4 };
   double                        m_FlatnessThreshold{ 0.01 };
   double                        m_WallControlSpacing{ 12.0 };
   double                        m_WallRegularization{ 0.01 };
@@ -239,6 +254,8 @@ private:
   std::vector<IterationRecord>  m_Sweep;
   std::vector<IterationRecord>  m_History;
   std::vector<SurfaceDistance>  m_SurfaceDistances;
+  std::vector<IterationRecord>  m_OuterIterations;
+  std::string                   m_OuterStopCondition;
   double                        m_FinalValue{ 0.0 };
   bool                          m_Identifiable{ true };
   std::string                   m_IdentifiabilityMessage;

@@ -578,8 +578,8 @@ LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<
     {
       if (!std::isfinite(prescribedAll[i]))
       {
-        Fail("LinearElasticModel::Solve", "prescribed displacement at degree of freedom " + std::to_string(i) +
-                                            " is not finite");
+        Fail("LinearElasticModel::Solve",
+             "prescribed displacement at degree of freedom " + std::to_string(i) + " is not finite");
       }
       prescribed[i] = prescribedAll[i];
     }

@@ -92,8 +92,8 @@ SignedDistanceSampler::Evaluate(const double x[3], double gradient[3]) const
     CubicWeights(c - f, w[d], dw[d]);
   }
   const auto at = [this](std::int64_t i, int d) {
-    return static_cast<std::size_t>(std::min<std::int64_t>(std::max<std::int64_t>(i, 0),
-                                                           static_cast<std::int64_t>(m_Grid.size[d]) - 1));
+    return static_cast<std::size_t>(
+      std::min<std::int64_t>(std::max<std::int64_t>(i, 0), static_cast<std::int64_t>(m_Grid.size[d]) - 1));
   };
   double value = 0.0, g[3] = { 0.0, 0.0, 0.0 };
   for (int c = 0; c < 4; ++c)

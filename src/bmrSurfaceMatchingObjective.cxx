@@ -24,8 +24,6 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -50,8 +48,8 @@ SurfaceNodes(const Scene & scene, const TetrahedralMesh & mesh, const SceneLabel
 } // namespace
 
 std::vector<ObjectiveSurface>
-SceneObjectiveSurfaces(const Scene &                                                                 scene,
-                       const TetrahedralMesh &                                                       mesh,
+SceneObjectiveSurfaces(const Scene &                                                                scene,
+                       const TetrahedralMesh &                                                      mesh,
                        const std::map<std::int32_t, std::shared_ptr<const SignedDistanceSampler>> & maps)
 {
   std::vector<ObjectiveSurface> surfaces;
@@ -84,12 +82,12 @@ SceneObjectiveSurfaces(const Scene &                                            
 
 struct SurfaceMatchingObjective::Impl
 {
-  const TetrahedralMesh &       mesh;
-  std::vector<ObjectiveSurface> surfaces;
-  BoundaryConditions            bc;
-  std::vector<std::int32_t>     controlNodes;
-  std::vector<std::int32_t>     unknownLabels;
-  std::vector<double>           basePrescribed; // 3N: fixed walls' values
+  const TetrahedralMesh &             mesh;
+  std::vector<ObjectiveSurface>       surfaces;
+  BoundaryConditions                  bc;
+  std::vector<std::int32_t>           controlNodes;
+  std::vector<std::int32_t>           unknownLabels;
+  std::vector<double>                 basePrescribed; // 3N: fixed walls' values
   std::unique_ptr<LinearElasticModel> model;
   // Walls as (control index, mesh node) lists, and the basis of their displacement.
   std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> walls;
@@ -140,9 +138,9 @@ SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &      
   {
     held[n] = 1;
   }
-  std::set<std::int32_t>         control;
+  std::set<std::int32_t>              control;
   std::vector<std::set<std::int32_t>> wallOf(N); // force surfaces (by index) each node is on
-  std::size_t                    wallIndex = 0;
+  std::size_t                         wallIndex = 0;
   for (const std::string & name : scene.forceSurfaces)
   {
     const SceneLabel * label = scene.FindLabel(name);
@@ -282,8 +280,9 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & parameters,
   Impl & d = *m_Impl;
   if (parameters.size() != GetNumberOfParameters())
   {
-    Fail("SurfaceMatchingObjective::Evaluate", "expected " + std::to_string(GetNumberOfParameters()) +
-                                                 " parameters, got " + std::to_string(parameters.size()));
+    Fail("SurfaceMatchingObjective::Evaluate",
+         "expected " + std::to_string(GetNumberOfParameters()) + " parameters, got " +
+           std::to_string(parameters.size()));
   }
   const std::vector<double> dWall = d.basis->Expand(parameters);
   const std::vector<double> u = d.model->Solve(d.bc.forces, d.Prescribed(dWall));
@@ -520,14 +519,16 @@ SurfaceMatchingObjective::MatchSurfaces(unsigned int iterations) const
 }
 
 WallSolution
-SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned int maximumIterations, double tolerance)
+SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start,
+                                     unsigned int                maximumIterations,
+                                     double                      tolerance)
 {
   Impl &            d = *m_Impl;
   const std::size_t np = GetNumberOfParameters();
   if (start.size() != np)
   {
-    Fail("SurfaceMatchingObjective::SolveWalls", "the start holds " + std::to_string(start.size()) +
-                                                   " values, expected " + std::to_string(np));
+    Fail("SurfaceMatchingObjective::SolveWalls",
+         "the start holds " + std::to_string(start.size()) + " values, expected " + std::to_string(np));
   }
   // Objective entries (surface, node) and the distinct nodes they need.
   std::vector<std::int32_t> nodes;
@@ -543,9 +544,10 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned
     row[nodes[i]] = static_cast<std::int32_t>(i);
   }
   // u is affine in p: u = u0 + A p. Columns of A by one solve each with the cached factorisation.
-  const std::vector<double> u0 = d.model->Solve(d.bc.forces, d.Prescribed(std::vector<double>(3 * d.controlNodes.size(), 0.0)));
-  Eigen::MatrixXd           A(static_cast<Eigen::Index>(3 * nodes.size()), static_cast<Eigen::Index>(np));
-  std::vector<double>       unit(np, 0.0), wallsOnly(u0.size(), 0.0);
+  const std::vector<double> u0 =
+    d.model->Solve(d.bc.forces, d.Prescribed(std::vector<double>(3 * d.controlNodes.size(), 0.0)));
+  Eigen::MatrixXd     A(static_cast<Eigen::Index>(3 * nodes.size()), static_cast<Eigen::Index>(np));
+  std::vector<double> unit(np, 0.0), wallsOnly(u0.size(), 0.0);
   for (std::size_t j = 0; j < np; ++j)
   {
     unit[j] = 1.0;
@@ -563,7 +565,8 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned
     {
       for (int c = 0; c < 3; ++c)
       {
-        A(static_cast<Eigen::Index>(3 * i + c), static_cast<Eigen::Index>(j)) = uj[3 * static_cast<std::size_t>(nodes[i]) + c];
+        A(static_cast<Eigen::Index>(3 * i + c), static_cast<Eigen::Index>(j)) =
+          uj[3 * static_cast<std::size_t>(nodes[i]) + c];
       }
     }
   }
@@ -615,19 +618,19 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned
   WallSolution    result;
   result.stop = "maximum number of iterations";
   unsigned int it = 0;
-  for (; it < maximumIterations; ++it)
+  bool         converged = false;
+  for (; it < maximumIterations && !converged; ++it)
   {
     const Eigen::VectorXd g = J.transpose() * r + d.regularization * p;
     if (g.norm() <= tolerance * std::max(1.0, p.norm()))
     {
       result.stop = "gradient below tolerance";
+      converged = true;
       break;
     }
     Eigen::MatrixXd H = J.transpose() * J;
     H.diagonal().array() += d.regularization;
-    if (std::getenv("BMR_DEBUG") && (it % 50 == 0 || it < 10))
-      std::fprintf(stderr, "LM it %u value %.8g |g| %.3g mu %.3g |p| %.3g\n", it, value, g.norm(), mu, p.norm());
-    bool                  accepted = false;
+    bool accepted = false;
     for (int attempt = 0; attempt < 30 && !accepted; ++attempt)
     {
       Eigen::MatrixXd M = H;
@@ -646,8 +649,7 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned
         accepted = true;
         if (decrease <= 1e-10 * value)
         {
-          attempt = 30;
-          it = maximumIterations; // converged in value
+          converged = true;
           result.stop = "no further decrease";
         }
       }
@@ -662,7 +664,7 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start, unsigned
       break;
     }
   }
-  result.iterations = std::min(it + 1, maximumIterations);
+  result.iterations = it;
   result.parameters.assign(p.data(), p.data() + np);
   result.value = Evaluate(result.parameters, &result.gradient, &result.logModulusGradient);
   return result;

@@ -25,14 +25,14 @@
 
 namespace bmr {
 
-WallBasis::WallBasis(const std::vector<double> &                                           points,
+WallBasis::WallBasis(const std::vector<double> &                                             points,
                      const std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> & walls,
-                     std::size_t                                                           numberOfNodes,
-                     double                                                                spacing)
+                     std::size_t                                                             numberOfNodes,
+                     double                                                                  spacing)
   : m_NumberOfNodes(numberOfNodes)
   , m_Rows(numberOfNodes)
 {
-  if (!(spacing > 0.0))
+  if (!(spacing > 0.0) || numberOfNodes == 0)
   {
     m_Identity = true;
     m_NumberOfControlPoints = numberOfNodes;
@@ -42,8 +42,8 @@ WallBasis::WallBasis(const std::vector<double> &                                
   const auto distance2 = [](const double * a, const double * b) {
     return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
   };
-  std::vector<std::array<double, 3>> controls;
-  std::vector<std::vector<double>>   raw(numberOfNodes);
+  std::vector<std::array<double, 3>>     controls;
+  std::vector<std::vector<double>>       raw(numberOfNodes);
   std::vector<std::vector<std::int32_t>> rawControl(numberOfNodes);
   for (const auto & wall : walls)
   {
@@ -104,10 +104,6 @@ WallBasis::WallBasis(const std::vector<double> &                                
     }
   }
   m_NumberOfControlPoints = controls.size();
-  if (m_NumberOfControlPoints == 0)
-  {
-    Fail("WallBasis", "no wall has a node");
-  }
   for (std::size_t k = 0; k < numberOfNodes; ++k)
   {
     if (raw[k].empty())
@@ -267,4 +263,3 @@ WallBasis::Fit(const std::vector<double> & d) const
 }
 
 } // namespace bmr
-

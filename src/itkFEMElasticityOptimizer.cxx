@@ -328,6 +328,8 @@ FEMElasticityOptimizer::GenerateData()
 {
   m_Sweep.clear();
   m_History.clear();
+  m_OuterIterations.clear();
+  m_OuterStopCondition.clear();
   m_SurfaceDistances.clear();
   m_EstimatedYoungsModuli.clear();
   m_Timings.clear();
@@ -367,7 +369,7 @@ FEMElasticityOptimizer::GenerateData()
     }
   }
 
-  const bmr::TetrahedralMesh & fine = this->GetMesh()->Get();
+  const bmr::TetrahedralMesh &  fine = this->GetMesh()->Get();
   bmr::SurfaceMatchingObjective fineObjective(fine, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, fine, samplers));
   fineObjective.SetWallControlSpacing(m_WallControlSpacing);
   fineObjective.SetWallRegularization(m_WallRegularization);
@@ -379,8 +381,8 @@ FEMElasticityOptimizer::GenerateData()
   auto t0 = Clock::now();
   if (!unknown.empty())
   {
-    const MeshObjectType *       coarseObject = this->GetCoarseMesh();
-    const bmr::TetrahedralMesh & coarse = coarseObject ? coarseObject->Get() : fine;
+    const MeshObjectType *                         coarseObject = this->GetCoarseMesh();
+    const bmr::TetrahedralMesh &                   coarse = coarseObject ? coarseObject->Get() : fine;
     std::unique_ptr<bmr::SurfaceMatchingObjective> coarseOwned;
     bmr::SurfaceMatchingObjective *                sweepObjective = &fineObjective;
     if (coarseObject)
@@ -398,9 +400,11 @@ FEMElasticityOptimizer::GenerateData()
       const auto          ts = Clock::now();
       std::vector<double> E = moduli;
       E[0] = lower[0] * std::pow(upper[0] / lower[0], double(k) / double(n - 1));
-      // Every sample starts from the same surface-matching guess: Phi*(E) does not depend on the sweep order.
+      // Continuation: each sample starts from the previous optimum, so that the sweep follows one branch of
+      // minima of the (non-convex) distance objective and Phi*(E) is smooth.
       const InnerSolution s =
         SolveInner(*sweepObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
+      wall = s.wall;
       IterationRecord r;
       r.stage = "sweep";
       r.iteration = k;
@@ -413,45 +417,45 @@ FEMElasticityOptimizer::GenerateData()
       this->Record(r, m_Sweep);
       this->UpdateProgress(0.5f * float(k + 1) / float(n));
     }
-    // Best sample, refined by the parabola in log E through it and its neighbours.
-    std::size_t best = 0;
-    double      vmin = m_Sweep[0].value, vmax = m_Sweep[0].value;
-    for (std::size_t k = 1; k < m_Sweep.size(); ++k)
+    // The minimum is bracketed by the first sign change of the envelope gradient dPhi*/dlogE from - to +
+    // (more robust than the sampled values, which carry the inner solver's tolerance); the zero is
+    // interpolated linearly in log E. Without a sign change the minimum lies on a bound.
+    double vmin = m_Sweep[0].value, vmax = m_Sweep[0].value;
+    for (const auto & r : m_Sweep)
     {
-      if (m_Sweep[k].value < m_Sweep[best].value)
-      {
-        best = k;
-      }
-      vmin = std::min(vmin, m_Sweep[k].value);
-      vmax = std::max(vmax, m_Sweep[k].value);
+      vmin = std::min(vmin, r.value);
+      vmax = std::max(vmax, r.value);
     }
-    double logE = std::log(m_Sweep[best].youngsModuli[0]);
-    if (best > 0 && best + 1 < m_Sweep.size())
+    std::size_t best = m_Sweep.back().logModulusGradient[0] < 0.0 ? m_Sweep.size() - 1 : 0;
+    double      logE = std::log(m_Sweep[best].youngsModuli[0]);
+    for (std::size_t k = 0; k + 1 < m_Sweep.size(); ++k)
     {
-      const double h = std::log(upper[0] / lower[0]) / double(n - 1);
-      const double a = m_Sweep[best - 1].value, b = m_Sweep[best].value, c = m_Sweep[best + 1].value;
-      const double curvature = a - 2.0 * b + c;
-      if (curvature > 0.0)
+      const double g0 = m_Sweep[k].logModulusGradient[0], g1 = m_Sweep[k + 1].logModulusGradient[0];
+      if (g0 < 0.0 && g1 >= 0.0)
       {
-        logE += 0.5 * h * (a - c) / curvature;
+        const double l0 = std::log(m_Sweep[k].youngsModuli[0]), l1 = std::log(m_Sweep[k + 1].youngsModuli[0]);
+        logE = l0 + (l1 - l0) * g0 / (g0 - g1);
+        best = g1 < -g0 ? k + 1 : k;
+        break;
       }
     }
     moduli[0] = std::exp(logE);
-    const double variation = (vmax - vmin) / std::max(vmin, 1e-300);
+    const double       variation = (vmax - vmin) / std::max(vmin, 1e-300);
     std::ostringstream msg;
     if (variation < m_FlatnessThreshold)
     {
       m_Identifiable = false;
-      msg << "Phi*(E) of \"" << unknown[0]->name << "\" varies by only " << 100.0 * variation << " % over ["
-          << lower[0] << ", " << upper[0] << "] kPa (threshold " << 100.0 * m_FlatnessThreshold
+      msg << "Phi*(E) of \"" << unknown[0]->name << "\" varies by only " << 100.0 * variation << " % over [" << lower[0]
+          << ", " << upper[0] << "] kPa (threshold " << 100.0 * m_FlatnessThreshold
           << " %): the modulus is not identifiable from these surfaces";
     }
-    else if (best == 0 || best + 1 == m_Sweep.size())
+    else if ((best == 0 && m_Sweep[0].logModulusGradient[0] >= 0.0) ||
+             (best + 1 == m_Sweep.size() && m_Sweep.back().logModulusGradient[0] < 0.0))
     {
       m_Identifiable = false;
       msg << "the minimum of Phi*(E) of \"" << unknown[0]->name << "\" lies on the bound "
-          << m_Sweep[best].youngsModuli[0] << " kPa: the true modulus may lie outside [" << lower[0] << ", "
-          << upper[0] << "] kPa";
+          << m_Sweep[best].youngsModuli[0] << " kPa: the true modulus may lie outside [" << lower[0] << ", " << upper[0]
+          << "] kPa";
     }
     else
     {
@@ -471,6 +475,10 @@ FEMElasticityOptimizer::GenerateData()
   InnerSolution last;
   unsigned int  outerIteration = 0;
   const auto    innerAt = [&](const std::vector<double> & E) {
+    if (!m_History.empty() && m_History.back().youngsModuli == E)
+    {
+      return last.value; // L-BFGS-B starts by evaluating the point it was given
+    }
     const auto ts = Clock::now();
     last = SolveInner(fineObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
     wall = last.wall;
@@ -513,8 +521,8 @@ FEMElasticityOptimizer::GenerateData()
       }
       return value;
     };
-    const unsigned int             m = static_cast<unsigned int>(unknown.size());
-    FunctionMetric::ParametersType p(m);
+    const unsigned int                    m = static_cast<unsigned int>(unknown.size());
+    FunctionMetric::ParametersType        p(m);
     LBFGSBOptimizerv4::BoundValueType     lo(m), hi(m);
     LBFGSBOptimizerv4::BoundSelectionType select(m);
     for (unsigned int k = 0; k < m; ++k)
@@ -531,10 +539,28 @@ FEMElasticityOptimizer::GenerateData()
     optimizer->SetUpperBound(hi);
     optimizer->SetBoundSelection(select);
     optimizer->SetNumberOfIterations(m_MaximumNumberOfOuterIterations);
-    optimizer->SetMaximumNumberOfFunctionEvaluations(2 * m_MaximumNumberOfOuterIterations);
+    optimizer->SetMaximumNumberOfFunctionEvaluations(m_MaximumNumberOfOuterIterations);
     optimizer->SetGradientConvergenceTolerance(m_OuterGradientTolerance * std::max(bestValue, 1e-12));
     optimizer->SetCostFunctionConvergenceFactor(1e7);
+    // The accepted iterates of L-BFGS-B (its line searches' trial points are in the history only).
+    optimizer->AddObserver(IterationEvent(), [&](const EventObject &) {
+      IterationRecord r = m_History.back();
+      r.stage = "outer";
+      r.iteration = static_cast<unsigned int>(optimizer->GetCurrentIteration());
+      if (!m_OuterIterations.empty() && m_OuterIterations.back().iteration == r.iteration)
+      {
+        m_OuterIterations.pop_back(); // the event comes more than once per iteration
+      }
+      r.value = optimizer->GetCurrentMetricValue();
+      const auto & position = optimizer->GetCurrentPosition();
+      for (unsigned int k = 0; k < position.GetSize(); ++k)
+      {
+        r.youngsModuli[k] = std::exp(position[k]);
+      }
+      m_OuterIterations.push_back(r);
+    });
     optimizer->StartOptimization();
+    m_OuterStopCondition = optimizer->GetStopConditionDescription();
     if (moduli.size() == 1 && (bestModuli[0] <= lower[0] * 1.0001 || bestModuli[0] >= upper[0] * 0.9999))
     {
       m_Identifiable = false;

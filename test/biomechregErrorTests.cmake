@@ -79,8 +79,22 @@ expect_error(broken_json "JSON" simulate --moving-labels ${labels} --scene ${TEM
 expect_error(unwritable_output "cannot create output directory" simulate --moving-labels ${labels}
   --scene ${TEMP}/ok/truth_scene.json --out /proc/biomechreg-not-writable/out)
 
+# register: an objective label missing from the fixed labels (the CT, cast to labels, has none of them),
+# a fixed label image without any organ, a scene with nothing to estimate.
+set(ok_register --moving-ct ${TEMP}/ok/moving_ct.nrrd --moving-labels ${labels} --fixed-ct ${TEMP}/ok/fixed_ct.nrrd)
+expect_error(objective_label_missing "objective label \"inner\" \\(value 2\\) is missing from the fixed label image"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_ct.nrrd --scene ${TEMP}/ok/scene.json --out ${TEMP}/r1)
+string(REPEAT "0 " 64 zeros)
+file(WRITE ${TEMP}/empty_labels.nrrd "NRRD0004\ntype: int\ndimension: 3\nsizes: 4 4 4\nspacing: 4 4 4\nencoding: ascii\n\n${zeros}\n")
+expect_error(empty_fixed_labels "is missing from the fixed label image"
+  register ${ok_register} --fixed-labels ${TEMP}/empty_labels.nrrd --scene ${TEMP}/ok/scene.json --out ${TEMP}/r2)
+string(JSON bad SET "${scene}" force_surfaces "[]")
+file(WRITE ${TEMP}/nothing.json "${bad}")
+expect_error(nothing_to_estimate "nothing to estimate"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/nothing.json --out ${TEMP}/r3)
+
 # No partial outputs: none of the failed runs may have left a directory or temporary file.
-foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 x)
+foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 r1 r2 r3 x)
   if(EXISTS ${TEMP}/${dir})
     file(GLOB leftovers ${TEMP}/${dir}/*)
     if(leftovers)

@@ -47,7 +47,9 @@ TestScene()
   bmr::SceneLabel inclusion{ "inclusion", 2, R::UnknownMaterial, 40.0, 0.4 };
   inclusion.lowerBound = 10;
   inclusion.upperBound = 400;
-  s.labels = { { "outside", 0, R::Outside }, { "tissue", 1, R::Material, 10.0, 0.35 }, inclusion, { "cavity", 3, R::Hollow } };
+  s.labels = {
+    { "outside", 0, R::Outside }, { "tissue", 1, R::Material, 10.0, 0.35 }, inclusion, { "cavity", 3, R::Hollow }
+  };
   s.gauge = "tissue";
   s.forceSurfaces = { "cavity" };
   s.objective = { { "inclusion", 1.0 }, { "cavity", 2.0 } };
@@ -93,8 +95,8 @@ CheckTaylor(const char * name, TPhi phiAt, double phi0, double slope0, double h0
     const double h = h0 / std::pow(2.0, k);
     const double remainder = std::abs(phiAt(h) - phi0 - h * slope0);
     const double central = (phiAt(h) - phiAt(-h)) / (2.0 * h);
-    std::cout << name << ": h " << h << " remainder " << remainder << " central difference " << central
-              << " adjoint " << slope0;
+    std::cout << name << ": h " << h << " remainder " << remainder << " central difference " << central << " adjoint "
+              << slope0;
     if (k > 0)
     {
       const double slope = std::log2(previous / remainder);
@@ -170,16 +172,17 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
       return 2;
     return x * x + y * y + z * z < OuterRadius * OuterRadius ? 1 : 0;
   };
-  const bmr::TetrahedralMesh mesh = bmr::ExtractSubmesh(bmr::MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 22.0, p), { 3 });
-  const bmr::Scene           scene = TestScene();
+  const bmr::TetrahedralMesh mesh =
+    bmr::ExtractSubmesh(bmr::MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 22.0, p), { 3 });
+  const bmr::Scene scene = TestScene();
   // Fixed surfaces: the cavity grown by 1.5 mm, the inclusion shifted by 1 mm.
-  const double                                                           movedInclusion[3] = { 7.0, 0.5, 0.0 };
+  const double                                                              movedInclusion[3] = { 7.0, 0.5, 0.0 };
   std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> maps{
     { 2, SphereMap(movedInclusion, InclusionRadius) }, { 3, SphereMap(CavityCenter, CavityRadius + 1.5) }
   };
   bmr::SurfaceMatchingObjective objective(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
-  std::cout << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << objective.GetNumberOfParameters()
-            << " parameters" << std::endl;
+  std::cout << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << objective.GetNumberOfParameters() << " parameters"
+            << std::endl;
   objective.SetYoungsModuli({ 40.0 });
   std::vector<double> d = objective.MatchSurfaces();
   std::vector<double> v(d.size());
@@ -219,7 +222,11 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
 
   // 3. Bad set-ups are named.
   ok &= bmr::test::ExpectException(
-    "missing map", [&] { bmr::SceneObjectiveSurfaces(scene, mesh, { { 3, maps[3] } }); }, "inclusion");
+    "missing map",
+    [&] {
+      bmr::SceneObjectiveSurfaces(scene, mesh, { { 3, maps[3] } });
+    },
+    "inclusion");
   bmr::Scene nothing = scene;
   nothing.forceSurfaces.clear();
   nothing.labels[2].role = bmr::LabelRole::Material;

@@ -1,0 +1,54 @@
+# Checks the outputs of `biomechreg register` on a pelvis phantom pair in DIR (DIR/reg):
+# - the recovered prostate modulus is within 10 % of the truth (truth.json), the issue's accuracy target.
+#   The fixed scan is made on a finer, independent mesh and voxelised at 1 mm, so the shape change that
+#   carries the modulus is seen through the label staircase; benchmarks/run_estimation_benchmark.sh
+#   measures the error over 50-350 kPa;
+# - the RMS distance of the deformed prostate surface nodes to the fixed prostate surface is below half
+#   a voxel (0.5 mm);
+# - the accepted outer iterates (history.csv, stage "outer") never increase Phi*;
+# - every promised output exists and report.json names the gauge.
+# Run with: cmake -DDIR=<phantom dir> -P biomechregRegisterCheck.cmake
+file(READ ${DIR}/truth.json truth)
+file(READ ${DIR}/reg/report.json report)
+string(JSON trueE GET "${truth}" youngs_modulus_kPa prostate)
+string(JSON recoveredE GET "${report}" youngs_modulus_kPa prostate)
+string(JSON rms GET "${report}" surface_distance_mm prostate rms)
+string(JSON gauge GET "${report}" gauge label)
+# if() compares floating-point numbers; math() is integer-only, and the true modulus is a whole number.
+math(EXPR lower "${trueE} * 9 / 10")
+math(EXPR upper "${trueE} * 11 / 10")
+message(STATUS "prostate E: true ${trueE} kPa, recovered ${recoveredE} kPa (accepted ${lower}..${upper})")
+if(recoveredE LESS lower OR recoveredE GREATER upper)
+  message(SEND_ERROR "recovered prostate modulus ${recoveredE} kPa is more than 10 % from the true ${trueE} kPa")
+endif()
+message(STATUS "prostate surface RMS ${rms} mm (limit 0.5 mm)")
+if(NOT rms LESS 0.5)
+  message(SEND_ERROR "prostate surface RMS ${rms} mm is not below half a voxel (0.5 mm)")
+endif()
+if(NOT gauge STREQUAL "soft_tissue")
+  message(SEND_ERROR "report.json: gauge is '${gauge}', expected soft_tissue")
+endif()
+
+file(STRINGS ${DIR}/reg/history.csv lines REGEX "^outer,")
+list(LENGTH lines n)
+if(n LESS 2)
+  message(SEND_ERROR "history.csv holds ${n} outer iterations, expected at least 2")
+endif()
+set(previous "")
+foreach(line ${lines})
+  string(REPLACE "," ";" fields "${line}")
+  list(GET fields 3 phi) # stage, iteration, E_prostate_kPa, phi_mm2, ...
+  if(NOT previous STREQUAL "")
+    if(phi GREATER previous)
+      message(SEND_ERROR "outer Phi* increased from ${previous} to ${phi}")
+    endif()
+  endif()
+  set(previous ${phi})
+endforeach()
+message(STATUS "${n} outer iterations, Phi* non-increasing")
+
+foreach(f field.nrrd forward_field.nrrd warped_ct.nrrd warped_labels.nrrd mesh.vtu history.csv sweep.csv report.json)
+  if(NOT EXISTS ${DIR}/reg/${f})
+    message(SEND_ERROR "missing output ${f}")
+  endif()
+endforeach()
