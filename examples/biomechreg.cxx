@@ -40,6 +40,8 @@ struct PhantomOptions
   double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
   double            bladderMM{ 4.0 };
   double            rectumMM{ 3.0 };
+  double            bladderKPa{ 0.0 }; ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead
+  double            rectumKPa{ 0.0 };
   double            noiseHU{ 10.0 };
   std::uint64_t     seed{ 1 };
   double            truthRefinement{ 0.75 };
@@ -92,7 +94,13 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
     kv.second *= o.truthRefinement;
   }
   truth.mesh.randomSeed = 12345;
-  if (pelvis)
+  if (pelvis && (o.bladderKPa > 0.0 || o.rectumKPa > 0.0))
+  {
+    // Pressure in the lumens: the walls move as the tissue lets them (no wall is driven into the prostate).
+    truth.loads = { { "bladder", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, o.bladderKPa },
+                    { "rectum", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, o.rectumKPa } };
+  }
+  else if (pelvis)
   {
     truth.loads = {
       { "bladder",
@@ -192,12 +200,20 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
       first = false;
     }
   }
-  t << "},\n  \"wall_displacements\": [";
+  t << "},\n  \"wall_loads\": [";
   for (std::size_t i = 0; i < truth.loads.size(); ++i)
   {
-    t << (i ? ", " : "") << "{\"surface\": \"" << truth.loads[i].surface
-      << "\", \"type\": \"radial_displacement\", \"center_mm\": " << Json3(truth.loads[i].center)
-      << ", \"magnitude_mm\": " << truth.loads[i].magnitude << "}";
+    const bmr::SceneLoad & l = truth.loads[i];
+    t << (i ? ", " : "") << "{\"surface\": \"" << l.surface << "\", ";
+    if (l.type == bmr::SceneLoad::Type::Pressure)
+    {
+      t << "\"type\": \"pressure\", \"pressure_kPa\": " << l.magnitude << "}";
+    }
+    else
+    {
+      t << "\"type\": \"radial_displacement\", \"center_mm\": " << Json3(l.center)
+        << ", \"magnitude_mm\": " << l.magnitude << "}";
+    }
   }
   t << "],\n  \"truth_mesh\": {\"tetrahedra\": " << sim.mesh.GetNumberOfTetrahedra()
     << ", \"nodes\": " << sim.mesh.GetNumberOfPoints() << ", \"cell_size_mm\": " << truth.mesh.cellSize
@@ -256,6 +272,12 @@ PhantomCommand(const Arguments & args)
   o.prostateNu = args.Number("--true-nu", 0.40);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
+  o.bladderKPa = args.Number("--bladder-kPa", 0.0);
+  o.rectumKPa = args.Number("--rectum-kPa", 0.0);
+  if (o.bladderKPa < 0.0 || o.rectumKPa < 0.0)
+  {
+    throw UsageError("--bladder-kPa and --rectum-kPa must be >= 0");
+  }
   o.noiseHU = args.Number("--noise-HU", 10.0);
   const double seed = args.Number("--seed", 1.0);
   if (!(seed >= 0.0 && seed == std::floor(seed)))
@@ -372,7 +394,8 @@ PrintUsage(std::ostream & os)
         "  biomechreg                      run the demo into ./biomechreg-demo\n"
         "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
         "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-        "                     [--rectum-mm D] [--noise-HU S] [--seed N]\n"
+        "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
+        "                     [--noise-HU S] [--seed N]\n"
         "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
         "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
         "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F]\n"

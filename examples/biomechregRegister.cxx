@@ -299,7 +299,8 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   first = true;
   for (const auto & s : optimizer->GetSurfaceDistances())
   {
-    j << (first ? "" : ", ") << JsonString(s.name) << ": {\"rms\": " << s.rms << ", \"max\": " << s.maximum << "}";
+    j << (first ? "" : ", ") << JsonString(s.name) << ": {\"rms\": " << s.rms << ", \"max\": " << s.maximum
+      << ", \"mean_signed\": " << s.mean << "}";
     first = false;
   }
   j << "},\n  \"dice\": {";

@@ -44,6 +44,7 @@ struct BiomechanicalRegistration_EXPORT SurfaceDistanceStatistics
   std::size_t nodes{ 0 };
   double      rms{ 0.0 };
   double      maximum{ 0.0 };
+  double      mean{ 0.0 }; ///< signed: > 0 when the nodes lie outside the fixed organ on average
 };
 
 /** The objective surfaces of \a scene on \a mesh: for a simulated organ the nodes

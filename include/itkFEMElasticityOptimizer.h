@@ -115,6 +115,7 @@ public:
     std::string name;
     double      rms{ 0.0 };     ///< mm
     double      maximum{ 0.0 }; ///< mm
+    double      mean{ 0.0 };    ///< mm, signed (> 0: outside the fixed organ on average)
   };
 
   void

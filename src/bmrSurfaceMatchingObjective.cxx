@@ -393,9 +393,10 @@ SurfaceMatchingObjective::ComputeSurfaceDistances(const std::vector<double> & u)
       const double x[3] = { mesh.points[3 * n] + u[3 * n],
                             mesh.points[3 * n + 1] + u[3 * n + 1],
                             mesh.points[3 * n + 2] + u[3 * n + 2] };
-      const double phi = std::abs(s.distance->Evaluate(x, nullptr));
+      const double phi = s.distance->Evaluate(x, nullptr);
       sum += phi * phi;
-      st.maximum = std::max(st.maximum, phi);
+      st.mean += phi / static_cast<double>(s.nodes.size());
+      st.maximum = std::max(st.maximum, std::abs(phi));
     }
     st.rms = std::sqrt(sum / static_cast<double>(s.nodes.size()));
     stats.push_back(st);

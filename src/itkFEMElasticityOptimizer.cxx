@@ -208,6 +208,87 @@ SolveInner(bmr::SurfaceMatchingObjective & objective,
   return result;
 }
 
+FEMElasticityOptimizer::IterationRecord
+MakeRecord(const char *                stage,
+           unsigned int                iteration,
+           const std::vector<double> & moduli,
+           const InnerSolution &       s,
+           double                      seconds)
+{
+  FEMElasticityOptimizer::IterationRecord r;
+  r.stage = stage;
+  r.iteration = iteration;
+  r.youngsModuli = moduli;
+  r.value = s.value;
+  r.wallGradientNorm = s.wallGradientNorm;
+  r.logModulusGradient = s.logModulusGradient;
+  r.innerIterations = s.iterations;
+  r.seconds = seconds;
+  return r;
+}
+
+/** Initial modulus and identifiability from the sweep of Phi*(E). */
+struct SweepAnalysis
+{
+  double      modulus{ 0.0 };
+  bool        identifiable{ true };
+  std::string message;
+};
+
+/** The minimum is bracketed by the first sign change of the envelope gradient dPhi* / dlogE from - to +
+ * (more robust than the sampled values, which carry the inner solver's tolerance); the zero is
+ * interpolated linearly in log E. Without a sign change the minimum lies on a bound; when Phi* varies by
+ * less than \a flatness (relative) over the bounds the modulus is not identifiable. */
+SweepAnalysis
+AnalyseSweep(const std::vector<FEMElasticityOptimizer::IterationRecord> & sweep,
+             const std::string &                                          name,
+             double                                                       lower,
+             double                                                       upper,
+             double                                                       flatness)
+{
+  double vmin = sweep[0].value, vmax = sweep[0].value;
+  for (const auto & r : sweep)
+  {
+    vmin = std::min(vmin, r.value);
+    vmax = std::max(vmax, r.value);
+  }
+  std::size_t best = sweep.back().logModulusGradient[0] < 0.0 ? sweep.size() - 1 : 0;
+  double      logE = std::log(sweep[best].youngsModuli[0]);
+  bool        bracketed = false;
+  for (std::size_t k = 0; k + 1 < sweep.size() && !bracketed; ++k)
+  {
+    const double g0 = sweep[k].logModulusGradient[0], g1 = sweep[k + 1].logModulusGradient[0];
+    if (g0 < 0.0 && g1 >= 0.0)
+    {
+      const double l0 = std::log(sweep[k].youngsModuli[0]), l1 = std::log(sweep[k + 1].youngsModuli[0]);
+      logE = l0 + (l1 - l0) * g0 / (g0 - g1);
+      bracketed = true;
+    }
+  }
+  SweepAnalysis      a;
+  std::ostringstream msg;
+  a.modulus = std::exp(logE);
+  const double variation = (vmax - vmin) / std::max(vmin, 1e-300);
+  if (variation < flatness)
+  {
+    a.identifiable = false;
+    msg << "Phi*(E) of \"" << name << "\" varies by only " << 100.0 * variation << " % over [" << lower << ", " << upper
+        << "] kPa (threshold " << 100.0 * flatness << " %): the modulus is not identifiable from these surfaces";
+  }
+  else if (!bracketed)
+  {
+    a.identifiable = false;
+    msg << "the minimum of Phi*(E) of \"" << name << "\" lies on the bound " << sweep[best].youngsModuli[0]
+        << " kPa: the true modulus may lie outside [" << lower << ", " << upper << "] kPa";
+  }
+  else
+  {
+    msg << "Phi*(E) varies by " << 100.0 * variation << " % over the bounds, minimum inside";
+  }
+  a.message = msg.str();
+  return a;
+}
+
 std::shared_ptr<const bmr::SignedDistanceSampler>
 ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string & name)
 {
@@ -405,63 +486,13 @@ FEMElasticityOptimizer::GenerateData()
       const InnerSolution s =
         SolveInner(*sweepObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
       wall = s.wall;
-      IterationRecord r;
-      r.stage = "sweep";
-      r.iteration = k;
-      r.youngsModuli = E;
-      r.value = s.value;
-      r.wallGradientNorm = s.wallGradientNorm;
-      r.logModulusGradient = s.logModulusGradient;
-      r.innerIterations = s.iterations;
-      r.seconds = Seconds(ts);
-      this->Record(r, m_Sweep);
+      this->Record(MakeRecord("sweep", k, E, s, Seconds(ts)), m_Sweep);
       this->UpdateProgress(0.5f * float(k + 1) / float(n));
     }
-    // The minimum is bracketed by the first sign change of the envelope gradient dPhi*/dlogE from - to +
-    // (more robust than the sampled values, which carry the inner solver's tolerance); the zero is
-    // interpolated linearly in log E. Without a sign change the minimum lies on a bound.
-    double vmin = m_Sweep[0].value, vmax = m_Sweep[0].value;
-    for (const auto & r : m_Sweep)
-    {
-      vmin = std::min(vmin, r.value);
-      vmax = std::max(vmax, r.value);
-    }
-    std::size_t best = m_Sweep.back().logModulusGradient[0] < 0.0 ? m_Sweep.size() - 1 : 0;
-    double      logE = std::log(m_Sweep[best].youngsModuli[0]);
-    for (std::size_t k = 0; k + 1 < m_Sweep.size(); ++k)
-    {
-      const double g0 = m_Sweep[k].logModulusGradient[0], g1 = m_Sweep[k + 1].logModulusGradient[0];
-      if (g0 < 0.0 && g1 >= 0.0)
-      {
-        const double l0 = std::log(m_Sweep[k].youngsModuli[0]), l1 = std::log(m_Sweep[k + 1].youngsModuli[0]);
-        logE = l0 + (l1 - l0) * g0 / (g0 - g1);
-        best = g1 < -g0 ? k + 1 : k;
-        break;
-      }
-    }
-    moduli[0] = std::exp(logE);
-    const double       variation = (vmax - vmin) / std::max(vmin, 1e-300);
-    std::ostringstream msg;
-    if (variation < m_FlatnessThreshold)
-    {
-      m_Identifiable = false;
-      msg << "Phi*(E) of \"" << unknown[0]->name << "\" varies by only " << 100.0 * variation << " % over [" << lower[0]
-          << ", " << upper[0] << "] kPa (threshold " << 100.0 * m_FlatnessThreshold
-          << " %): the modulus is not identifiable from these surfaces";
-    }
-    else if ((best == 0 && m_Sweep[0].logModulusGradient[0] >= 0.0) ||
-             (best + 1 == m_Sweep.size() && m_Sweep.back().logModulusGradient[0] < 0.0))
-    {
-      m_Identifiable = false;
-      msg << "the minimum of Phi*(E) of \"" << unknown[0]->name << "\" lies on the bound "
-          << m_Sweep[best].youngsModuli[0] << " kPa: the true modulus may lie outside [" << lower[0] << ", " << upper[0]
-          << "] kPa";
-    }
-    else
-    {
-      msg << "Phi*(E) varies by " << 100.0 * variation << " % over the bounds, minimum inside";
-    }
-    m_IdentifiabilityMessage = msg.str();
+    const SweepAnalysis analysis = AnalyseSweep(m_Sweep, unknown[0]->name, lower[0], upper[0], m_FlatnessThreshold);
+    moduli[0] = analysis.modulus;
+    m_Identifiable = analysis.identifiable;
+    m_IdentifiabilityMessage = analysis.message;
   }
   m_Timings["sweep"] = Seconds(t0);
 
@@ -482,16 +513,7 @@ FEMElasticityOptimizer::GenerateData()
     const auto ts = Clock::now();
     last = SolveInner(fineObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
     wall = last.wall;
-    IterationRecord r;
-    r.stage = "fine";
-    r.iteration = outerIteration++;
-    r.youngsModuli = E;
-    r.value = last.value;
-    r.wallGradientNorm = last.wallGradientNorm;
-    r.logModulusGradient = last.logModulusGradient;
-    r.innerIterations = last.iterations;
-    r.seconds = Seconds(ts);
-    this->Record(r, m_History);
+    this->Record(MakeRecord("fine", outerIteration++, E, last, Seconds(ts)), m_History);
     this->UpdateProgress(std::min(0.99f, 0.5f + 0.02f * float(outerIteration)));
     return last.value;
   };
@@ -581,7 +603,7 @@ FEMElasticityOptimizer::GenerateData()
   out.force = fineObjective.ComputeBoundaryForces(out.displacement);
   for (const auto & s : fineObjective.ComputeSurfaceDistances(out.displacement))
   {
-    m_SurfaceDistances.push_back({ s.name, s.rms, s.maximum });
+    m_SurfaceDistances.push_back({ s.name, s.rms, s.maximum, s.mean });
   }
   this->GetOutput()->Set(out);
   this->UpdateProgress(1.0f);

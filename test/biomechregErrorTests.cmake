@@ -85,7 +85,7 @@ set(ok_register --moving-ct ${TEMP}/ok/moving_ct.nrrd --moving-labels ${labels} 
 expect_error(objective_label_missing "objective label \"inner\" \\(value 2\\) is missing from the fixed label image"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_ct.nrrd --scene ${TEMP}/ok/scene.json --out ${TEMP}/r1)
 string(REPEAT "0 " 64 zeros)
-file(WRITE ${TEMP}/empty_labels.nrrd "NRRD0004\ntype: int\ndimension: 3\nsizes: 4 4 4\nspacing: 4 4 4\nencoding: ascii\n\n${zeros}\n")
+file(WRITE ${TEMP}/empty_labels.nrrd "NRRD0004\ntype: int\ndimension: 3\nsizes: 4 4 4\nspacings: 4 4 4\nencoding: ascii\n\n${zeros}\n")
 expect_error(empty_fixed_labels "is missing from the fixed label image"
   register ${ok_register} --fixed-labels ${TEMP}/empty_labels.nrrd --scene ${TEMP}/ok/scene.json --out ${TEMP}/r2)
 string(JSON bad SET "${scene}" force_surfaces "[]")

@@ -29,32 +29,14 @@
 #include <iostream>
 
 namespace {
-// Outer ball (fixed boundary) with a hollow cavity (force surface) and a stiff inclusion (unknown E).
-constexpr double OuterRadius = 20.0, CavityRadius = 6.0, InclusionRadius = 5.0;
-const double     CavityCenter[3] = { -6.0, 0.0, 0.0 }, InclusionCenter[3] = { 8.0, 0.0, 0.0 };
+// The geometry of bmr::test::CavityInclusionBall().
+constexpr double InclusionRadius = 5.0, CavityRadius = 6.0;
+const double     CavityCenter[3] = { -6.0, 0.0, 0.0 };
 
 double
 Distance(const double c[3], double x, double y, double z)
 {
   return std::sqrt((x - c[0]) * (x - c[0]) + (y - c[1]) * (y - c[1]) + (z - c[2]) * (z - c[2]));
-}
-
-bmr::Scene
-TestScene()
-{
-  using R = bmr::LabelRole;
-  bmr::Scene      s;
-  bmr::SceneLabel inclusion{ "inclusion", 2, R::UnknownMaterial, 40.0, 0.4 };
-  inclusion.lowerBound = 10;
-  inclusion.upperBound = 400;
-  s.labels = {
-    { "outside", 0, R::Outside }, { "tissue", 1, R::Material, 10.0, 0.35 }, inclusion, { "cavity", 3, R::Hollow }
-  };
-  s.gauge = "tissue";
-  s.forceSurfaces = { "cavity" };
-  s.objective = { { "inclusion", 1.0 }, { "cavity", 2.0 } };
-  s.roiBoundaryFixed = true;
-  return s;
 }
 
 /** Signed distance [mm] to a sphere of radius r around c, sampled on a 1 mm oblique grid. */
@@ -161,20 +143,8 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
   }
 
   // 2. Adjoint gradients against finite differences.
-  bmr::MeshingParameters p;
-  p.cellSize = 3.0;
-  p.facetSize = 3.0;
-  p.facetDistance = 0.5;
-  auto labelAt = [](double x, double y, double z) -> std::int32_t {
-    if (Distance(CavityCenter, x, y, z) < CavityRadius)
-      return 3;
-    if (Distance(InclusionCenter, x, y, z) < InclusionRadius)
-      return 2;
-    return x * x + y * y + z * z < OuterRadius * OuterRadius ? 1 : 0;
-  };
-  const bmr::TetrahedralMesh mesh =
-    bmr::ExtractSubmesh(bmr::MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 22.0, p), { 3 });
-  const bmr::Scene scene = TestScene();
+  const bmr::TetrahedralMesh mesh = bmr::test::CavityInclusionBall(3.0);
+  const bmr::Scene           scene = bmr::test::CavityInclusionScene(true);
   // Fixed surfaces: the cavity grown by 1.5 mm, the inclusion shifted by 1 mm.
   const double                                                              movedInclusion[3] = { 7.0, 0.5, 0.0 };
   std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> maps{

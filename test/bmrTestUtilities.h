@@ -18,9 +18,12 @@
 #ifndef bmrTestUtilities_h
 #define bmrTestUtilities_h
 
+#include "bmrMesher.h"
+#include "bmrScene.h"
 #include "bmrTetrahedralMesh.h"
 #include "itkMacro.h"
 
+#include <cmath>
 #include <functional>
 #include <iostream>
 #include <string>
@@ -64,6 +67,46 @@ StructuredCube(int n, double h, std::int32_t rightLabel = 1)
         }
       }
   return mesh;
+}
+
+/** A ball of radius 20 mm (tissue, label 1, its boundary fixed by the scene) holding a hollow cavity
+ * (label 3, radius 6 mm at x = -6) whose wall loads are unknown and an inclusion (label 2, radius 5 mm at
+ * x = 8); CGAL's implicit domain, cavity elements removed. Used by the estimation tests. */
+inline TetrahedralMesh
+CavityInclusionBall(double h)
+{
+  MeshingParameters p;
+  p.cellSize = h;
+  p.facetSize = h;
+  p.facetDistance = 0.5;
+  auto labelAt = [](double x, double y, double z) -> std::int32_t {
+    if (std::sqrt((x + 6.0) * (x + 6.0) + y * y + z * z) < 6.0)
+      return 3;
+    if (std::sqrt((x - 8.0) * (x - 8.0) + y * y + z * z) < 5.0)
+      return 2;
+    return x * x + y * y + z * z < 400.0 ? 1 : 0;
+  };
+  return ExtractSubmesh(MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 22.0, p), { 3 });
+}
+
+/** The estimation scene of CavityInclusionBall(): tissue 10 kPa (gauge), inclusion 40 kPa (unknown in
+ * [10, 400] kPa when \a unknown), cavity wall loads estimated, objective on inclusion and cavity. */
+inline Scene
+CavityInclusionScene(bool unknown)
+{
+  using R = LabelRole;
+  Scene      s;
+  SceneLabel inclusion{ "inclusion", 2, unknown ? R::UnknownMaterial : R::Material, 40.0, 0.4 };
+  inclusion.lowerBound = 10;
+  inclusion.upperBound = 400;
+  s.labels = {
+    { "outside", 0, R::Outside }, { "tissue", 1, R::Material, 10.0, 0.35 }, inclusion, { "cavity", 3, R::Hollow }
+  };
+  s.gauge = "tissue";
+  s.forceSurfaces = { "cavity" };
+  s.objective = { { "inclusion", 1.0 }, { "cavity", 1.0 } };
+  s.roiBoundaryFixed = true;
+  return s;
 }
 
 /** Runs \a f and checks that it throws an itk::ExceptionObject whose description contains \a expected. */

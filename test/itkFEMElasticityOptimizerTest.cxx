@@ -25,7 +25,6 @@
 #include "itkFEMElasticityOptimizer.h"
 #include "itkSceneDistanceMaps.h"
 
-#include "bmrMesher.h"
 #include "bmrTestUtilities.h"
 #include "itkTestingMacros.h"
 
@@ -58,42 +57,14 @@ SphereMap(double cx, double r)
   return map;
 }
 
-bmr::Scene
-TestScene(bool unknown)
-{
-  using R = bmr::LabelRole;
-  bmr::Scene      s;
-  bmr::SceneLabel inclusion{ "inclusion", 2, unknown ? R::UnknownMaterial : R::Material, 40.0, 0.4 };
-  inclusion.lowerBound = 10;
-  inclusion.upperBound = 400;
-  s.labels = {
-    { "outside", 0, R::Outside }, { "tissue", 1, R::Material, 10.0, 0.35 }, inclusion, { "cavity", 3, R::Hollow }
-  };
-  s.gauge = "tissue";
-  s.forceSurfaces = { "cavity" };
-  s.objective = { { "inclusion", 1.0 }, { "cavity", 1.0 } };
-  s.roiBoundaryFixed = true;
-  return s;
-}
 } // namespace
 
 int
 itkFEMElasticityOptimizerTest(int, char *[])
 {
-  bool                   ok = true;
-  bmr::MeshingParameters p;
-  p.cellSize = 3.0;
-  p.facetSize = 3.0;
-  p.facetDistance = 0.5;
-  auto labelAt = [](double x, double y, double z) -> std::int32_t {
-    if (std::hypot(x + 6.0, y, z) < 6.0)
-      return 3;
-    if (std::hypot(x - 8.0, y, z) < 5.0)
-      return 2;
-    return x * x + y * y + z * z < 400.0 ? 1 : 0;
-  };
+  bool ok = true;
   auto mesh = itk::TetrahedralMeshObject::New();
-  mesh->Set(bmr::ExtractSubmesh(bmr::MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 22.0, p), { 3 }));
+  mesh->Set(bmr::test::CavityInclusionBall(3.0));
 
   auto optimizer = itk::FEMElasticityOptimizer::New();
   ITK_EXERCISE_BASIC_OBJECT_METHODS(optimizer, FEMElasticityOptimizer, ProcessObject);
@@ -101,11 +72,11 @@ itkFEMElasticityOptimizerTest(int, char *[])
   // Bad set-ups.
   optimizer->SetMesh(mesh);
   ITK_TRY_EXPECT_EXCEPTION(optimizer->Update()); // no scene
-  optimizer->SetScene(TestScene(false));
+  optimizer->SetScene(bmr::test::CavityInclusionScene(false));
   optimizer->SetDistanceMap("cavity", SphereMap(-6.0, 7.5));
   ok &= bmr::test::ExpectException(
     "missing distance map", [&] { optimizer->Update(); }, "inclusion");
-  bmr::Scene nothing = TestScene(false);
+  bmr::Scene nothing = bmr::test::CavityInclusionScene(false);
   nothing.forceSurfaces.clear();
   nothing.roiBoundaryFixed = true;
   optimizer->SetScene(nothing);
@@ -114,7 +85,7 @@ itkFEMElasticityOptimizerTest(int, char *[])
     "nothing to estimate", [&] { optimizer->Update(); }, "nothing to estimate");
 
   // Forces only: the cavity wall must reach the fixed cavity surface, 1.5 mm away.
-  optimizer->SetScene(TestScene(false));
+  optimizer->SetScene(bmr::test::CavityInclusionScene(false));
   optimizer->SetWallControlSpacing(6.0);
   ITK_TRY_EXPECT_NO_EXCEPTION(optimizer->Update());
   double cavityRms = -1.0;
@@ -146,7 +117,7 @@ itkFEMElasticityOptimizerTest(int, char *[])
   }
 
   // Joint estimation: the estimate lies in the bounds, the gauge is the scene's, the outer iterates decrease.
-  optimizer->SetScene(TestScene(true));
+  optimizer->SetScene(bmr::test::CavityInclusionScene(true));
   optimizer->SetNumberOfSweepSamples(5);
   ITK_TRY_EXPECT_NO_EXCEPTION(optimizer->Update());
   const double E = optimizer->GetEstimatedYoungsModuli().at("inclusion");
