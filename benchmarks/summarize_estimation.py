@@ -15,29 +15,30 @@ out = sys.argv[1]
 rows = list(csv.DictReader(open(f"{out}/estimation_runs.csv")))
 groups = OrderedDict()
 for r in rows:
-    groups.setdefault((r["study"], r["scene"], r["true_E_kPa"], r["true_nu"], r["mesh_scale"]), []).append(r)
+    key = (r["study"], r["scene"], r["true_E_kPa"], r["true_nu"], r["mesh_scale"], r.get("tumour_fraction", "0"))
+    groups.setdefault(key, []).append(r)
 
 med = []
-for (study, scene, E, nu, scale), rs in groups.items():
+for (study, scene, E, nu, scale, tumour), rs in groups.items():
     m = lambda k: statistics.median(float(x[k]) for x in rs)  # noqa: E731
     med.append(dict(study=study, scene=scene, E=float(E), nu=float(nu), scale=float(scale), runs=len(rs),
                     Er=m("recovered_E_kPa"), err=m("relative_error"), tets=int(m("tetrahedra")),
                     est=m("estimation_s"), total=m("total_s"), rms=m("prostate_rms_mm"),
-                    ident=min(int(x["identifiable"]) for x in rs)))
+                    ident=min(int(x["identifiable"]) for x in rs), tumour=float(tumour or 0)))
 with open(f"{out}/estimation.csv", "w") as f:
-    f.write("study,scene,true_E_kPa,true_nu,mesh_scale,runs,recovered_E_kPa,relative_error,tetrahedra,"
-            "estimation_s,total_s,prostate_rms_mm,identifiable\n")
+    f.write("study,scene,true_E_kPa,true_nu,mesh_scale,tumour_fraction,runs,recovered_E_kPa,relative_error,"
+            "tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable\n")
     for d in med:
-        f.write(f'{d["study"]},{d["scene"]},{d["E"]:g},{d["nu"]:g},{d["scale"]:g},{d["runs"]},{d["Er"]:.2f},'
+        f.write(f'{d["study"]},{d["scene"]},{d["E"]:g},{d["nu"]:g},{d["scale"]:g},{d["tumour"]:g},{d["runs"]},{d["Er"]:.2f},'
                 f'{d["err"]:.4f},{d["tets"]},{d["est"]:.2f},{d["total"]:.2f},{d["rms"]:.4f},{d["ident"]}\n')
 
 for study in OrderedDict((d["study"], 0) for d in med):
     print(f"\n{study} (medians; times in s, moduli in kPa)\n")
-    print("| scene | true E | true nu | mesh scale | tets | recovered E | rel. error | estimation | total | prostate RMS mm | identifiable |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print("| scene | true E | true nu | tumour fraction | mesh scale | tets | recovered E | rel. error | estimation | total | prostate RMS mm | identifiable |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for d in med:
         if d["study"] == study:
-            print(f'| {d["scene"]} | {d["E"]:g} | {d["nu"]:.2f} | {d["scale"]:g} | {d["tets"]} | {d["Er"]:.1f} | '
+            print(f'| {d["scene"]} | {d["E"]:g} | {d["nu"]:.2f} | {d["tumour"]:g} | {d["scale"]:g} | {d["tets"]} | {d["Er"]:.1f} | '
                   f'{100 * d["err"]:+.1f} % | {d["est"]:.1f} | {d["total"]:.1f} | {d["rms"]:.3f} | {"yes" if d["ident"] else "no"} |')
 
 fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))

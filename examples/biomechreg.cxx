@@ -31,6 +31,9 @@ using namespace bmrcli;
 
 // ----------------------------------------------------------------- phantom
 
+/** Label of the tumour inside the prostate, in the truth's label map only. */
+constexpr std::int32_t PelvisTumour = 6;
+
 struct PhantomOptions
 {
   std::string       scene{ "pelvis" };
@@ -40,7 +43,9 @@ struct PhantomOptions
   double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
   double            bladderMM{ 4.0 };
   double            rectumMM{ 3.0 };
-  double            bladderKPa{ 0.0 }; ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead
+  double            tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour (truth only)
+  double            tumourE{ 100.0 };      ///< kPa
+  double            bladderKPa{ 0.0 };     ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead
   double            rectumKPa{ 0.0 };
   double            noiseHU{ 10.0 };
   std::uint64_t     seed{ 1 };
@@ -116,9 +121,53 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   }
   truth.Validate();
 
-  auto              movingCT = itk::MakeImageOnGrid<CTImageType>(moving.grid, moving.ct);
-  auto              movingLabels = itk::MakeImageOnGrid<LabelImageType>(moving.grid, moving.labels);
-  SimulationOutputs sim = RunSimulation(movingLabels, truth, movingLabels, timer);
+  auto movingCT = itk::MakeImageOnGrid<CTImageType>(moving.grid, moving.ct);
+  auto movingLabels = itk::MakeImageOnGrid<LabelImageType>(moving.grid, moving.labels);
+  // The truth may hold a stiffer tumour inside the prostate (dissertation Table 3.4): a ball at the
+  // prostate's centroid with the requested fraction of its volume, labelled only in the truth's label map.
+  // The estimator sees one homogeneous prostate.
+  LabelImageType::Pointer truthLabels = movingLabels;
+  if (pelvis && o.tumourFraction > 0.0)
+  {
+    std::vector<std::int32_t> labels = moving.labels;
+    std::array<double, 3>     c{ { 0, 0, 0 } };
+    std::size_t               n = 0;
+    const auto &              g = moving.grid;
+    const auto                at = [&g](std::size_t v) {
+      return g.IndexToPoint(
+        { { double(v % g.size[0]), double((v / g.size[0]) % g.size[1]), double(v / (g.size[0] * g.size[1])) } });
+    };
+    for (std::size_t v = 0; v < labels.size(); ++v)
+    {
+      if (labels[v] == bmr::PelvisProstate)
+      {
+        const auto x = at(v);
+        for (int a = 0; a < 3; ++a)
+        {
+          c[a] += x[a];
+        }
+        ++n;
+      }
+    }
+    const double voxel = g.spacing[0] * g.spacing[1] * g.spacing[2];
+    const double r = std::cbrt(o.tumourFraction * double(n) * voxel * 3.0 / (4.0 * 3.14159265358979));
+    for (int a = 0; a < 3; ++a)
+    {
+      c[a] /= double(std::max<std::size_t>(n, 1));
+    }
+    for (std::size_t v = 0; v < labels.size(); ++v)
+    {
+      const auto x = at(v);
+      if (labels[v] == bmr::PelvisProstate && std::hypot(x[0] - c[0], x[1] - c[1], x[2] - c[2]) <= r)
+      {
+        labels[v] = PelvisTumour;
+      }
+    }
+    truthLabels = itk::MakeImageOnGrid<LabelImageType>(moving.grid, labels);
+    truth.labels.push_back({ "tumour", PelvisTumour, bmr::LabelRole::Material, o.tumourE, o.prostateNu });
+    truth.mesh.cellSizePerLabel[PelvisTumour] = truth.mesh.cellSizePerLabel[bmr::PelvisProstate];
+  }
+  SimulationOutputs sim = RunSimulation(truthLabels, truth, movingLabels, timer);
 
   timer.Begin("warp to the fixed volume");
   auto fixedCT = Warp<CTImageType>(movingCT, sim.pullBack, false, -1000.0f);
@@ -200,7 +249,7 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
       first = false;
     }
   }
-  t << "},\n  \"wall_loads\": [";
+  t << "},\n  \"tumour_volume_fraction\": " << (pelvis ? o.tumourFraction : 0.0) << ",\n  \"wall_loads\": [";
   for (std::size_t i = 0; i < truth.loads.size(); ++i)
   {
     const bmr::SceneLoad & l = truth.loads[i];
@@ -272,6 +321,12 @@ PhantomCommand(const Arguments & args)
   o.prostateNu = args.Number("--true-nu", 0.40);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
+  o.tumourFraction = args.Number("--tumour-fraction", 0.0);
+  o.tumourE = args.Number("--tumour-E-kPa", 100.0);
+  if (!(o.tumourFraction >= 0.0 && o.tumourFraction < 1.0) || !(o.tumourE > 0.0))
+  {
+    throw UsageError("--tumour-fraction must lie in [0, 1) and --tumour-E-kPa be > 0");
+  }
   o.bladderKPa = args.Number("--bladder-kPa", 0.0);
   o.rectumKPa = args.Number("--rectum-kPa", 0.0);
   if (o.bladderKPa < 0.0 || o.rectumKPa < 0.0)
@@ -395,7 +450,7 @@ PrintUsage(std::ostream & os)
         "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
         "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
         "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
-        "                     [--noise-HU S] [--seed N]\n"
+        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
         "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
         "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
         "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F]\n"
