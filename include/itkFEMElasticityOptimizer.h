@@ -159,10 +159,6 @@ public:
   itkGetConstMacro(WallRegularization, double);
   itkSetMacro(FlatnessThreshold, double);
   itkGetConstMacro(FlatnessThreshold, double);
-  /** Skip the fine-mesh outer optimisation and keep the sweep's estimate (for speed studies). */
-  itkSetMacro(SweepOnly, bool);
-  itkGetConstMacro(SweepOnly, bool);
-  itkBooleanMacro(SweepOnly);
 
   /** The mesh with displacement [mm] and estimated wall forces [mN]. */
   MeshObjectType *
@@ -249,7 +245,6 @@ private:
   double                        m_FlatnessThreshold{ 0.01 };
   double                        m_WallControlSpacing{ 12.0 };
   double                        m_WallRegularization{ 0.01 };
-  bool                          m_SweepOnly{ false };
   std::map<std::string, double> m_EstimatedYoungsModuli;
   std::string                   m_GaugeLabel;
   std::vector<IterationRecord>  m_Sweep;

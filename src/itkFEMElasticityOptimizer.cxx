@@ -520,7 +520,7 @@ FEMElasticityOptimizer::GenerateData()
   std::vector<double> bestModuli = moduli;
   double              bestValue = innerAt(moduli);
   std::vector<double> bestWall = wall;
-  if (!unknown.empty() && !m_SweepOnly)
+  if (!unknown.empty())
   {
     // Outer: bounded L-BFGS over log E (vnl's L-BFGS-B through ITK).
     auto metric = FunctionMetric::New();
@@ -622,7 +622,6 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
   os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
-  os << indent << "SweepOnly: " << m_SweepOnly << std::endl;
   os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
   for (const auto & kv : m_EstimatedYoungsModuli)
   {
