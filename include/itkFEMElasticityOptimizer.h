@@ -38,26 +38,32 @@ namespace itk {
  * LabelImageToTetrahedralMeshFilter with the same scene); the fixed anatomy is
  * given by one signed distance map [mm] per objective label of the scene
  * (SetDistanceMap(); negative inside, as SignedMaurerDistanceMapImageFilter
- * makes them, see SceneDistanceMaps()). The unknowns are the loads on the
+ * makes them, see ComputeSceneDistanceMaps()). The unknowns are the loads on the
  * scene's force surfaces (bladder and rectum walls) and the moduli of the
  * labels with the role unknown_material. The objective is
  * \f[ \Phi(E, F) = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l(E, F))^2 \f]
  * with K(E) u = F (linear elasticity, u = 0 on fixed walls).
  *
  * Nested optimisation:
- * - inner: \f$\Phi^*(E) = \min_F \Phi(E, F)\f$ by L-BFGS (itk::LBFGS2Optimizerv4,
- *   More-Thuente line search) with the adjoint gradient. The loads are
- *   parameterised by the wall displacements d they cause (F = S(E) d with S the
- *   Schur complement on the walls, an exact change of variables, so Phi* is
- *   unchanged) and measured in mm, which makes the inner problem well
- *   conditioned and its gradient of the same size as the outer one;
+ * - inner: \f$\Phi^*(E) = \min_F \Phi(E, F)\f$. The loads are parameterised
+ *   by the wall displacements d they cause (F = S(E) d with S the Schur
+ *   complement on the walls, an exact change of variables, so Phi* is
+ *   unchanged), measured in mm, which makes the inner problem well conditioned
+ *   and its gradient of the same size as the outer one. By default d is spanned
+ *   by a smooth reduced basis (WallControlSpacing, bmr::WallBasis) with the
+ *   E-independent regulariser WallRegularization/2 |p|^2, and the inner problem
+ *   is solved by Levenberg-Marquardt (bmr::SurfaceMatchingObjective::SolveWalls);
+ *   with WallControlSpacing = 0 every wall node is free and L-BFGS
+ *   (itk::LBFGS2Optimizerv4, More-Thuente line search) with the adjoint gradient
+ *   is used instead;
  * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the scene's bounds by
  *   itk::LBFGSBOptimizerv4, with the envelope-theorem gradient
  *   \f$ d\Phi^{*} / d\log E_m = -E_m \lambda^T \hat K_m u \f$ at the inner optimum;
  * - initial loads by surface matching (dissertation 5.3.1.1); initial E from a
  *   sweep of Phi*(E) over the bounds (log-spaced) on the coarse mesh (input
- *   "CoarseMesh"; the fine mesh when none is given), refined by a parabola
- *   through the three best samples, then coarse-to-fine on the fine mesh.
+ *   "CoarseMesh"; the fine mesh when none is given), each sample warm-started
+ *   from the previous one; the minimum is bracketed by the sign change of
+ *   dPhi* / dlog E and interpolated, then refined on the fine mesh.
  *
  * Stopping rules (dissertation): inner when \f$\|\partial\Phi/\partial d\| \le
  * \epsilon_F \max(1, \|d\|)\f$ (InnerGradientTolerance, default 1e-5) or after
@@ -76,8 +82,9 @@ namespace itk {
  * minimum lies on a bound, IsIdentifiable() is false with a message.
  *
  * Output: the mesh with nodal displacement [mm] and the estimated wall forces
- * [mN]; the estimated moduli [kPa]; the history of every outer iteration; the
- * surface distances [mm]. An IterationEvent is invoked after every inner
+ * [mN]; the estimated moduli [kPa]; every fine-mesh inner solve (GetHistory())
+ * and the accepted outer iterates (GetOuterIterations()); the surface
+ * distances [mm]. An IterationEvent is invoked after every inner
  * solve (GetCurrentValue(), GetCurrentYoungsModuli()).
  * Deterministic: sequential, no random numbers.
  * \ingroup BiomechanicalRegistration
