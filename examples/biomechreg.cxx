@@ -69,15 +69,15 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   const bool         pelvis = o.scene == "pelvis";
   bmr::PhantomVolume moving;
   timer.Begin("phantom volume");
-  std::array<double, 3> centre;
+  std::array<double, 3>        centre;
+  bmr::PelvisPhantomParameters pelvisParameters;
   if (pelvis)
   {
-    bmr::PelvisPhantomParameters p;
-    p.grid = o.grid;
-    p.seedPlacementSeed = o.seed;
-    p.noiseSigmaHU = o.noiseHU;
-    p.noiseSeed = 1000 + o.seed;
-    moving = bmr::MakePelvisPhantom(p);
+    pelvisParameters.grid = o.grid;
+    pelvisParameters.seedPlacementSeed = o.seed;
+    pelvisParameters.noiseSigmaHU = o.noiseHU;
+    pelvisParameters.noiseSeed = 1000 + o.seed;
+    moving = bmr::MakePelvisPhantom(pelvisParameters);
   }
   else
   {
@@ -171,7 +171,29 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
 
   timer.Begin("warp to the fixed volume");
   auto fixedCT = Warp<CTImageType>(movingCT, sim.pullBack, false, -1000.0f);
-  auto fixedLabels = Warp<LabelImageType>(movingLabels, sim.pullBack, true, 0);
+  // Pelvis: the fixed labels voxelise the deformed analytic anatomy once (the label at each voxel's
+  // pull-back point), as a scan would; resampling the voxelised moving labels would quantise twice.
+  LabelImageType::Pointer fixedLabels;
+  if (pelvis)
+  {
+    std::vector<double> points(3 * moving.grid.GetNumberOfVoxels());
+    const auto *        d = sim.pullBack->GetBufferPointer();
+    for (std::size_t v = 0; v < moving.grid.GetNumberOfVoxels(); ++v)
+    {
+      const auto x = moving.grid.IndexToPoint({ { double(v % moving.grid.size[0]),
+                                                  double((v / moving.grid.size[0]) % moving.grid.size[1]),
+                                                  double(v / (moving.grid.size[0] * moving.grid.size[1])) } });
+      for (int c = 0; c < 3; ++c)
+      {
+        points[3 * v + c] = x[c] + d[v][c];
+      }
+    }
+    fixedLabels = itk::MakeImageOnGrid<LabelImageType>(moving.grid, bmr::PelvisLabelsAt(pelvisParameters, points));
+  }
+  else
+  {
+    fixedLabels = Warp<LabelImageType>(movingLabels, sim.pullBack, true, 0);
+  }
   // The fixed scan has its own noise on top of the warped (noisy) moving one.
   {
     std::vector<float> noise(fixedCT->GetBufferedRegion().GetNumberOfPixels(), 0.0f);

@@ -106,6 +106,14 @@ struct BiomechanicalRegistration_EXPORT SpherePhantomParameters
 BiomechanicalRegistration_EXPORT PhantomVolume
 MakePelvisPhantom(const PelvisPhantomParameters & parameters);
 
+/** Labels of the pelvis phantom's anatomy at physical points [mm] (3 per point), as the label map of
+ * MakePelvisPhantom() holds them at voxel centres (seeds count as prostate). A deformed anatomy is
+ * voxelised once with it: the label of a fixed voxel v is the label at its pull-back point v + d(v).
+ * Resampling the already voxelised moving labels instead quantises the surface twice (0.22 mm RMS
+ * against 0.06 mm at 1 mm voxels), which is larger than the shape change of a stiff organ. */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<double> & points);
+
 /** Builds the concentric-spheres phantom (core 60 HU, shell 20 HU, air -1000 HU). */
 BiomechanicalRegistration_EXPORT PhantomVolume
 MakeSpherePhantom(const SpherePhantomParameters & parameters);

@@ -790,6 +790,25 @@ MakePelvisPhantom(const PelvisPhantomParameters & parameters)
   return volume;
 }
 
+std::vector<std::int32_t>
+PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<double> & points)
+{
+  const char * where = "PelvisLabelsAt";
+  CheckPhantomGrid(parameters.grid, "pelvis phantom grid", where);
+  if (points.size() % 3 != 0)
+  {
+    Fail(where, "expected 3 coordinates per point");
+  }
+  const Vec3                center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
+  const PelvisModel         model(center, PlaceSeeds(center, parameters.numberOfSeeds, parameters.seedPlacementSeed));
+  std::vector<std::int32_t> labels(points.size() / 3);
+  for (std::size_t n = 0; n < labels.size(); ++n)
+  {
+    labels[n] = PelvisTissueLabel[model.Classify({ { points[3 * n], points[3 * n + 1], points[3 * n + 2] } })];
+  }
+  return labels;
+}
+
 PhantomVolume
 MakeSpherePhantom(const SpherePhantomParameters & parameters)
 {
