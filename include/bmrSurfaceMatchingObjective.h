@@ -105,9 +105,6 @@ public:
   SurfaceMatchingObjective &
   operator=(const SurfaceMatchingObjective &) = delete;
 
-  /** Nodes whose displacement is a parameter (walls of the force surfaces), sorted. */
-  const std::vector<std::int32_t> &
-  GetControlNodes() const;
   /** Number of parameters p of the wall displacement d = W p: 3 per control
    * point of the wall basis (3 per control node without one). */
   std::size_t
@@ -127,17 +124,13 @@ public:
   /** Labels whose modulus is estimated, in scene order. */
   const std::vector<std::int32_t> &
   GetUnknownLabels() const;
-  const std::vector<ObjectiveSurface> &
-  GetSurfaces() const;
 
   /** Moduli [kPa] of the unknown labels (in GetUnknownLabels() order). */
   void
   SetYoungsModuli(const std::vector<double> & moduli);
-  std::vector<double>
-  GetYoungsModuli() const;
 
-  /** Phi(E, d) + R(d) [mm^2]; fills the gradients when not null (3 per control node
-   * [mm], one per unknown label [mm^2 per unit log E]). */
+  /** Phi(E, d) + alpha/2 |p|^2 [mm^2] with d = W p; fills the gradients when not
+   * null (with respect to p [mm], and one per unknown label [mm^2 per unit log E]). */
   double
   Evaluate(const std::vector<double> & d, std::vector<double> * gradientD, std::vector<double> * gradientLogE);
 
@@ -171,9 +164,6 @@ public:
    * reduced wall basis (tens to hundreds of parameters). */
   WallSolution
   SolveWalls(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
-
-  LinearElasticModel &
-  GetModel();
 
 private:
   struct Impl;

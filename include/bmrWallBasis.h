@@ -67,11 +67,6 @@ public:
   {
     return m_NumberOfControlPoints;
   }
-  bool
-  IsIdentity() const
-  {
-    return m_Identity;
-  }
   /** d = W L^{-T} q (3 per node from 3 per control point). */
   std::vector<double>
   Expand(const std::vector<double> & c) const;

@@ -204,12 +204,6 @@ SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &      
 
 SurfaceMatchingObjective::~SurfaceMatchingObjective() = default;
 
-const std::vector<std::int32_t> &
-SurfaceMatchingObjective::GetControlNodes() const
-{
-  return m_Impl->controlNodes;
-}
-
 std::size_t
 SurfaceMatchingObjective::GetNumberOfParameters() const
 {
@@ -242,12 +236,6 @@ SurfaceMatchingObjective::GetUnknownLabels() const
   return m_Impl->unknownLabels;
 }
 
-const std::vector<ObjectiveSurface> &
-SurfaceMatchingObjective::GetSurfaces() const
-{
-  return m_Impl->surfaces;
-}
-
 void
 SurfaceMatchingObjective::SetYoungsModuli(const std::vector<double> & moduli)
 {
@@ -259,17 +247,6 @@ SurfaceMatchingObjective::SetYoungsModuli(const std::vector<double> & moduli)
   {
     m_Impl->model->SetYoungsModulus(m_Impl->unknownLabels[m], moduli[m]);
   }
-}
-
-std::vector<double>
-SurfaceMatchingObjective::GetYoungsModuli() const
-{
-  std::vector<double> E;
-  for (std::int32_t l : m_Impl->unknownLabels)
-  {
-    E.push_back(m_Impl->model->GetYoungsModulus(l));
-  }
-  return E;
 }
 
 double
@@ -669,12 +646,6 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start,
   result.parameters.assign(p.data(), p.data() + np);
   result.value = Evaluate(result.parameters, &result.gradient, &result.logModulusGradient);
   return result;
-}
-
-LinearElasticModel &
-SurfaceMatchingObjective::GetModel()
-{
-  return *m_Impl->model;
 }
 
 } // namespace bmr
