@@ -14,6 +14,9 @@ itk_module(BiomechanicalRegistration
     ITKDisplacementField
     ITKDistanceMap
     ITKOptimizersv4
+    ITKPDEDeformableRegistration
+    ITKConnectedComponents
+    ITKThresholding
     ITKImageIntensity
     ITKIOImageBase
   COMPILE_DEPENDS

@@ -19,7 +19,7 @@
 // (FEMElasticityOptimizer) and the displacement fields, warped images and
 // report that come out of it.
 #include "biomechregCommon.h"
-#include "itkDisplacementFieldJacobianDeterminantFilter.h"
+#include "itkRegistrationQualityMeasures.h"
 #include "itkFEMElasticityOptimizer.h"
 #include "itkSceneDistanceMaps.h"
 
@@ -223,43 +223,21 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   report.identifiable = optimizer->GetIdentifiable();
   report.identifiability = optimizer->GetIdentifiabilityMessage();
   report.tetrahedra = sim.mesh.GetNumberOfTetrahedra();
-  const auto *      a = warpedLabels->GetBufferPointer();
-  const auto *      b = in.fixedLabels->GetBufferPointer();
-  const std::size_t n = in.fixedLabels->GetBufferedRegion().GetNumberOfPixels();
   for (const auto & l : in.scene.labels)
   {
     if (l.role == bmr::LabelRole::Outside)
     {
       continue;
     }
-    std::size_t na = 0, nb = 0, both = 0;
-    for (std::size_t i = 0; i < n; ++i)
+    const itk::LabelOverlap overlap = itk::ComputeLabelOverlap<LabelImageType>(warpedLabels, in.fixedLabels, l.value);
+    if (overlap.inA + overlap.inB > 0)
     {
-      na += a[i] == l.value;
-      nb += b[i] == l.value;
-      both += a[i] == l.value && b[i] == l.value;
-    }
-    if (na + nb > 0)
-    {
-      report.dice[l.name] = 2.0 * double(both) / double(na + nb);
+      report.dice[l.name] = overlap.dice;
     }
   }
-  using JacobianFilter = itk::DisplacementFieldJacobianDeterminantFilter<FieldType, float>;
-  auto jacobian = JacobianFilter::New();
-  jacobian->SetInput(sim.pullBack);
-  jacobian->SetUseImageSpacingOn();
-  jacobian->Update();
-  const float *     J = jacobian->GetOutput()->GetBufferPointer();
-  const std::size_t nJ = jacobian->GetOutput()->GetBufferedRegion().GetNumberOfPixels();
-  double            jmin = std::numeric_limits<double>::max();
-  std::size_t       nonPositive = 0;
-  for (std::size_t i = 0; i < nJ; ++i)
-  {
-    jmin = std::min(jmin, double(J[i]));
-    nonPositive += J[i] <= 0.0f;
-  }
-  report.jacobianMinimum = jmin;
-  report.jacobianNonPositiveFraction = double(nonPositive) / double(nJ);
+  const auto jacobian = itk::ComputeJacobianDeterminantStatistics(sim.pullBack.GetPointer());
+  report.jacobianMinimum = jacobian.minimum;
+  report.jacobianNonPositiveFraction = jacobian.fractionNonPositive;
   timer.End();
 
   timer.Begin("write history and report");

@@ -88,7 +88,7 @@ void
 ImageWarper<TImage, TDisplacementField>::GenerateData()
 {
   using ScalarType = typename DisplacementFieldType::PixelType::ValueType;
-  using TransformType = DisplacementFieldTransform<ScalarType, 3>;
+  using TransformType = DisplacementFieldTransform<ScalarType, ImageType::ImageDimension>;
   using ResampleType = ResampleImageFilter<ImageType, ImageType, ScalarType>;
 
   // The transform keeps a pointer to the field; a shallow copy keeps the input unmodified.
@@ -112,8 +112,8 @@ ImageWarper<TImage, TDisplacementField>::GenerateData()
       break;
     case InterpolationEnum::LabelGaussian: {
       auto   interpolator = LabelImageGaussianInterpolateImageFunction<ImageType, ScalarType>::New();
-      double sigma[3];
-      for (unsigned int i = 0; i < 3; ++i)
+      double sigma[ImageType::ImageDimension];
+      for (unsigned int i = 0; i < ImageType::ImageDimension; ++i)
       {
         sigma[i] = 0.5 * this->GetInput()->GetSpacing()[i];
       }
