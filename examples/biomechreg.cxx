@@ -20,6 +20,9 @@
 //   biomechreg register ...         joint estimation of wall loads and Young's moduli (FEMElasticityOptimizer)
 //   biomechreg phantom ...          synthetic moving/fixed pair with ground truth
 //   biomechreg simulate ...         forward simulation of a scene on a moving label map
+//   biomechreg demons ...           the intensity-based baseline (ITK Demons, multi-resolution)
+//   biomechreg phantom-set ...      N phantom pairs with ground-truth seed landmarks
+//   biomechreg compare ...          FEM vs Demons vs identity on seed landmarks, with paired t-tests
 // Every error is one line on stderr and a non-zero exit; outputs are written to
 // temporary names and renamed when complete.
 #include "biomechregCommon.h"
@@ -34,24 +37,6 @@ using namespace bmrcli;
 /** Label of the tumour inside the prostate, in the truth's label map only. */
 constexpr std::int32_t PelvisTumour = 6;
 
-struct PhantomOptions
-{
-  std::string       scene{ "pelvis" };
-  std::string       out;
-  bmr::GridGeometry grid;
-  double            prostateE{ 50.0 };
-  double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
-  double            bladderMM{ 4.0 };
-  double            rectumMM{ 3.0 };
-  double            tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour (truth only)
-  double            tumourE{ 100.0 };      ///< kPa
-  double            bladderKPa{ 0.0 };     ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead
-  double            rectumKPa{ 0.0 };
-  double            noiseHU{ 10.0 };
-  std::uint64_t     seed{ 1 };
-  double            truthRefinement{ 0.75 };
-};
-
 std::string
 Json3(const std::array<double, 3> & p)
 {
@@ -60,6 +45,204 @@ Json3(const std::array<double, 3> & p)
   return o.str();
 }
 
+bmr::GridGeometry
+GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults)
+{
+  bmr::GridGeometry     g = defaults;
+  std::array<double, 3> size = args.Triple("--size", { { double(g.size[0]), double(g.size[1]), double(g.size[2]) } });
+  g.spacing = args.Triple("--spacing", g.spacing);
+  for (int i = 0; i < 3; ++i)
+  {
+    if (!(size[i] >= 1.0 && size[i] <= 4096.0 && size[i] == std::floor(size[i])))
+    {
+      throw UsageError("--size must be three integers in [1, 4096]");
+    }
+    g.size[i] = static_cast<std::size_t>(size[i]);
+  }
+  // Rotation of the grid about the superior (z) axis makes an oblique volume.
+  const double a = args.Number("--rotate-z-deg", 0.0) * 3.14159265358979323846 / 180.0;
+  g.direction = { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 };
+  // Centre the grid on the physical origin unless an origin is given.
+  std::array<double, 3> half;
+  for (int i = 0; i < 3; ++i)
+  {
+    half[i] = 0.5 * (static_cast<double>(g.size[i]) - 1.0) * g.spacing[i];
+  }
+  std::array<double, 3> centred;
+  for (int r = 0; r < 3; ++r)
+  {
+    centred[r] = -(g.direction[3 * r] * half[0] + g.direction[3 * r + 1] * half[1] + g.direction[3 * r + 2] * half[2]);
+  }
+  g.origin = args.Triple("--origin", centred);
+  g.Validate("phantom grid (--size/--spacing/--origin)");
+  return g;
+}
+
+int
+PhantomCommand(const Arguments & args)
+{
+  PhantomOptions o;
+  o.scene = args.Get("--scene", "pelvis");
+  if (o.scene != "pelvis" && o.scene != "spheres")
+  {
+    throw UsageError("--scene must be pelvis or spheres");
+  }
+  o.out = args.Require("--out");
+  o.grid = GridFromArguments(
+    args, o.scene == "pelvis" ? bmr::PelvisPhantomParameters().grid : bmr::SpherePhantomParameters().grid);
+  o.prostateE = args.Number("--true-E-kPa", 50.0);
+  o.prostateNu = args.Number("--true-nu", 0.40);
+  o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
+  o.rectumMM = args.Number("--rectum-mm", 3.0);
+  o.tumourFraction = args.Number("--tumour-fraction", 0.0);
+  o.tumourE = args.Number("--tumour-E-kPa", 100.0);
+  if (!(o.tumourFraction >= 0.0 && o.tumourFraction < 1.0) || !(o.tumourE > 0.0))
+  {
+    throw UsageError("--tumour-fraction must lie in [0, 1) and --tumour-E-kPa be > 0");
+  }
+  o.bladderKPa = args.Number("--bladder-kPa", 0.0);
+  o.rectumKPa = args.Number("--rectum-kPa", 0.0);
+  if (o.bladderKPa < 0.0 || o.rectumKPa < 0.0)
+  {
+    throw UsageError("--bladder-kPa and --rectum-kPa must be >= 0");
+  }
+  o.noiseHU = args.Number("--noise-HU", 10.0);
+  const double seed = args.Number("--seed", 1.0);
+  if (!(seed >= 0.0 && seed == std::floor(seed)))
+  {
+    throw UsageError("--seed must be a non-negative integer");
+  }
+  o.seed = static_cast<std::uint64_t>(seed);
+  args.CheckAllUsed();
+  StageTimer timer;
+  std::cout << "biomechreg phantom: " << o.scene << " -> " << o.out << std::endl;
+  MakePhantom(o, timer);
+  PrintTimings(timer);
+  return EXIT_SUCCESS;
+}
+
+// ---------------------------------------------------------------- simulate
+
+int
+SimulateCommand(const Arguments & args)
+{
+  const std::string labelsPath = args.Require("--moving-labels");
+  const std::string scenePath = args.Require("--scene");
+  const std::string out = args.Require("--out");
+  const std::string ctPath = args.Get("--moving-ct");
+  const std::string referencePath = args.Get("--reference");
+  args.CheckAllUsed();
+
+  StageTimer timer;
+  std::cout << "biomechreg simulate -> " << out << std::endl;
+  timer.Begin("read inputs");
+  const bmr::Scene     scene = bmr::ReadScene(scenePath);
+  auto                 labels = ReadImage<LabelImageType>(labelsPath, "moving label image");
+  CTImageType::Pointer ct;
+  if (!ctPath.empty())
+  {
+    ct = ReadImage<CTImageType>(ctPath, "moving CT");
+  }
+  itk::ImageBase<3>::ConstPointer reference = labels.GetPointer();
+  if (!referencePath.empty())
+  {
+    reference = ReadImage<CTImageType>(referencePath, "reference image").GetPointer();
+  }
+  timer.End();
+  MakeDirectory(out);
+  SimulationOutputs sim = RunSimulation(labels, scene, reference, timer);
+  WarpAndWrite(out, sim, labels, ct, timer);
+  PrintTimings(timer);
+  return EXIT_SUCCESS;
+}
+
+// -------------------------------------------------------------------- demo
+
+int
+DemoCommand()
+{
+  const std::string dir = "biomechreg-demo";
+  // A stiffness ratio of 10, mid-range of the dissertation's 50-350 kPa (README, estimation benchmark).
+  const double trueE = 100.0;
+  std::cout << "biomechreg demo: pelvis phantom -> joint estimation of wall loads and prostate modulus -> "
+               "displacement fields -> warped images -> report\n"
+            << "(outputs in ./" << dir << "; run 'biomechreg help' for the subcommands)\n\n";
+  StageTimer     timer;
+  PhantomOptions o;
+  o.out = dir;
+  // 1 mm voxels and a bladder filling of 8 mm: the prostate's shape change is then several voxels of
+  // surface motion, which the label maps resolve (at 1.25 x 1.25 x 2.5 mm and 4 mm it is not; see README).
+  o.grid = bmr::PelvisPhantomParameters().grid;
+  o.grid.size = { { 200, 160, 160 } };
+  o.grid.spacing = { { 1.0, 1.0, 1.0 } };
+  o.bladderMM = 8.0;
+  o.rectumMM = 4.0;
+  o.prostateE = trueE;
+  std::cout << "1. phantom pair with known truth (prostate " << trueE
+            << " kPa, tissue 10 kPa, bladder +8 mm, rectum +4 mm, 1 mm voxels; fixed scan from a finer, "
+               "independent mesh)\n";
+  MakePhantom(o, timer);
+
+  std::cout << "\n2. registration: the estimator sees the scans, the label maps and scene.json (prostate E unknown)\n";
+  RegisterInputs in;
+  in.scene = bmr::ReadScene(dir + "/scene.json");
+  in.movingLabels = ReadImage<LabelImageType>(dir + "/moving_labels.nrrd", "moving label image");
+  in.movingCT = ReadImage<CTImageType>(dir + "/moving_ct.nrrd", "moving CT");
+  in.fixedLabels = ReadImage<LabelImageType>(dir + "/fixed_labels.nrrd", "fixed label image");
+  in.out = dir + "/register";
+  StageTimer           run;
+  const RegisterReport report = RunRegistration(in, run);
+
+  const double recovered = report.youngsModulus.at("prostate");
+  std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
+            << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
+            << std::noshowpos << " %), gauge soft_tissue 10 kPa"
+            << "\n  (the error over 50-350 kPa on this phantom: README, estimation benchmark)"
+            << (report.identifiable ? "" : "\n  warning: ") << (report.identifiable ? "" : report.identifiability)
+            << "\n  Dice after warping:";
+  for (const auto & kv : report.dice)
+  {
+    std::cout << "  " << kv.first << " " << std::setprecision(4) << kv.second;
+  }
+  std::cout << "\n  pull-back Jacobian determinant: minimum " << std::setprecision(3) << report.jacobianMinimum
+            << ", fraction <= 0: " << report.jacobianNonPositiveFraction << "\n";
+  std::cout << "\nPhantom generation:";
+  PrintTimings(timer);
+  std::cout << "\nRegistration (" << report.tetrahedra << " tetrahedra):";
+  PrintTimings(run);
+  std::cout << "\nWrote " << dir << "/{moving,fixed}_{ct,labels}.nrrd, scene.json, truth.json, landmarks_*.csv, and "
+            << in.out
+            << "/{field.nrrd, forward_field.nrrd, warped_ct.nrrd, warped_labels.nrrd, mesh.vtu, history.csv, "
+               "sweep.csv, report.json}"
+            << std::endl;
+  return EXIT_SUCCESS;
+}
+
+void
+PrintUsage(std::ostream & os)
+{
+  os << "usage:\n"
+        "  biomechreg                      run the demo into ./biomechreg-demo\n"
+        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
+        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
+        "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
+        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
+        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
+        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
+        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
+        "                      [--wall-spacing-mm D] [--wall-regularization A] [--max-outer-iterations N]\n"
+        "                      [--outer-tolerance T]\n"
+        "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
+        "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
+        "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching on|off]\n"
+        "  biomechreg phantom-set --out DIR [--count N] [--seed S]\n"
+        "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
+        "                     [--flatten LABELS] [register's and demons' settings]\n"
+        "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n";
+}
+} // namespace
+
+namespace bmrcli {
 /** Makes a moving/fixed pair: the fixed images are the moving ones warped by a
  * forward simulation with known moduli on a finer, independently meshed model. */
 void
@@ -75,6 +258,7 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   {
     pelvisParameters.grid = o.grid;
     pelvisParameters.seedPlacementSeed = o.seed;
+    pelvisParameters.numberOfSeeds = o.numberOfSeeds;
     pelvisParameters.noiseSigmaHU = o.noiseHU;
     pelvisParameters.noiseSeed = 1000 + o.seed;
     moving = bmr::MakePelvisPhantom(pelvisParameters);
@@ -90,14 +274,8 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   timer.End();
 
   // Truth: known moduli and wall displacements, on a finer mesh with another random seed.
-  bmr::Scene truth = pelvis ? PelvisScene(o.prostateE, false, o.prostateNu) : SpheresScene(o.prostateE, false);
-  truth.mesh.cellSize *= o.truthRefinement;
-  truth.mesh.facetSize *= o.truthRefinement;
-  truth.mesh.facetDistance *= o.truthRefinement;
-  for (auto & kv : truth.mesh.cellSizePerLabel)
-  {
-    kv.second *= o.truthRefinement;
-  }
+  bmr::Scene truth = ScaledMeshSizes(pelvis ? PelvisScene(o.prostateE, false, o.prostateNu) : SpheresScene(o.prostateE, false),
+                                     o.truthRefinement);
   truth.mesh.randomSeed = 12345;
   if (pelvis && (o.bladderKPa > 0.0 || o.rectumKPa > 0.0))
   {
@@ -294,194 +472,7 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   timer.End();
 }
 
-bmr::GridGeometry
-GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults)
-{
-  bmr::GridGeometry     g = defaults;
-  std::array<double, 3> size = args.Triple("--size", { { double(g.size[0]), double(g.size[1]), double(g.size[2]) } });
-  g.spacing = args.Triple("--spacing", g.spacing);
-  for (int i = 0; i < 3; ++i)
-  {
-    if (!(size[i] >= 1.0 && size[i] <= 4096.0 && size[i] == std::floor(size[i])))
-    {
-      throw UsageError("--size must be three integers in [1, 4096]");
-    }
-    g.size[i] = static_cast<std::size_t>(size[i]);
-  }
-  // Rotation of the grid about the superior (z) axis makes an oblique volume.
-  const double a = args.Number("--rotate-z-deg", 0.0) * 3.14159265358979323846 / 180.0;
-  g.direction = { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 };
-  // Centre the grid on the physical origin unless an origin is given.
-  std::array<double, 3> half;
-  for (int i = 0; i < 3; ++i)
-  {
-    half[i] = 0.5 * (static_cast<double>(g.size[i]) - 1.0) * g.spacing[i];
-  }
-  std::array<double, 3> centred;
-  for (int r = 0; r < 3; ++r)
-  {
-    centred[r] = -(g.direction[3 * r] * half[0] + g.direction[3 * r + 1] * half[1] + g.direction[3 * r + 2] * half[2]);
-  }
-  g.origin = args.Triple("--origin", centred);
-  g.Validate("phantom grid (--size/--spacing/--origin)");
-  return g;
-}
-
-int
-PhantomCommand(const Arguments & args)
-{
-  PhantomOptions o;
-  o.scene = args.Get("--scene", "pelvis");
-  if (o.scene != "pelvis" && o.scene != "spheres")
-  {
-    throw UsageError("--scene must be pelvis or spheres");
-  }
-  o.out = args.Require("--out");
-  o.grid = GridFromArguments(
-    args, o.scene == "pelvis" ? bmr::PelvisPhantomParameters().grid : bmr::SpherePhantomParameters().grid);
-  o.prostateE = args.Number("--true-E-kPa", 50.0);
-  o.prostateNu = args.Number("--true-nu", 0.40);
-  o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
-  o.rectumMM = args.Number("--rectum-mm", 3.0);
-  o.tumourFraction = args.Number("--tumour-fraction", 0.0);
-  o.tumourE = args.Number("--tumour-E-kPa", 100.0);
-  if (!(o.tumourFraction >= 0.0 && o.tumourFraction < 1.0) || !(o.tumourE > 0.0))
-  {
-    throw UsageError("--tumour-fraction must lie in [0, 1) and --tumour-E-kPa be > 0");
-  }
-  o.bladderKPa = args.Number("--bladder-kPa", 0.0);
-  o.rectumKPa = args.Number("--rectum-kPa", 0.0);
-  if (o.bladderKPa < 0.0 || o.rectumKPa < 0.0)
-  {
-    throw UsageError("--bladder-kPa and --rectum-kPa must be >= 0");
-  }
-  o.noiseHU = args.Number("--noise-HU", 10.0);
-  const double seed = args.Number("--seed", 1.0);
-  if (!(seed >= 0.0 && seed == std::floor(seed)))
-  {
-    throw UsageError("--seed must be a non-negative integer");
-  }
-  o.seed = static_cast<std::uint64_t>(seed);
-  args.CheckAllUsed();
-  StageTimer timer;
-  std::cout << "biomechreg phantom: " << o.scene << " -> " << o.out << std::endl;
-  MakePhantom(o, timer);
-  PrintTimings(timer);
-  return EXIT_SUCCESS;
-}
-
-// ---------------------------------------------------------------- simulate
-
-int
-SimulateCommand(const Arguments & args)
-{
-  const std::string labelsPath = args.Require("--moving-labels");
-  const std::string scenePath = args.Require("--scene");
-  const std::string out = args.Require("--out");
-  const std::string ctPath = args.Get("--moving-ct");
-  const std::string referencePath = args.Get("--reference");
-  args.CheckAllUsed();
-
-  StageTimer timer;
-  std::cout << "biomechreg simulate -> " << out << std::endl;
-  timer.Begin("read inputs");
-  const bmr::Scene     scene = bmr::ReadScene(scenePath);
-  auto                 labels = ReadImage<LabelImageType>(labelsPath, "moving label image");
-  CTImageType::Pointer ct;
-  if (!ctPath.empty())
-  {
-    ct = ReadImage<CTImageType>(ctPath, "moving CT");
-  }
-  itk::ImageBase<3>::ConstPointer reference = labels.GetPointer();
-  if (!referencePath.empty())
-  {
-    reference = ReadImage<CTImageType>(referencePath, "reference image").GetPointer();
-  }
-  timer.End();
-  MakeDirectory(out);
-  SimulationOutputs sim = RunSimulation(labels, scene, reference, timer);
-  WarpAndWrite(out, sim, labels, ct, timer);
-  PrintTimings(timer);
-  return EXIT_SUCCESS;
-}
-
-// -------------------------------------------------------------------- demo
-
-int
-DemoCommand()
-{
-  const std::string dir = "biomechreg-demo";
-  // A stiffness ratio of 10, mid-range of the dissertation's 50-350 kPa (README, estimation benchmark).
-  const double trueE = 100.0;
-  std::cout << "biomechreg demo: pelvis phantom -> joint estimation of wall loads and prostate modulus -> "
-               "displacement fields -> warped images -> report\n"
-            << "(outputs in ./" << dir << "; run 'biomechreg help' for the subcommands)\n\n";
-  StageTimer     timer;
-  PhantomOptions o;
-  o.out = dir;
-  // 1 mm voxels and a bladder filling of 8 mm: the prostate's shape change is then several voxels of
-  // surface motion, which the label maps resolve (at 1.25 x 1.25 x 2.5 mm and 4 mm it is not; see README).
-  o.grid = bmr::PelvisPhantomParameters().grid;
-  o.grid.size = { { 200, 160, 160 } };
-  o.grid.spacing = { { 1.0, 1.0, 1.0 } };
-  o.bladderMM = 8.0;
-  o.rectumMM = 4.0;
-  o.prostateE = trueE;
-  std::cout << "1. phantom pair with known truth (prostate " << trueE
-            << " kPa, tissue 10 kPa, bladder +8 mm, rectum +4 mm, 1 mm voxels; fixed scan from a finer, "
-               "independent mesh)\n";
-  MakePhantom(o, timer);
-
-  std::cout << "\n2. registration: the estimator sees the scans, the label maps and scene.json (prostate E unknown)\n";
-  RegisterInputs in;
-  in.scene = bmr::ReadScene(dir + "/scene.json");
-  in.movingLabels = ReadImage<LabelImageType>(dir + "/moving_labels.nrrd", "moving label image");
-  in.movingCT = ReadImage<CTImageType>(dir + "/moving_ct.nrrd", "moving CT");
-  in.fixedLabels = ReadImage<LabelImageType>(dir + "/fixed_labels.nrrd", "fixed label image");
-  in.out = dir + "/register";
-  StageTimer           run;
-  const RegisterReport report = RunRegistration(in, run);
-
-  const double recovered = report.youngsModulus.at("prostate");
-  std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
-            << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
-            << std::noshowpos << " %), gauge soft_tissue 10 kPa"
-            << "\n  (the error over 50-350 kPa on this phantom: README, estimation benchmark)"
-            << (report.identifiable ? "" : "\n  warning: ") << (report.identifiable ? "" : report.identifiability)
-            << "\n  Dice after warping:";
-  for (const auto & kv : report.dice)
-  {
-    std::cout << "  " << kv.first << " " << std::setprecision(4) << kv.second;
-  }
-  std::cout << "\n  pull-back Jacobian determinant: minimum " << std::setprecision(3) << report.jacobianMinimum
-            << ", fraction <= 0: " << report.jacobianNonPositiveFraction << "\n";
-  std::cout << "\nPhantom generation:";
-  PrintTimings(timer);
-  std::cout << "\nRegistration (" << report.tetrahedra << " tetrahedra):";
-  PrintTimings(run);
-  std::cout << "\nWrote " << dir << "/{moving,fixed}_{ct,labels}.nrrd, scene.json, truth.json, landmarks_*.csv, and "
-            << in.out
-            << "/{field.nrrd, forward_field.nrrd, warped_ct.nrrd, warped_labels.nrrd, mesh.vtu, history.csv, "
-               "sweep.csv, report.json}"
-            << std::endl;
-  return EXIT_SUCCESS;
-}
-
-void
-PrintUsage(std::ostream & os)
-{
-  os << "usage:\n"
-        "  biomechreg                      run the demo into ./biomechreg-demo\n"
-        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
-        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-        "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
-        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
-        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
-        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
-        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F]\n"
-        "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n";
-}
-} // namespace
+} // namespace bmrcli
 
 int
 main(int argc, char * argv[])
@@ -510,6 +501,18 @@ main(int argc, char * argv[])
     if (command == "register")
     {
       return RegisterCommand(args);
+    }
+    if (command == "demons")
+    {
+      return bmrcli::DemonsCommand(args);
+    }
+    if (command == "compare")
+    {
+      return bmrcli::CompareCommand(args);
+    }
+    if (command == "phantom-set")
+    {
+      return bmrcli::PhantomSetCommand(args);
     }
     throw UsageError("unknown command \"" + command + "\" (try: biomechreg help)");
   }

@@ -539,6 +539,9 @@ struct RegisterInputs
   double                  coarseFactor{ 1.6 };        ///< coarse mesh sizes = scene sizes x this (<= 1: no coarse mesh)
   double                  wallControlSpacing{ 12.0 }; ///< mm, FEMElasticityOptimizer::SetWallControlSpacing
   double                  wallRegularization{ 0.01 }; ///< FEMElasticityOptimizer::SetWallRegularization
+  double                  meshScale{ 1.0 };           ///< mesh sizes = scene sizes x this (> 1: coarser, faster)
+  unsigned int            maximumOuterIterations{ 20 }; ///< FEMElasticityOptimizer::SetMaximumNumberOfOuterIterations
+  double                  outerTolerance{ 1e-4 };       ///< FEMElasticityOptimizer::SetOuterGradientTolerance
 };
 
 /** What a registration run measured, as written to report.json. */
@@ -552,7 +555,22 @@ struct RegisterReport
   bool                          identifiable{ true };
   std::string                   identifiability;
   std::size_t                   tetrahedra{ 0 };
+  FieldType::Pointer            pullBack; ///< fixed -> moving field [mm], as written to field.nrrd
 };
+
+/** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
+inline bmr::Scene
+ScaledMeshSizes(bmr::Scene scene, double factor)
+{
+  scene.mesh.cellSize *= factor;
+  scene.mesh.facetSize *= factor;
+  scene.mesh.facetDistance *= factor;
+  for (auto & kv : scene.mesh.cellSizePerLabel)
+  {
+    kv.second *= factor;
+  }
+  return scene;
+}
 
 /** Distance maps -> meshes -> FEMElasticityOptimizer -> fields -> warped images -> files in inputs.out. */
 RegisterReport
@@ -560,6 +578,74 @@ RunRegistration(const RegisterInputs & inputs, StageTimer & timer);
 
 int
 RegisterCommand(const Arguments & args);
+
+/** Reads --mesh-scale, --max-outer-iterations and --outer-tolerance into \a in (register, compare). */
+void
+ParseFemSettings(const Arguments & args, RegisterInputs & in);
+
+// ---------------------------------------------------------------- phantom
+
+/** Options of one phantom pair (biomechreg phantom, phantom-set, the demo). */
+struct PhantomOptions
+{
+  std::string       scene{ "pelvis" };
+  std::string       out;
+  bmr::GridGeometry grid;
+  double            prostateE{ 50.0 };
+  double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
+  double            bladderMM{ 4.0 };
+  double            rectumMM{ 3.0 };
+  double            tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour (truth only)
+  double            tumourE{ 100.0 };      ///< kPa
+  double            bladderKPa{ 0.0 };     ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead
+  double            rectumKPa{ 0.0 };
+  double            noiseHU{ 10.0 };
+  std::uint64_t     seed{ 1 };
+  unsigned int      numberOfSeeds{ 3 }; ///< implanted seeds in the prostate (pelvis)
+  double            truthRefinement{ 0.75 };
+};
+
+/** Makes a moving/fixed pair in o.out: the fixed images are the moving ones warped by a forward
+ * simulation with known moduli on a finer, independently meshed model (biomechreg.cxx). */
+void
+MakePhantom(const PhantomOptions & o, StageTimer & timer);
+
+// ---------------------------------------------------------------- Demons and compare
+
+/** Settings of the Demons baseline (itk::DemonsBaselineRegistrationFilter; defaults as documented there). */
+struct DemonsSettings
+{
+  std::string  variant{ "diffeomorphic" }; ///< or "symmetric" (fast symmetric forces)
+  unsigned int levels{ 3 };
+  unsigned int iterations{ 50 }; ///< per level
+  double       sigma{ 1.5 };     ///< field smoothing [voxels]
+  bool         histogramMatching{ true };
+};
+
+/** Reads --demons-variant, --demons-levels, --demons-iterations, --demons-sigma, --histogram-matching. */
+DemonsSettings
+ParseDemonsSettings(const Arguments & args);
+
+/** Demons of the moving CT onto the fixed CT; returns the fixed -> moving field [mm]. The labels are
+ * used only when \a flatten names organs to flatten. */
+FieldType::Pointer
+RunDemons(const CTImageType *               fixedCT,
+          const CTImageType *               movingCT,
+          const LabelImageType *            fixedLabels,
+          const LabelImageType *            movingLabels,
+          const std::vector<std::int32_t> & flatten,
+          const DemonsSettings &            settings);
+
+/** Comma-separated labels, by value or (with a scene) by name. */
+std::vector<std::int32_t>
+ParseLabelList(const std::string & text, const bmr::Scene * scene);
+
+int
+DemonsCommand(const Arguments & args);
+int
+CompareCommand(const Arguments & args);
+int
+PhantomSetCommand(const Arguments & args);
 
 } // namespace bmrcli
 

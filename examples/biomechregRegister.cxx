@@ -70,19 +70,6 @@ protected:
   ProgressPrinter() = default;
 };
 
-bmr::Scene
-Coarsened(bmr::Scene scene, double factor)
-{
-  scene.mesh.cellSize *= factor;
-  scene.mesh.facetSize *= factor;
-  scene.mesh.facetDistance *= factor;
-  for (auto & kv : scene.mesh.cellSizePerLabel)
-  {
-    kv.second *= factor;
-  }
-  return scene;
-}
-
 std::string
 HistoryCsv(const std::vector<itk::FEMElasticityOptimizer::IterationRecord> & records,
            const std::vector<std::string> &                                  unknownNames)
@@ -137,16 +124,17 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
 {
   using Optimizer = itk::FEMElasticityOptimizer;
   MakeDirectory(in.out);
-  in.scene.Validate();
+  const bmr::Scene scene = ScaledMeshSizes(in.scene, in.meshScale);
+  scene.Validate();
 
   timer.Begin("distance maps (fixed labels)");
-  const auto maps = itk::ComputeSceneDistanceMaps(in.fixedLabels.GetPointer(), in.scene);
+  const auto maps = itk::ComputeSceneDistanceMaps(in.fixedLabels.GetPointer(), scene);
   timer.End(std::to_string(maps.size()) + " organs");
 
   SimulationOutputs sim;
-  sim.mesh = MeshLabels(in.movingLabels, in.scene, timer, "mesh (CGAL Mesh_3)");
+  sim.mesh = MeshLabels(in.movingLabels, scene, timer, "mesh (CGAL Mesh_3)");
   bool hasUnknown = false;
-  for (const auto & l : in.scene.labels)
+  for (const auto & l : scene.labels)
   {
     hasUnknown |= l.role == bmr::LabelRole::UnknownMaterial;
   }
@@ -158,10 +146,10 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   if (hasUnknown && in.coarseFactor > 1.0)
   {
     auto coarse = itk::TetrahedralMeshObject::New();
-    coarse->Set(MeshLabels(in.movingLabels, Coarsened(in.scene, in.coarseFactor), timer, "coarse mesh (sweep)"));
+    coarse->Set(MeshLabels(in.movingLabels, ScaledMeshSizes(scene, in.coarseFactor), timer, "coarse mesh (sweep)"));
     optimizer->SetCoarseMesh(coarse);
   }
-  optimizer->SetScene(in.scene);
+  optimizer->SetScene(scene);
   for (const auto & kv : maps)
   {
     optimizer->SetDistanceMap(kv.first, kv.second);
@@ -169,6 +157,8 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   optimizer->SetNumberOfSweepSamples(in.sweepSamples);
   optimizer->SetWallControlSpacing(in.wallControlSpacing);
   optimizer->SetWallRegularization(in.wallRegularization);
+  optimizer->SetMaximumNumberOfOuterIterations(in.maximumOuterIterations);
+  optimizer->SetOuterGradientTolerance(in.outerTolerance);
   optimizer->AddObserver(itk::IterationEvent(), ProgressPrinter::New());
   std::cout << "  estimation (sweep of E on the coarse mesh, then L-BFGS-B over log E on the fine mesh):" << std::endl;
   optimizer->Update();
@@ -192,8 +182,8 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   sim.mesh = optimizer->GetOutput()->Get();
 
   // Per-element moduli, stress and the Dirichlet flags of the estimated state, for mesh.vtu.
-  auto materials = bmr::SceneMaterials(in.scene);
-  for (const auto & l : in.scene.labels)
+  auto materials = bmr::SceneMaterials(scene);
+  for (const auto & l : scene.labels)
   {
     const auto it = optimizer->GetEstimatedYoungsModuli().find(l.name);
     if (it != optimizer->GetEstimatedYoungsModuli().end())
@@ -208,7 +198,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   sim.simulation.youngsModulus = model.GetElementYoungsModuli();
   sim.simulation.poissonRatio = model.GetElementPoissonRatios();
   sim.simulation.dirichlet.assign(sim.mesh.GetNumberOfPoints(), 0);
-  for (std::int32_t n : bmr::SceneBoundaryConditions(in.scene, sim.mesh).dirichletNodes)
+  for (std::int32_t n : bmr::SceneBoundaryConditions(scene, sim.mesh).dirichletNodes)
   {
     sim.simulation.dirichlet[n] = 1;
   }
@@ -223,7 +213,8 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   report.identifiable = optimizer->GetIdentifiable();
   report.identifiability = optimizer->GetIdentifiabilityMessage();
   report.tetrahedra = sim.mesh.GetNumberOfTetrahedra();
-  for (const auto & l : in.scene.labels)
+  report.pullBack = sim.pullBack;
+  for (const auto & l : scene.labels)
   {
     if (l.role == bmr::LabelRole::Outside)
     {
@@ -242,7 +233,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
 
   timer.Begin("write history and report");
   std::vector<std::string> unknownNames;
-  for (const auto & l : in.scene.labels)
+  for (const auto & l : scene.labels)
   {
     if (l.role == bmr::LabelRole::UnknownMaterial)
     {
@@ -268,7 +259,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
     j << (first ? "" : ", ") << JsonString(kv.first) << ": " << kv.second;
     first = false;
   }
-  const bmr::SceneLabel * gauge = in.scene.FindLabel(optimizer->GetGaugeLabel());
+  const bmr::SceneLabel * gauge = scene.FindLabel(optimizer->GetGaugeLabel());
   j << "},\n  \"gauge\": {\"label\": " << JsonString(optimizer->GetGaugeLabel())
     << ", \"youngs_modulus_kPa\": " << (gauge ? gauge->youngsModulus : 0.0) << "},\n"
     << "  \"identifiable\": " << (report.identifiable ? "true" : "false")
@@ -307,6 +298,27 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   return report;
 }
 
+void
+ParseFemSettings(const Arguments & args, RegisterInputs & in)
+{
+  in.meshScale = args.Number("--mesh-scale", in.meshScale);
+  if (!(in.meshScale >= 0.25 && in.meshScale <= 4.0))
+  {
+    throw UsageError("--mesh-scale must lie in [0.25, 4] (mesh sizes relative to the scene's)");
+  }
+  const double outer = args.Number("--max-outer-iterations", in.maximumOuterIterations);
+  if (!(outer >= 1 && outer <= 1000 && outer == std::floor(outer)))
+  {
+    throw UsageError("--max-outer-iterations must be an integer in [1, 1000]");
+  }
+  in.maximumOuterIterations = static_cast<unsigned int>(outer);
+  in.outerTolerance = args.Number("--outer-tolerance", in.outerTolerance);
+  if (!(in.outerTolerance > 0.0 && in.outerTolerance < 1.0))
+  {
+    throw UsageError("--outer-tolerance must lie in (0, 1) (relative to Phi*)");
+  }
+}
+
 int
 RegisterCommand(const Arguments & args)
 {
@@ -338,6 +350,7 @@ RegisterCommand(const Arguments & args)
   {
     throw UsageError("--wall-spacing-mm must be >= 0 (0: every wall node free)");
   }
+  ParseFemSettings(args, in);
   args.CheckAllUsed();
 
   StageTimer timer;

@@ -66,25 +66,34 @@ ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabe
   return o;
 }
 
-/** \brief 95th percentile of the symmetric surface distance [mm] between \a label in \a a and in \a b.
+/** Symmetric surface distances [mm] between one label in two label maps: mean, 95th percentile ("HD95")
+ * and maximum (Hausdorff distance). */
+struct SurfaceDistanceStatistics
+{
+  double mean{ 0.0 };
+  double percentile95{ 0.0 };
+  double maximum{ 0.0 };
+};
+
+/** \brief Symmetric surface distances [mm] between \a label in \a a and in \a b.
  *
  * The surface of a label is the set of its voxels with a 6-neighbour outside it. For each surface voxel of
  * A, the distance to the surface of B is read from B's signed Maurer distance map (physical spacing); the
- * same from B to A; the result is the 95th percentile (linear interpolation) of the pooled distances —
- * the "HD95" of segmentation papers, robust to a few outlying voxels. Throws when the label is absent from
- * either image or the grids differ.
+ * same from B to A. Of the pooled distances the result gives the mean, the 95th percentile (linear
+ * interpolation) — the "HD95" of segmentation papers, robust to a few outlying voxels — and the maximum.
+ * Throws when the label is absent from either image or the grids differ.
  * \ingroup BiomechanicalRegistration
  */
 template <typename TLabelImage>
-double
-ComputeHausdorffDistance95(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
+SurfaceDistanceStatistics
+ComputeSurfaceDistances(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
 {
   constexpr unsigned int Dimension = TLabelImage::ImageDimension;
   using MaskType = Image<unsigned char, Dimension>;
   using MapType = Image<float, Dimension>;
   if (a->GetLargestPossibleRegion() != b->GetLargestPossibleRegion())
   {
-    itkGenericExceptionMacro(<< "ComputeHausdorffDistance95: the two label images differ in size");
+    itkGenericExceptionMacro(<< "ComputeSurfaceDistances: the two label images differ in size");
   }
   const auto mapOf = [label](const TLabelImage * image) {
     auto threshold = BinaryThresholdImageFilter<TLabelImage, MaskType>::New();
@@ -133,11 +142,16 @@ ComputeHausdorffDistance95(const TLabelImage * a, const TLabelImage * b, typenam
     }
     if (found == 0)
     {
-      itkGenericExceptionMacro(<< "ComputeHausdorffDistance95: label " << static_cast<double>(label)
+      itkGenericExceptionMacro(<< "ComputeSurfaceDistances: label " << static_cast<double>(label)
                                << " does not occur in " << (k == 0 ? "the first" : "the second") << " image");
     }
   }
-  return bmr::Percentile(distances, 95.0);
+  const bmr::SummaryStatistics summary = bmr::Summarize(distances);
+  SurfaceDistanceStatistics     result;
+  result.mean = summary.mean;
+  result.percentile95 = bmr::Percentile(distances, 95.0);
+  result.maximum = summary.maximum;
+  return result;
 }
 
 /** Statistics of the Jacobian determinant J of x -> x + d(x) over a field's voxels (all but the outermost

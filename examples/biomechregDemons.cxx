@@ -1,0 +1,159 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// biomechreg demons: the intensity-based baseline (itk::DemonsBaselineRegistrationFilter) from the command line,
+// and the settings parser shared with biomechreg compare.
+#include "biomechregCommon.h"
+#include "itkDemonsBaselineRegistrationFilter.h"
+
+namespace bmrcli {
+
+DemonsSettings
+ParseDemonsSettings(const Arguments & args)
+{
+  DemonsSettings s;
+  s.variant = args.Get("--demons-variant", s.variant);
+  if (s.variant != "diffeomorphic" && s.variant != "symmetric")
+  {
+    throw UsageError("--demons-variant must be diffeomorphic or symmetric");
+  }
+  const double levels = args.Number("--demons-levels", s.levels);
+  const double iterations = args.Number("--demons-iterations", s.iterations);
+  if (!(levels >= 1 && levels <= 6 && levels == std::floor(levels)) ||
+      !(iterations >= 1 && iterations <= 10000 && iterations == std::floor(iterations)))
+  {
+    throw UsageError("--demons-levels must be an integer in [1, 6] and --demons-iterations one in [1, 10000]");
+  }
+  s.levels = static_cast<unsigned int>(levels);
+  s.iterations = static_cast<unsigned int>(iterations);
+  s.sigma = args.Number("--demons-sigma", s.sigma);
+  if (!(s.sigma > 0.0 && s.sigma <= 20.0))
+  {
+    throw UsageError("--demons-sigma must lie in (0, 20] voxels");
+  }
+  const std::string matching = args.Get("--histogram-matching", "on");
+  if (matching != "on" && matching != "off")
+  {
+    throw UsageError("--histogram-matching must be on or off");
+  }
+  s.histogramMatching = matching == "on";
+  return s;
+}
+
+FieldType::Pointer
+RunDemons(const CTImageType *               fixedCT,
+          const CTImageType *               movingCT,
+          const LabelImageType *            fixedLabels,
+          const LabelImageType *            movingLabels,
+          const std::vector<std::int32_t> & flatten,
+          const DemonsSettings &            settings)
+{
+  using FilterType = itk::DemonsBaselineRegistrationFilter<CTImageType, FieldType, LabelImageType>;
+  auto demons = FilterType::New();
+  demons->SetFixedImage(fixedCT);
+  demons->SetMovingImage(movingCT);
+  demons->SetVariant(settings.variant == "symmetric" ? FilterType::VariantEnum::FastSymmetricForces
+                                                     : FilterType::VariantEnum::Diffeomorphic);
+  demons->SetNumberOfLevels(settings.levels);
+  demons->SetNumberOfIterations(std::vector<unsigned int>(settings.levels, settings.iterations));
+  demons->SetStandardDeviation(settings.sigma);
+  demons->SetHistogramMatching(settings.histogramMatching);
+  if (!flatten.empty())
+  {
+    demons->SetFixedLabelImage(fixedLabels);
+    demons->SetMovingLabelImage(movingLabels);
+    demons->SetFlattenLabels(flatten);
+  }
+  demons->Update();
+  return demons->GetOutput();
+}
+
+std::vector<std::int32_t>
+ParseLabelList(const std::string & text, const bmr::Scene * scene)
+{
+  std::vector<std::int32_t> labels;
+  std::istringstream        in(text);
+  std::string               item;
+  while (std::getline(in, item, ','))
+  {
+    if (item.empty())
+    {
+      continue;
+    }
+    const bmr::SceneLabel * named = scene ? scene->FindLabel(item) : nullptr;
+    if (named)
+    {
+      labels.push_back(named->value);
+      continue;
+    }
+    char *     end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (end == item.c_str() || *end != '\0')
+    {
+      throw UsageError("label \"" + item + "\" is neither an integer nor a label of the scene");
+    }
+    labels.push_back(static_cast<std::int32_t>(v));
+  }
+  return labels;
+}
+
+int
+DemonsCommand(const Arguments & args)
+{
+  const std::string movingCTPath = args.Require("--moving-ct");
+  const std::string fixedCTPath = args.Require("--fixed-ct");
+  const std::string out = args.Require("--out");
+  const std::string movingLabelsPath = args.Get("--moving-labels");
+  const std::string fixedLabelsPath = args.Get("--fixed-labels");
+  const auto        flatten = ParseLabelList(args.Get("--flatten"), nullptr);
+  const auto        settings = ParseDemonsSettings(args);
+  args.CheckAllUsed();
+  if (!flatten.empty() && (movingLabelsPath.empty() || fixedLabelsPath.empty()))
+  {
+    throw UsageError("--flatten needs --moving-labels and --fixed-labels (each image is flattened with its own)");
+  }
+
+  StageTimer timer;
+  std::cout << "biomechreg demons -> " << out << std::endl;
+  timer.Begin("read inputs");
+  auto                    movingCT = ReadImage<CTImageType>(movingCTPath, "moving CT");
+  auto                    fixedCT = ReadImage<CTImageType>(fixedCTPath, "fixed CT");
+  LabelImageType::Pointer movingLabels, fixedLabels;
+  if (!flatten.empty())
+  {
+    movingLabels = ReadImage<LabelImageType>(movingLabelsPath, "moving label image");
+    fixedLabels = ReadImage<LabelImageType>(fixedLabelsPath, "fixed label image");
+  }
+  timer.End();
+  MakeDirectory(out);
+  std::ostringstream detail;
+  detail << settings.variant << ", " << settings.levels << " levels x " << settings.iterations << " iterations";
+  timer.Begin("Demons");
+  const auto field = RunDemons(fixedCT, movingCT, fixedLabels, movingLabels, flatten, settings);
+  timer.End(detail.str());
+  timer.Begin("warp CT (linear)");
+  auto warped = Warp<CTImageType>(movingCT, field, false, -1000.0f);
+  timer.End();
+  timer.Begin("write outputs");
+  WriteImage<FieldType>(field, out + "/field.nrrd");
+  WriteImage<CTImageType>(warped, out + "/warped_ct.nrrd");
+  timer.End();
+  PrintTimings(timer);
+  return EXIT_SUCCESS;
+}
+
+} // namespace bmrcli
