@@ -221,24 +221,26 @@ DemoCommand()
 void
 PrintUsage(std::ostream & os)
 {
-  os << "usage:\n"
-        "  biomechreg                      run the demo into ./biomechreg-demo\n"
-        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
-        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-        "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
-        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
-        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
-        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
-        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
-        "                      [--wall-spacing-mm D] [--wall-regularization A] [--max-outer-iterations N]\n"
-        "                      [--outer-tolerance T]\n"
-        "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
-        "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
-        "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching on|off]\n"
-        "  biomechreg phantom-set --out DIR [--count N] [--seed S]\n"
-        "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
-        "                     [--flatten LABELS] [register's and demons' settings]\n"
-        "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n";
+  os
+    << "usage:\n"
+       "  biomechreg                      run the demo into ./biomechreg-demo\n"
+       "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
+       "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
+       "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
+       "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
+       "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
+       "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
+       "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
+       "                      [--wall-spacing-mm D] [--wall-regularization A] [--max-outer-iterations N]\n"
+       "                      [--outer-tolerance T]\n"
+       "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
+       "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
+       "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching "
+       "on|off]\n"
+       "  biomechreg phantom-set --out DIR [--count N] [--seed S]\n"
+       "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
+       "                     [--flatten LABELS] [register's and demons' settings]\n"
+       "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n";
 }
 } // namespace
 
@@ -274,8 +276,8 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
   timer.End();
 
   // Truth: known moduli and wall displacements, on a finer mesh with another random seed.
-  bmr::Scene truth = ScaledMeshSizes(pelvis ? PelvisScene(o.prostateE, false, o.prostateNu) : SpheresScene(o.prostateE, false),
-                                     o.truthRefinement);
+  bmr::Scene truth = ScaledMeshSizes(
+    pelvis ? PelvisScene(o.prostateE, false, o.prostateNu) : SpheresScene(o.prostateE, false), o.truthRefinement);
   truth.mesh.randomSeed = 12345;
   if (pelvis && (o.bladderKPa > 0.0 || o.rectumKPa > 0.0))
   {

@@ -636,7 +636,7 @@ RunDemons(const CTImageType *               fixedCT,
           const std::vector<std::int32_t> & flatten,
           const DemonsSettings &            settings);
 
-/** Comma-separated labels, by value or (with a scene) by name. */
+/** Comma-separated labels, by value or (with a scene) by name; "none" gives an empty list. */
 std::vector<std::int32_t>
 ParseLabelList(const std::string & text, const bmr::Scene * scene);
 

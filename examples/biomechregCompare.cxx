@@ -41,8 +41,8 @@ struct PairInputs
   std::map<std::string, std::string> paths; ///< column -> path ("" when absent)
 };
 
-const std::vector<std::string> RequiredColumns = { "name",     "moving_ct", "moving_labels", "fixed_ct",
-                                                   "fixed_labels", "scene" };
+const std::vector<std::string> RequiredColumns = { "name",     "moving_ct",    "moving_labels",
+                                                   "fixed_ct", "fixed_labels", "scene" };
 const std::vector<std::string> OptionalColumns = { "moving_landmarks", "fixed_landmarks", "fem_field", "demons_field" };
 
 std::string
@@ -130,6 +130,14 @@ ReadPairList(const std::string & path)
       throw std::runtime_error("pair list \"" + path + "\" line " + std::to_string(number) +
                                ": the name must be non-empty, without spaces or slashes");
     }
+    for (std::size_t c = 1; c < RequiredColumns.size(); ++c)
+    {
+      if (p.paths[RequiredColumns[c]].empty())
+      {
+        throw std::runtime_error("pair list \"" + path + "\" line " + std::to_string(number) + ": the column \"" +
+                                 RequiredColumns[c] + "\" is empty");
+      }
+    }
     for (const auto & other : pairs)
     {
       if (other.name == p.name)
@@ -149,13 +157,13 @@ ReadPairList(const std::string & path)
 /** What one method gave on one pair. */
 struct MethodResult
 {
-  std::string                                              method;
-  double                                                   seconds{ 0.0 }; ///< compute time, writing excluded
-  bool                                                     precomputed{ false };
-  std::vector<double>                                      tre;     ///< mm, in the order of the fixed landmarks
-  std::map<std::string, itk::LabelOverlap>                 overlap; ///< per organ
-  std::map<std::string, itk::SurfaceDistanceStatistics>    surface; ///< per organ, mm
-  itk::JacobianDeterminantStatistics                       jacobian;
+  std::string                                           method;
+  double                                                seconds{ 0.0 }; ///< compute time, writing excluded
+  bool                                                  precomputed{ false };
+  std::vector<double>                                   tre;     ///< mm, in the order of the fixed landmarks
+  std::map<std::string, itk::LabelOverlap>              overlap; ///< per organ
+  std::map<std::string, itk::SurfaceDistanceStatistics> surface; ///< per organ, mm
+  itk::JacobianDeterminantStatistics                    jacobian;
 };
 
 struct CompareOptions
@@ -196,7 +204,7 @@ PairLandmarks(const PairInputs &           pair,
                              " seeds in the moving CT and " + std::to_string(fixed.size()) +
                              " in the fixed CT (give landmark files instead)");
   }
-  const auto match = bmr::MatchLandmarks(moving, fixed);
+  const auto                 match = bmr::MatchLandmarks(moving, fixed);
   std::vector<bmr::Landmark> paired(fixed.size());
   for (std::size_t i = 0; i < moving.size(); ++i)
   {
@@ -210,8 +218,10 @@ PairLandmarks(const PairInputs &           pair,
 /** Writes a 4 x 4 checkerboard of the fixed CT and a warped CT on the axial slice through \a centre
  * (soft-tissue window -200 ... 300 HU), as dissertation Fig. 3.12. */
 void
-WriteCheckerboard(const CTImageType * fixed, const CTImageType * warped, const itk::Point<double, 3> & centre,
-                  const std::string & path)
+WriteCheckerboard(const CTImageType *           fixed,
+                  const CTImageType *           warped,
+                  const itk::Point<double, 3> & centre,
+                  const std::string &           path)
 {
   using SliceType = itk::Image<float, 2>;
   using PngType = itk::Image<unsigned char, 2>;
@@ -219,10 +229,10 @@ WriteCheckerboard(const CTImageType * fixed, const CTImageType * warped, const i
   fixed->TransformPhysicalPointToIndex(centre, index);
   auto region = fixed->GetLargestPossibleRegion();
   index[2] = std::max<itk::IndexValueType>(region.GetIndex(2),
-                                          std::min<itk::IndexValueType>(index[2], region.GetUpperIndex()[2]));
+                                           std::min<itk::IndexValueType>(index[2], region.GetUpperIndex()[2]));
   region.SetIndex(2, index[2]);
   region.SetSize(2, 0);
-  SliceType::Pointer slices[2];
+  SliceType::Pointer  slices[2];
   const CTImageType * images[2] = { fixed, warped };
   for (int i = 0; i < 2; ++i)
   {
@@ -295,7 +305,7 @@ TTestRow(const std::string & what, const std::vector<double> & a, const std::vec
   {
     return "| " + what + " | " + std::to_string(a.size()) + " | – | – | – | (fewer than 2 pairs) |\n";
   }
-  const auto t = bmr::PairedTTest(a, b);
+  const auto         t = bmr::PairedTTest(a, b);
   std::ostringstream o;
   o << "| " << what << " | " << t.count << " | " << Fixed(t.meanDifference, 3) << " | " << Fixed(t.t, 3) << " | "
     << std::scientific << std::setprecision(3) << t.pValue << " | " << (t.pValue < 0.05 ? "yes" : "no") << " |\n";
@@ -340,7 +350,20 @@ CompareCommand(const Arguments & args)
   }
   ParseFemSettings(args, o.fem);
   args.CheckAllUsed();
+  // Every input is checked before anything is written: a bad list leaves no partial output.
   const std::vector<PairInputs> pairs = ReadPairList(listPath);
+  for (const PairInputs & pair : pairs)
+  {
+    for (const auto & kv : pair.paths)
+    {
+      struct stat info;
+      if (!kv.second.empty() && stat(kv.second.c_str(), &info) != 0)
+      {
+        throw std::runtime_error("pair \"" + pair.name + "\": " + kv.first + " \"" + kv.second + "\" does not exist");
+      }
+    }
+    bmr::ReadScene(pair.paths.at("scene"));
+  }
   MakeDirectory(out);
 
   std::ostringstream perLandmark, perPair, perOrgan;
@@ -384,8 +407,8 @@ CompareCommand(const Arguments & args)
     }
     timer.Begin("landmarks");
     std::vector<bmr::Landmark> movingLandmarks, fixedLandmarks;
-    PairLandmarks(pair, movingCT, movingLabels, fixedCT, fixedLabels, organ->value, dir, movingLandmarks,
-                  fixedLandmarks);
+    PairLandmarks(
+      pair, movingCT, movingLabels, fixedCT, fixedLabels, organ->value, dir, movingLandmarks, fixedLandmarks);
     timer.End(std::to_string(fixedLandmarks.size()) + " pairs");
     const std::vector<std::int32_t> flatten = ParseLabelList(o.flatten.empty() ? organName : o.flatten, &scene);
 
@@ -437,9 +460,9 @@ CompareCommand(const Arguments & args)
       }
       else
       {
-        std::cout << "  Demons (" << o.demons.variant << ", " << o.demons.levels << " levels x "
-                  << o.demons.iterations << " iterations, flattened labels: " << (o.flatten.empty() ? organName : o.flatten)
-                  << ") ..." << std::flush;
+        std::cout << "  Demons (" << o.demons.variant << ", " << o.demons.levels << " levels x " << o.demons.iterations
+                  << " iterations, flattened labels: " << (o.flatten.empty() ? organName : o.flatten) << ") ..."
+                  << std::flush;
         field = RunDemons(fixedCT, movingCT, fixedLabels, movingLabels, flatten, o.demons);
         r.seconds = std::chrono::duration<double>(Clock::now() - start).count();
         std::cout << " " << Fixed(r.seconds, 1) << " s" << std::endl;
@@ -519,8 +542,8 @@ CompareCommand(const Arguments & args)
       if (a.size() >= 2)
       {
         const auto t = bmr::PairedTTest(a, b);
-        tests << "fem_vs_" << other << "," << (unit ? "pair_mean" : "seed") << "," << t.count << ","
-              << t.meanDifference << "," << t.t << "," << t.pValue << "\n";
+        tests << "fem_vs_" << other << "," << (unit ? "pair_mean" : "seed") << "," << t.count << "," << t.meanDifference
+              << "," << t.t << "," << t.pValue << "\n";
       }
     }
   }
@@ -529,7 +552,8 @@ CompareCommand(const Arguments & args)
   bmr::WriteTextFileAtomically(out + "/per_organ.csv", perOrgan.str());
   bmr::WriteTextFileAtomically(out + "/ttests.csv", tests.str());
   bmr::WriteTextFileAtomically(out + "/summary.md", md.str());
-  std::cout << "\n" << md.str() << "\nWrote " << out
+  std::cout << "\n"
+            << md.str() << "\nWrote " << out
             << "/{summary.md, per_pair.csv, per_organ.csv, per_landmark.csv, ttests.csv, <pair>/checkerboard_*.png}"
             << "\n(plots: /usr/bin/python3 scripts/plot_compare.py " << out << ")" << std::endl;
   return EXIT_SUCCESS;
@@ -559,7 +583,7 @@ PhantomSetCommand(const Arguments & args)
   parameters << "name,true_E_kPa,bladder_mm,rectum_mm,seed\n";
   for (unsigned int k = 0; k < static_cast<unsigned int>(count); ++k)
   {
-    PhantomOptions o;
+    PhantomOptions    o;
     const std::string name = "pair" + std::to_string(k + 1);
     o.out = out + "/" + name;
     o.grid = bmr::PelvisPhantomParameters().grid;
@@ -567,7 +591,8 @@ PhantomSetCommand(const Arguments & args)
     o.bladderMM = std::round(10.0 * uniform(3.0, 8.0)) / 10.0;
     o.rectumMM = std::round(10.0 * uniform(2.0, 5.0)) / 10.0;
     o.seed = static_cast<std::uint64_t>(seed) * 1000 + k + 1;
-    std::cout << "\n" << name << ": prostate " << o.prostateE << " kPa, bladder +" << o.bladderMM << " mm, rectum +"
+    std::cout << "\n"
+              << name << ": prostate " << o.prostateE << " kPa, bladder +" << o.bladderMM << " mm, rectum +"
               << o.rectumMM << " mm, seed " << o.seed << std::endl;
     StageTimer timer;
     MakePhantom(o, timer);

@@ -86,8 +86,12 @@ std::vector<std::int32_t>
 ParseLabelList(const std::string & text, const bmr::Scene * scene)
 {
   std::vector<std::int32_t> labels;
-  std::istringstream        in(text);
-  std::string               item;
+  if (text == "none")
+  {
+    return labels;
+  }
+  std::istringstream in(text);
+  std::string        item;
   while (std::getline(in, item, ','))
   {
     if (item.empty())

@@ -58,9 +58,9 @@ namespace itk {
  *
  * \ingroup BiomechanicalRegistration
  */
-template <typename TImage,
-          typename TDisplacementField = Image<Vector<double, TImage::ImageDimension>, TImage::ImageDimension>,
-          typename TLabelImage = Image<std::int32_t, TImage::ImageDimension>>
+template<typename TImage,
+         typename TDisplacementField = Image<Vector<double, TImage::ImageDimension>, TImage::ImageDimension>,
+         typename TLabelImage = Image<std::int32_t, TImage::ImageDimension>>
 class ITK_TEMPLATE_EXPORT DemonsBaselineRegistrationFilter : public ImageToImageFilter<TImage, TDisplacementField>
 {
 public:

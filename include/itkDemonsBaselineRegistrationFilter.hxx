@@ -33,41 +33,41 @@
 
 namespace itk {
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::DemonsBaselineRegistrationFilter()
 {
   this->AddRequiredInputName("MovingImage");
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetFixedImage(const ImageType * image)
 {
   this->SetInput(image);
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 auto
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GetFixedImage() const -> const ImageType *
 {
   return this->GetInput();
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetMovingImage(const ImageType * image)
 {
   this->SetInput("MovingImage", const_cast<ImageType *>(image));
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 auto
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GetMovingImage() const -> const ImageType *
 {
   return itkDynamicCastInDebugMode<const ImageType *>(this->ProcessObject::GetInput("MovingImage"));
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetFixedLabelImage(
   const LabelImageType * labels)
@@ -75,7 +75,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetFi
   this->SetInput("FixedLabelImage", const_cast<LabelImageType *>(labels));
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetMovingLabelImage(
   const LabelImageType * labels)
@@ -83,7 +83,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetMo
   this->SetInput("MovingLabelImage", const_cast<LabelImageType *>(labels));
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetNumberOfLevels(unsigned int levels)
 {
@@ -95,7 +95,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetNu
   }
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetNumberOfIterations(
   const std::vector<unsigned int> & iterations)
@@ -107,7 +107,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::SetNu
   }
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::VerifyPreconditions() ITKv5_CONST
 {
@@ -126,8 +126,8 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Verif
   {
     itkExceptionMacro("HistogramLevels must be >= 2 and MatchPoints >= 1");
   }
-  if (!m_FlattenLabels.empty() && (!this->ProcessObject::GetInput("FixedLabelImage") ||
-                                   !this->ProcessObject::GetInput("MovingLabelImage")))
+  if (!m_FlattenLabels.empty() &&
+      (!this->ProcessObject::GetInput("FixedLabelImage") || !this->ProcessObject::GetInput("MovingLabelImage")))
   {
     itkExceptionMacro("FlattenLabels needs both the fixed and the moving label image");
   }
@@ -138,14 +138,14 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Verif
     {
       if (!std::isfinite(static_cast<double>(it.Get())))
       {
-        itkExceptionMacro(<< (image == this->GetFixedImage() ? "fixed" : "moving")
-                          << " image: voxel " << it.GetIndex() << " is not finite");
+        itkExceptionMacro(<< (image == this->GetFixedImage() ? "fixed" : "moving") << " image: voxel " << it.GetIndex()
+                          << " is not finite");
       }
     }
   }
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GenerateOutputInformation()
 {
@@ -161,7 +161,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
   output->SetDirection(fixed->GetDirection());
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GenerateInputRequestedRegion()
 {
@@ -176,7 +176,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
 
 namespace DemonsBaselineDetail {
 /** Replaces every voxel of the given labels by the label's mean intensity in \a image (same grid). */
-template <typename TFloatImage, typename TLabelImage>
+template<typename TFloatImage, typename TLabelImage>
 void
 FlattenLabels(TFloatImage * image, const TLabelImage * labels, const std::vector<typename TLabelImage::PixelType> & set)
 {
@@ -189,8 +189,8 @@ FlattenLabels(TFloatImage * image, const TLabelImage * labels, const std::vector
   {
     sums[l] = { 0.0, 0 };
   }
-  ImageRegionIterator<TFloatImage>           it(image, image->GetLargestPossibleRegion());
-  ImageRegionConstIterator<TLabelImage>      lt(labels, labels->GetLargestPossibleRegion());
+  ImageRegionIterator<TFloatImage>      it(image, image->GetLargestPossibleRegion());
+  ImageRegionConstIterator<TLabelImage> lt(labels, labels->GetLargestPossibleRegion());
   for (; !it.IsAtEnd(); ++it, ++lt)
   {
     const auto s = sums.find(lt.Get());
@@ -211,7 +211,7 @@ FlattenLabels(TFloatImage * image, const TLabelImage * labels, const std::vector
 }
 } // namespace DemonsBaselineDetail
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GenerateData()
 {
@@ -219,8 +219,10 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
   using CastType = CastImageFilter<ImageType, FloatImageType>;
   using MultiResolutionType =
     MultiResolutionPDEDeformableRegistration<FloatImageType, FloatImageType, DisplacementFieldType, float>;
-  using DiffeomorphicType = DiffeomorphicDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
-  using SymmetricType = FastSymmetricForcesDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
+  using DiffeomorphicType =
+    DiffeomorphicDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
+  using SymmetricType =
+    FastSymmetricForcesDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
 
   typename FloatImageType::Pointer images[2];
   const ImageType *                inputs[2] = { this->GetFixedImage(), this->GetMovingImage() };
@@ -288,7 +290,7 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
   this->GraftOutput(multiResolution->GetOutput());
 }
 
-template <typename TImage, typename TDisplacementField, typename TLabelImage>
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
 void
 DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::PrintSelf(std::ostream & os,
                                                                                      Indent         indent) const

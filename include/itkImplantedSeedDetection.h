@@ -58,7 +58,7 @@ struct ImplantedSeedDetectionParameters
  * absent. Use bmr::MatchLandmarks() to pair the seeds found in two scans.
  * \ingroup BiomechanicalRegistration
  */
-template <typename TImage, typename TLabelImage>
+template<typename TImage, typename TLabelImage>
 std::vector<bmr::Landmark>
 DetectImplantedSeeds(const TImage *                           ct,
                      const TLabelImage *                      labels,
@@ -69,7 +69,8 @@ DetectImplantedSeeds(const TImage *                           ct,
   using ComponentImageType = Image<std::uint32_t, Dimension>;
   using MaskType = Image<unsigned char, Dimension>;
   const auto region = ct->GetLargestPossibleRegion();
-  if (!(parameters.growThresholdHU <= parameters.thresholdHU) || !(parameters.minimumVolume <= parameters.maximumVolume))
+  if (!(parameters.growThresholdHU <= parameters.thresholdHU) ||
+      !(parameters.minimumVolume <= parameters.maximumVolume))
   {
     itkGenericExceptionMacro(<< "DetectImplantedSeeds: needs growThresholdHU <= thresholdHU and minimumVolume <= "
                                 "maximumVolume");
@@ -82,7 +83,7 @@ DetectImplantedSeeds(const TImage *                           ct,
   }
 
   // Mean organ intensity below the threshold: the background the seed's excess intensity is measured from.
-  auto   mask = MaskType::New();
+  auto mask = MaskType::New();
   mask->CopyInformation(ct);
   mask->SetRegions(region);
   mask->Allocate(true);
@@ -153,7 +154,8 @@ DetectImplantedSeeds(const TImage *                           ct,
   for (std::size_t c = 1; c <= count; ++c)
   {
     const double volume = double(size[c]) * voxelVolume;
-    if (!touches[c] || peak[c] <= parameters.thresholdHU || volume < parameters.minimumVolume || volume > parameters.maximumVolume)
+    if (!touches[c] || peak[c] <= parameters.thresholdHU || volume < parameters.minimumVolume ||
+        volume > parameters.maximumVolume)
     {
       continue;
     }
@@ -192,7 +194,7 @@ DetectImplantedSeeds(const TImage *                           ct,
       {
         continue;
       }
-      const double w = std::max(0.0, static_cast<double>(ct->GetPixel(index)) - background);
+      const double               w = std::max(0.0, static_cast<double>(ct->GetPixel(index)) - background);
       typename TImage::PointType x;
       ct->TransformIndexToPhysicalPoint(index, x);
       sum += w;

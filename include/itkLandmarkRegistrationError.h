@@ -38,9 +38,9 @@ namespace itk {
  * outside the field's grid (between the outermost voxel centres).
  * \ingroup BiomechanicalRegistration
  */
-template <typename TDisplacementField>
+template<typename TDisplacementField>
 std::vector<double>
-ComputeTargetRegistrationErrors(const TDisplacementField *          field,
+ComputeTargetRegistrationErrors(const TDisplacementField *         field,
                                 const std::vector<bmr::Landmark> & fixed,
                                 const std::vector<bmr::Landmark> & moving)
 {

@@ -43,7 +43,7 @@ struct LabelOverlap
 
 /** Overlap of \a label in \a a and \a b (same grid; throws otherwise).
  * \ingroup BiomechanicalRegistration */
-template <typename TLabelImage>
+template<typename TLabelImage>
 LabelOverlap
 ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
 {
@@ -84,7 +84,7 @@ struct SurfaceDistanceStatistics
  * Throws when the label is absent from either image or the grids differ.
  * \ingroup BiomechanicalRegistration
  */
-template <typename TLabelImage>
+template<typename TLabelImage>
 SurfaceDistanceStatistics
 ComputeSurfaceDistances(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
 {
@@ -147,7 +147,7 @@ ComputeSurfaceDistances(const TLabelImage * a, const TLabelImage * b, typename T
     }
   }
   const bmr::SummaryStatistics summary = bmr::Summarize(distances);
-  SurfaceDistanceStatistics     result;
+  SurfaceDistanceStatistics    result;
   result.mean = summary.mean;
   result.percentile95 = bmr::Percentile(distances, 95.0);
   result.maximum = summary.maximum;
@@ -167,7 +167,7 @@ struct JacobianDeterminantStatistics
 
 /** Jacobian determinant statistics of \a field (physical spacing, central differences).
  * \ingroup BiomechanicalRegistration */
-template <typename TDisplacementField>
+template<typename TDisplacementField>
 JacobianDeterminantStatistics
 ComputeJacobianDeterminantStatistics(const TDisplacementField * field)
 {
@@ -210,7 +210,8 @@ ComputeJacobianDeterminantStatistics(const TDisplacementField * field)
   if (positive > 1)
   {
     const double mean = sum / double(positive);
-    s.standardDeviationOfLog = std::sqrt(std::max(0.0, (squares - double(positive) * mean * mean) / double(positive - 1)));
+    s.standardDeviationOfLog =
+      std::sqrt(std::max(0.0, (squares - double(positive) * mean * mean) / double(positive - 1)));
   }
   return s;
 }

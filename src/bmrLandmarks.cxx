@@ -125,7 +125,7 @@ ReadCsv(std::istream & in, const std::string & path, bool slicer)
   std::vector<Landmark> landmarks;
   std::string           line;
   std::size_t           number = 0;
-  bool                  lps = !slicer; // our CSV is LPS; a Slicer .fcsv is RAS unless it says otherwise
+  bool                  lps = !slicer;   // our CSV is LPS; a Slicer .fcsv is RAS unless it says otherwise
   bool                  header = slicer; // a .fcsv has no column header line (its header is a comment)
   while (std::getline(in, line))
   {
@@ -138,13 +138,12 @@ ReadCsv(std::istream & in, const std::string & path, bool slicer)
     if (line[0] == '#')
     {
       std::string lower = line;
-      std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) {
-        return static_cast<char>(std::tolower(c));
-      });
+      std::transform(
+        lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
       if (slicer && lower.find("coordinatesystem") != std::string::npos)
       {
-        const std::string value = Trim(lower.substr(lower.find('=') == std::string::npos ? lower.size()
-                                                                                          : lower.find('=') + 1));
+        const std::string value =
+          Trim(lower.substr(lower.find('=') == std::string::npos ? lower.size() : lower.find('=') + 1));
         if (value == "lps" || value == "1")
         {
           lps = true;
@@ -240,7 +239,7 @@ ReadMarkupsJson(std::istream & in, const std::string & path)
     }
     for (const auto & cp : markup["controlPoints"])
     {
-      Landmark l;
+      Landmark   l;
       const auto position = cp.find("position");
       if (position == cp.end() || !position->is_array() || position->size() != 3)
       {
@@ -293,7 +292,7 @@ ReadLandmarks(const std::string & path)
 void
 WriteLandmarks(const std::string & path, const std::vector<Landmark> & landmarks)
 {
-  const std::string extension = Extension(path);
+  const std::string  extension = Extension(path);
   std::ostringstream out;
   out << std::setprecision(17);
   for (const Landmark & l : landmarks)

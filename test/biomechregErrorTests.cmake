@@ -106,3 +106,24 @@ file(GLOB_RECURSE temporaries ${TEMP}/.tmp-*)
 if(temporaries)
   message(SEND_ERROR "temporary files left behind: ${temporaries}")
 endif()
+
+# demons, phantom-set and compare: usage errors and bad pair lists, refused before anything is written.
+expect_error(demons_flatten_without_labels "--flatten needs --moving-labels and --fixed-labels"
+  demons --moving-ct ${TEMP}/ok/moving_ct.nrrd --fixed-ct ${TEMP}/ok/fixed_ct.nrrd --flatten 2 --out ${TEMP}/d1)
+expect_error(demons_bad_variant "--demons-variant must be diffeomorphic or symmetric"
+  demons --moving-ct ${TEMP}/ok/moving_ct.nrrd --fixed-ct ${TEMP}/ok/fixed_ct.nrrd --demons-variant log --out ${TEMP}/d2)
+expect_error(phantom_set_count "--count must be an integer in \\[1, 100\\]" phantom-set --count 0 --out ${TEMP}/p1)
+file(WRITE ${TEMP}/no_scene_column.csv "name,moving_ct,moving_labels,fixed_ct,fixed_labels\na,x,x,x,x\n")
+expect_error(compare_missing_column "the header lacks the column \"scene\""
+  compare --pairs ${TEMP}/no_scene_column.csv --out ${TEMP}/c1)
+file(WRITE ${TEMP}/missing_file.csv "name,moving_ct,moving_labels,fixed_ct,fixed_labels,scene\n"
+  "a,ok/moving_ct.nrrd,ok/moving_labels.nrrd,ok/nonexistent.nrrd,ok/fixed_labels.nrrd,ok/scene.json\n")
+expect_error(compare_missing_file "fixed_ct \".*nonexistent.nrrd\" does not exist"
+  compare --pairs ${TEMP}/missing_file.csv --out ${TEMP}/c2)
+expect_error(compare_unknown_method "--methods takes identity, fem and demons"
+  compare --pairs ${TEMP}/missing_file.csv --methods fem,elastix --out ${TEMP}/c3)
+foreach(dir d1 d2 p1 c1 c2 c3)
+  if(EXISTS ${TEMP}/${dir})
+    message(SEND_ERROR "a refused run created ${TEMP}/${dir}")
+  endif()
+endforeach()

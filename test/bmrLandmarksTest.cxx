@@ -100,9 +100,14 @@ bmrLandmarksTest(int argc, char * argv[])
   Write(dir + "/empty.csv", "id,x_mm,y_mm,z_mm\n");
   Write(dir + "/truncated.json", "{\"markups\": [{\"controlPoints\": [");
   Write(dir + "/landmarks.txt", "id,x_mm,y_mm,z_mm\na,1,2,3\n");
-  for (const std::string name :
-       { "bad_header.csv", "bad_number.csv", "nan.csv", "duplicate.csv", "empty.csv", "truncated.json", "landmarks.txt",
-         "missing.csv" })
+  for (const std::string name : { "bad_header.csv",
+                                  "bad_number.csv",
+                                  "nan.csv",
+                                  "duplicate.csv",
+                                  "empty.csv",
+                                  "truncated.json",
+                                  "landmarks.txt",
+                                  "missing.csv" })
   {
     ITK_TRY_EXPECT_EXCEPTION(bmr::ReadLandmarks(dir + "/" + name));
   }
@@ -133,7 +138,7 @@ bmrLandmarksTest(int argc, char * argv[])
   // two-tailed p has a closed form: with tan(theta) = t / sqrt(4), p = 1 - sin(theta) (1 + cos^2(theta) / 2)
   // = 0.0449088 (significant at 0.05). Tolerances: 1e-9 for the arithmetic, 1e-9 for the distribution.
   {
-    const auto r = bmr::PairedTTest({ 2.1, 3.4, 1.9, 2.8, 3.0 }, { 1.8, 2.9, 2.0, 2.2, 2.5 });
+    const auto   r = bmr::PairedTTest({ 2.1, 3.4, 1.9, 2.8, 3.0 }, { 1.8, 2.9, 2.0, 2.2, 2.5 });
     const double theta = std::atan(r.t / 2.0);
     const double closedForm = 1.0 - std::sin(theta) * (1.0 + 0.5 * std::cos(theta) * std::cos(theta));
     ok &= Near(r.meanDifference, 0.36, 1e-12, "mean difference");

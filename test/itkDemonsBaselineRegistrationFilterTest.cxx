@@ -50,7 +50,8 @@ std::size_t
 DifferingPixels(const ImageType * a, const ImageType * b)
 {
   std::size_t n = 0;
-  for (itk::ImageRegionConstIterator<ImageType> ia(a, a->GetLargestPossibleRegion()), ib(b, b->GetLargestPossibleRegion());
+  for (itk::ImageRegionConstIterator<ImageType> ia(a, a->GetLargestPossibleRegion()),
+       ib(b, b->GetLargestPossibleRegion());
        !ia.IsAtEnd();
        ++ia, ++ib)
   {
@@ -64,9 +65,9 @@ DifferingPixels(const ImageType * a, const ImageType * b)
 int
 itkDemonsBaselineRegistrationFilterTest(int, char *[])
 {
-  bool       ok = true;
-  const auto fixed = Disk(64, 64, 32);
-  const auto moving = Disk(62, 64, 30);
+  bool              ok = true;
+  const auto        fixed = Disk(64, 64, 32);
+  const auto        moving = Disk(62, 64, 30);
   const std::size_t before = DifferingPixels(fixed, moving);
   std::cout << "differing pixels before registration: " << before << std::endl;
 
@@ -107,7 +108,8 @@ itkDemonsBaselineRegistrationFilterTest(int, char *[])
     labels->Allocate();
     auto withSpot = Disk(64, 64, 32);
     auto shiftedSpot = Disk(64, 64, 32);
-    for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(labels, labels->GetLargestPossibleRegion()); !it.IsAtEnd();
+    for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(labels, labels->GetLargestPossibleRegion());
+         !it.IsAtEnd();
          ++it)
     {
       const auto i = it.GetIndex();
@@ -137,8 +139,8 @@ itkDemonsBaselineRegistrationFilterTest(int, char *[])
         maximum[flatten] = std::max(maximum[flatten], it.Get().GetNorm());
       }
     }
-    std::cout << "largest displacement with the spot visible " << maximum[0] << " px, flattened " << maximum[1]
-              << " px" << std::endl;
+    std::cout << "largest displacement with the spot visible " << maximum[0] << " px, flattened " << maximum[1] << " px"
+              << std::endl;
     // Flattened, the images are identical: the field must stay at (numerically) zero.
     if (!(maximum[0] > 1.0 && maximum[1] < 1e-6))
     {

@@ -68,7 +68,8 @@ itkRegistrationEvaluationTest(int, char *[])
     for (int i = 1; i >= 0; --i) // reversed order: pairing is by id
     {
       moving.push_back({ fixed[i].id,
-                         { { fixed[i].point[0] + t[0] + e[i][0], fixed[i].point[1] + t[1] + e[i][1],
+                         { { fixed[i].point[0] + t[0] + e[i][0],
+                             fixed[i].point[1] + t[1] + e[i][1],
                              fixed[i].point[2] + t[2] + e[i][2] } } });
     }
     const auto tre = itk::ComputeTargetRegistrationErrors(field.GetPointer(), fixed, moving);
@@ -90,7 +91,7 @@ itkRegistrationEvaluationTest(int, char *[])
     const bmr::PhantomVolume volume = bmr::MakePelvisPhantom(p);
     const auto               ct = itk::MakeImageOnGrid<CTImageType>(volume.grid, volume.ct);
     const auto               labels = itk::MakeImageOnGrid<LabelImageType>(volume.grid, volume.labels);
-    const auto               found = itk::DetectImplantedSeeds(ct.GetPointer(), labels.GetPointer(), bmr::PelvisProstate);
+    const auto found = itk::DetectImplantedSeeds(ct.GetPointer(), labels.GetPointer(), bmr::PelvisProstate);
     if (found.size() != volume.seeds.size())
     {
       std::cerr << "found " << found.size() << " seeds, expected " << volume.seeds.size() << std::endl;
@@ -138,7 +139,8 @@ itkRegistrationEvaluationTest(int, char *[])
       auto image = LabelImageType::New();
       image->SetRegions(itk::ImageRegion<3>(itk::Size<3>{ { 32, 32, 32 } }));
       image->Allocate();
-      for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(image, image->GetLargestPossibleRegion()); !it.IsAtEnd();
+      for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(image, image->GetLargestPossibleRegion());
+           !it.IsAtEnd();
            ++it)
       {
         const auto i = it.GetIndex();
@@ -155,7 +157,8 @@ itkRegistrationEvaluationTest(int, char *[])
     const double expectedDice = 2.0 * 512.0 / (512.0 + 1331.0); // (4/3 pi r^3 cancels): 2 r1^3 / (r1^3 + r2^3)
     std::cout << "Dice " << self.dice << " / " << overlap.dice << " (about " << expectedDice << "), HD95 " << hdSelf
               << " / " << hd << " mm (about 3)" << std::endl;
-    std::cout << "mean surface distance " << distances.mean << " mm, maximum " << distances.maximum << " mm" << std::endl;
+    std::cout << "mean surface distance " << distances.mean << " mm, maximum " << distances.maximum << " mm"
+              << std::endl;
     ok &= self.dice == 1.0 && hdSelf == 0.0 && std::abs(hd - 3.0) <= 1.0 && std::abs(distances.mean - 3.0) <= 1.0 &&
           distances.maximum >= hd && distances.mean <= hd && std::abs(overlap.dice - expectedDice) < 0.03;
     ITK_TRY_EXPECT_EXCEPTION(itk::ComputeSurfaceDistances<LabelImageType>(small, large, 7));
