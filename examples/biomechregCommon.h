@@ -419,12 +419,23 @@ ComputeFields(SimulationOutputs &       out,
 }
 
 /** Mesh -> FEM -> fields, timing each stage. */
+/** Prints the scene's warnings (bmr::Scene::Warnings) on stdout, one line each. */
+inline void
+PrintSceneWarnings(const bmr::Scene & scene)
+{
+  for (const std::string & w : scene.Warnings())
+  {
+    std::cout << "warning: " << w << std::endl;
+  }
+}
+
 inline SimulationOutputs
 RunSimulation(const LabelImageType *    movingLabels,
               const bmr::Scene &        scene,
               const itk::ImageBase<3> * fixedReference,
               StageTimer &              timer)
 {
+  PrintSceneWarnings(scene);
   SimulationOutputs out;
   out.mesh = MeshLabels(movingLabels, scene, timer, "mesh (CGAL Mesh_3)");
 

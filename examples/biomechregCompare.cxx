@@ -588,8 +588,8 @@ PhantomSetCommand(const Arguments & args)
     o.out = out + "/" + name;
     o.grid = bmr::PelvisPhantomParameters().grid;
     o.prostateE = std::round(std::exp(uniform(std::log(50.0), std::log(300.0))));
-    o.bladderMM = std::round(10.0 * uniform(3.0, 8.0)) / 10.0;
-    o.rectumMM = std::round(10.0 * uniform(2.0, 5.0)) / 10.0;
+    o.bladderMM = std::round(100.0 * uniform(3.0, 8.0)) / 100.0;
+    o.rectumMM = std::round(100.0 * uniform(2.0, 5.0)) / 100.0;
     o.seed = static_cast<std::uint64_t>(seed) * 1000 + k + 1;
     std::cout << "\n"
               << name << ": prostate " << o.prostateE << " kPa, bladder +" << o.bladderMM << " mm, rectum +"

@@ -126,6 +126,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   MakeDirectory(in.out);
   const bmr::Scene scene = ScaledMeshSizes(in.scene, in.meshScale);
   scene.Validate();
+  PrintSceneWarnings(scene);
 
   timer.Begin("distance maps (fixed labels)");
   const auto maps = itk::ComputeSceneDistanceMaps(in.fixedLabels.GetPointer(), scene);

@@ -30,6 +30,8 @@ struct BiomechanicalRegistration_EXPORT MaterialParameters
 {
   double youngsModulus{ 10.0 };
   double poissonRatio{ 0.35 };
+  /** Nodal-averaged pressure (locking-free) formulation for this material; see LinearElasticModel. */
+  bool averagedPressure{ false };
 };
 
 /** Wall times [s] of the stages of the last Factorize()/Solve(). */
@@ -50,6 +52,20 @@ struct BiomechanicalRegistration_EXPORT SolverTimings
  * g_a the gradient of the barycentric coordinate of node a, V_e the element
  * volume, lambda = E nu / ((1+nu)(1-2nu)) and mu = E / (2(1+nu)).
  * Units: u in mm, E in kPa, forces in mN (kPa mm^2).
+ *
+ * Near incompressibility (nu -> 0.5) locks P1 tetrahedra: the bulk modulus kappa = lambda + 2 mu / 3
+ * penalises the piecewise-constant volumetric strain of every element, which has too few degrees of
+ * freedom to vanish. A material with MaterialParameters::averagedPressure uses the nodal-averaged pressure
+ * formulation instead (Bonet & Burton 1998): the element keeps only its deviatoric part
+ * (lambda replaced by -2 mu / 3), and the volumetric energy is taken at the nodes,
+ * \f[ \tfrac12 \sum_p \kappa V_p \theta_p^2, \quad \theta_p = \bar g_p^T u, \quad
+ *     \bar g_p = \frac{1}{V_p} \sum_{e \in p} \frac{V_e}{4} b_e, \quad V_p = \sum_{e \in p} \frac{V_e}{4}, \f]
+ * over the patches p = (node, material) of the elements of that material around each node, b_e the
+ * element's divergence operator (b_e^T u = tr eps_e). With one volumetric constraint per node instead of
+ * per element (about 5 elements per node) the mesh can represent isochoric motion, and the solution stays
+ * accurate to nu = 0.499 (see bmrTwoLayerSphereTest). K becomes wider (each node couples to its patch
+ * neighbours' neighbours), so assembly and factorisation cost more; the stress deviator, and so the von
+ * Mises stress, is unchanged.
  *
  * Dirichlet conditions u_p = g are eliminated: K_ff u_f = f_f - K_fp g. The
  * sparse Cholesky factorisation of K_ff (CHOLMOD supernodal) is computed once

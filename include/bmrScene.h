@@ -93,6 +93,14 @@ struct BiomechanicalRegistration_EXPORT Scene
   double                     roiMargin{ -1.0 }; ///< mm around the non-outside labels; < 0: whole image
   bool                       roiBoundaryFixed{ false };
   MeshingParameters          mesh;
+  /** "formulation": "nodal_averaged_pressure" — the locking-free element formulation for every material
+   * (bmr::LinearElasticModel); "standard" (default): plain P1 tetrahedra. */
+  bool nodalAveragedPressure{ false };
+
+  /** Warnings about the scene that are not errors: nu > 0.45 on standard P1 tetrahedra (volumetric
+   * locking; use the nodal-averaged pressure formulation). */
+  std::vector<std::string>
+  Warnings() const;
 
   const SceneLabel *
   FindLabel(const std::string & name) const;

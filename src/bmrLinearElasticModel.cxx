@@ -110,6 +110,24 @@ struct LinearElasticModel::Impl
     : mesh(m)
   {}
 
+  /** The elements of one material around one node, and their nodes (sorted): the support of the node's
+   * averaged volumetric strain in the nodal-averaged pressure formulation. */
+  struct AveragingPatch
+  {
+    std::int32_t              label{ 0 };
+    std::vector<std::int32_t> elements;
+    std::vector<std::int32_t> nodes;
+  };
+  std::vector<AveragingPatch>
+  BuildAveragingPatches() const;
+  /** Position of the lower-triangle entry (row >= col) in rowIndex / values. */
+  std::size_t
+  EntryIndex(std::size_t row, std::size_t col) const
+  {
+    const auto first = rowIndex.begin() + colStart[col];
+    const auto last = rowIndex.begin() + colStart[col + 1];
+    return static_cast<std::size_t>(std::lower_bound(first, last, static_cast<std::int32_t>(row)) - rowIndex.begin());
+  }
   void
   BuildPattern();
   void
@@ -145,6 +163,51 @@ LinearElasticModel::Impl::CheckElements() const
   ValidateMesh(mesh);
 }
 
+auto
+LinearElasticModel::Impl::BuildAveragingPatches() const -> std::vector<AveragingPatch>
+{
+  std::vector<AveragingPatch> patches;
+  const std::size_t           M = mesh.GetNumberOfTetrahedra();
+  // Elements of averaged materials around every node, in element order (deterministic).
+  std::vector<std::vector<std::int32_t>> around(mesh.GetNumberOfPoints());
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    if (materials.at(mesh.labels[e]).averagedPressure)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        around[mesh.tetrahedra[4 * e + a]].push_back(static_cast<std::int32_t>(e));
+      }
+    }
+  }
+  for (const auto & elements : around)
+  {
+    // One patch per material present around the node (interfaces keep the materials apart).
+    std::set<std::int32_t> labels;
+    for (std::int32_t e : elements)
+    {
+      labels.insert(mesh.labels[e]);
+    }
+    for (std::int32_t label : labels)
+    {
+      AveragingPatch patch;
+      patch.label = label;
+      for (std::int32_t e : elements)
+      {
+        if (mesh.labels[e] == label)
+        {
+          patch.elements.push_back(e);
+          patch.nodes.insert(patch.nodes.end(), &mesh.tetrahedra[4 * e], &mesh.tetrahedra[4 * e] + 4);
+        }
+      }
+      std::sort(patch.nodes.begin(), patch.nodes.end());
+      patch.nodes.erase(std::unique(patch.nodes.begin(), patch.nodes.end()), patch.nodes.end());
+      patches.push_back(std::move(patch));
+    }
+  }
+  return patches;
+}
+
 void
 LinearElasticModel::Impl::BuildPattern()
 {
@@ -163,6 +226,22 @@ LinearElasticModel::Impl::BuildPattern()
         if (t[b] >= t[a])
         {
           upper[t[a]].push_back(t[b]);
+        }
+      }
+    }
+  }
+  // Nodal-averaged pressure: the volumetric strain of a (node, material) pair averages the elements of that
+  // material around the node, which couples every pair of nodes of that patch.
+  const std::vector<AveragingPatch> patches = BuildAveragingPatches();
+  for (const AveragingPatch & patch : patches)
+  {
+    for (std::int32_t a : patch.nodes)
+    {
+      for (std::int32_t b : patch.nodes)
+      {
+        if (b >= a)
+        {
+          upper[a].push_back(b);
         }
       }
     }
@@ -222,7 +301,13 @@ LinearElasticModel::Impl::BuildPattern()
     double       g[4][3];
     const double V = ElementGradients(mesh, e, g);
     double       lambda, mu;
-    LameParameters(1.0, materials.at(mesh.labels[e]).poissonRatio, lambda, mu);
+    const MaterialParameters & material = materials.at(mesh.labels[e]);
+    LameParameters(1.0, material.poissonRatio, lambda, mu);
+    if (material.averagedPressure)
+    {
+      // Deviatoric part only (lambda -> -2 mu / 3); the bulk part kappa comes from the nodal patches below.
+      lambda = -2.0 * mu / 3.0;
+    }
     std::vector<double> & vals = unitValues[mesh.labels[e]];
     const std::int32_t *  t = &mesh.tetrahedra[4 * e];
     for (int a = 0; a < 4; ++a)
@@ -241,10 +326,53 @@ LinearElasticModel::Impl::BuildPattern()
               continue;
             }
             const double kij = V * (lambda * g[a][i] * g[b][j] + mu * g[a][j] * g[b][i] + (i == j ? mu * gab : 0.0));
-            const auto   first = rowIndex.begin() + colStart[col];
-            const auto   last = rowIndex.begin() + colStart[col + 1];
-            const auto   pos = std::lower_bound(first, last, static_cast<std::int32_t>(row));
-            vals[static_cast<std::size_t>(pos - rowIndex.begin())] += kij;
+            vals[EntryIndex(row, col)] += kij;
+          }
+        }
+      }
+    }
+  }
+  // Bulk part of the averaged materials: kappa V_p gbar gbar^T per patch p, with the averaged divergence
+  // operator gbar = sum_e (V_e / 4) g_e / V_p and V_p = sum_e V_e / 4 over the patch's elements.
+  for (const AveragingPatch & patch : patches)
+  {
+    const double kappa = 1.0 / (3.0 * (1.0 - 2.0 * materials.at(patch.label).poissonRatio)); // unit E
+    std::vector<double> gbar(3 * patch.nodes.size(), 0.0);
+    double              volume = 0.0;
+    for (std::int32_t e : patch.elements)
+    {
+      double       g[4][3];
+      const double V = ElementGradients(mesh, static_cast<std::size_t>(e), g);
+      volume += 0.25 * V;
+      for (int a = 0; a < 4; ++a)
+      {
+        const auto k = static_cast<std::size_t>(
+          std::lower_bound(patch.nodes.begin(), patch.nodes.end(), mesh.tetrahedra[4 * e + a]) - patch.nodes.begin());
+        for (int i = 0; i < 3; ++i)
+        {
+          gbar[3 * k + i] += 0.25 * V * g[a][i];
+        }
+      }
+    }
+    for (double & x : gbar)
+    {
+      x /= volume;
+    }
+    std::vector<double> & vals = unitValues[patch.label];
+    for (std::size_t ka = 0; ka < patch.nodes.size(); ++ka)
+    {
+      for (std::size_t kb = 0; kb < patch.nodes.size(); ++kb)
+      {
+        for (int i = 0; i < 3; ++i)
+        {
+          for (int j = 0; j < 3; ++j)
+          {
+            const std::size_t row = 3 * static_cast<std::size_t>(patch.nodes[ka]) + i;
+            const std::size_t col = 3 * static_cast<std::size_t>(patch.nodes[kb]) + j;
+            if (row >= col)
+            {
+              vals[EntryIndex(row, col)] += kappa * volume * gbar[3 * ka + i] * gbar[3 * kb + j];
+            }
           }
         }
       }

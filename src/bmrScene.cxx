@@ -202,6 +202,28 @@ Scene::OutsideLabels() const
   return v;
 }
 
+std::vector<std::string>
+Scene::Warnings() const
+{
+  std::vector<std::string> warnings;
+  if (nodalAveragedPressure)
+  {
+    return warnings;
+  }
+  for (const SceneLabel & l : labels)
+  {
+    if ((l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial) && l.poissonRatio > 0.45)
+    {
+      std::ostringstream os;
+      os << "label \"" << l.name << "\" has nu = " << l.poissonRatio
+         << " > 0.45: linear tetrahedra lock (too stiff) near incompressibility; set \"formulation\": "
+            "\"nodal_averaged_pressure\" in the scene";
+      warnings.push_back(os.str());
+    }
+  }
+  return warnings;
+}
+
 void
 Scene::Validate() const
 {
@@ -394,7 +416,8 @@ ParseScene(const std::string & text, const std::string & source)
               "loads",
               "landmarks",
               "region_of_interest",
-              "mesh" },
+              "mesh",
+              "formulation" },
             source,
             "scene");
   if (root.contains("name"))
@@ -474,6 +497,15 @@ ParseScene(const std::string & text, const std::string & source)
   if (root.contains("gauge"))
   {
     scene.gauge = GetString(root, "gauge", source, "scene");
+  }
+  if (root.contains("formulation"))
+  {
+    const std::string f = GetString(root, "formulation", source, "scene");
+    if (f != "standard" && f != "nodal_averaged_pressure")
+    {
+      SceneError(source, "formulation", "\"" + f + "\" is not standard or nodal_averaged_pressure");
+    }
+    scene.nodalAveragedPressure = f == "nodal_averaged_pressure";
   }
   auto stringList = [&](const char * key, std::vector<std::string> & out) {
     if (!root.contains(key))
@@ -694,6 +726,7 @@ SceneToJson(const Scene & scene)
   root["labels"] = labels;
   if (!scene.gauge.empty())
     root["gauge"] = scene.gauge;
+  root["formulation"] = scene.nodalAveragedPressure ? "nodal_averaged_pressure" : "standard";
   if (!scene.forceSurfaces.empty())
     root["force_surfaces"] = scene.forceSurfaces;
   if (!scene.objective.empty())

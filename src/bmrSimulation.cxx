@@ -34,7 +34,7 @@ SceneMaterials(const Scene & scene)
   {
     if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
     {
-      materials[l.value] = MaterialParameters{ l.youngsModulus, l.poissonRatio };
+      materials[l.value] = MaterialParameters{ l.youngsModulus, l.poissonRatio, scene.nodalAveragedPressure };
     }
   }
   return materials;
