@@ -29,7 +29,9 @@
 #include "itkGDCMSeriesFileNames.h"
 #include "itkImageFileReader.h"
 #include "itkImageFileWriter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
 #include "itkImageRegionIterator.h"
+#include "itkDefaultConvertPixelTraits.h"
 #include "itkImageSeriesReader.h"
 #include "itkImageWarper.h"
 #include "itkLabelImageToTetrahedralMeshFilter.h"
@@ -44,6 +46,7 @@
 #include <set>
 #include <sstream>
 #include <sys/stat.h>
+#include <type_traits>
 
 
 namespace bmrcli {
@@ -135,7 +138,39 @@ private:
   std::streambuf *   m_Old;
 };
 
-/** Reads a 3-D image from any file ITK reads, or a DICOM series directory (GDCM). */
+/** Largest image the tool reads: 2^31 voxels (a declared size beyond is a corrupt or absurd header). */
+constexpr double MaximumNumberOfVoxels = 2147483648.0;
+
+/** Throws naming the first voxel that is NaN or infinite (floating-point pixels and vectors of them). */
+template<typename TImage>
+void
+CheckFinite(const TImage * image, const std::string & what)
+{
+  using ValueType = typename itk::NumericTraits<typename TImage::PixelType>::ValueType;
+  if (!std::is_floating_point<ValueType>::value)
+  {
+    return;
+  }
+  const unsigned int components = itk::NumericTraits<typename TImage::PixelType>::GetLength(image->GetPixel({}));
+  for (itk::ImageRegionConstIteratorWithIndex<TImage> it(image, image->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    const auto & v = it.Get();
+    for (unsigned int c = 0; c < components; ++c)
+    {
+      if (!std::isfinite(
+            static_cast<double>(itk::DefaultConvertPixelTraits<typename TImage::PixelType>::GetNthComponent(c, v))))
+      {
+        std::ostringstream os;
+        os << what << ": voxel " << it.GetIndex() << " is not finite (NaN or infinite)";
+        throw std::runtime_error(os.str());
+      }
+    }
+  }
+}
+
+/** Reads a 3-D image from any file ITK reads, or a DICOM series directory (GDCM). Refuses images that are
+ * not 3-D, declare more than MaximumNumberOfVoxels, have a zero, negative or non-finite spacing, or hold a
+ * non-finite voxel. */
 template<typename TImage>
 typename TImage::Pointer
 ReadImage(const std::string & path, const std::string & what)
@@ -170,6 +205,17 @@ ReadImage(const std::string & path, const std::string & what)
       {
         throw std::runtime_error(what + " \"" + path + "\" is " + std::to_string(dim) + "-D; a 3-D image is required");
       }
+      double voxels = 1.0;
+      for (unsigned int a = 0; a < dim; ++a)
+      {
+        voxels *= static_cast<double>(reader->GetImageIO()->GetDimensions(a));
+      }
+      if (voxels > MaximumNumberOfVoxels)
+      {
+        std::ostringstream os;
+        os << what << " \"" << path << "\" declares " << voxels << " voxels (more than 2^31)";
+        throw std::runtime_error(os.str());
+      }
       reader->Update();
       image = reader->GetOutput();
     }
@@ -185,6 +231,7 @@ ReadImage(const std::string & path, const std::string & what)
     throw std::runtime_error("cannot read " + what + " \"" + path + "\": " + diagnostics.FirstLine());
   }
   itk::GridGeometryOf(image).Validate((what + " \"" + path + "\"").c_str());
+  CheckFinite(image.GetPointer(), what + " \"" + path + "\"");
   return image;
 }
 

@@ -119,9 +119,50 @@ JsonString(const std::string & s)
 }
 } // namespace
 
+/** Axis-aligned physical bounding box [mm] of an image's voxel box (the corners at +-half a voxel). */
+std::array<std::array<double, 2>, 3>
+PhysicalBounds(const itk::ImageBase<3> * image)
+{
+  std::array<std::array<double, 2>, 3> b;
+  for (auto & axis : b)
+  {
+    axis = { { std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity() } };
+  }
+  const auto region = image->GetLargestPossibleRegion();
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    itk::ContinuousIndex<double, 3> index;
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      index[a] = region.GetIndex(a) - 0.5 + ((corner >> a) & 1 ? double(region.GetSize(a)) : 0.0);
+    }
+    itk::Point<double, 3> x;
+    image->TransformContinuousIndexToPhysicalPoint(index, x);
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      b[a][0] = std::min(b[a][0], x[a]);
+      b[a][1] = std::max(b[a][1], x[a]);
+    }
+  }
+  return b;
+}
+
 RegisterReport
 RunRegistration(const RegisterInputs & in, StageTimer & timer)
 {
+  // Images that do not overlap in physical space cannot be registered (wrong origin, wrong file).
+  const auto movingBox = PhysicalBounds(in.movingLabels);
+  const auto fixedBox = PhysicalBounds(in.fixedLabels);
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    if (movingBox[a][1] <= fixedBox[a][0] || fixedBox[a][1] <= movingBox[a][0])
+    {
+      throw std::runtime_error("the moving and fixed label images do not overlap in physical space (axis " +
+                               std::to_string(a) + ": moving " + std::to_string(movingBox[a][0]) + " .. " +
+                               std::to_string(movingBox[a][1]) + " mm, fixed " + std::to_string(fixedBox[a][0]) +
+                               " .. " + std::to_string(fixedBox[a][1]) + " mm)");
+    }
+  }
   using Optimizer = itk::FEMElasticityOptimizer;
   MakeDirectory(in.out);
   const bmr::Scene scene = ScaledMeshSizes(in.scene, in.meshScale);

@@ -24,9 +24,12 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -75,6 +78,25 @@ ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
     g[0][i] = -(g[1][i] + g[2][i] + g[3][i]);
   }
   return det / 6.0;
+}
+
+/** Runs the BLAS that CHOLMOD calls on one thread. A multithreaded OpenBLAS splits the supernodal
+ * updates differently for different thread counts, and so rounds differently: the factorisation, and with
+ * it every field and estimate, would change with the machine's core count (measured: fields differing in
+ * the last bits between OPENBLAS_NUM_THREADS=1 and 2). The symbol is looked up at run time, so any other
+ * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorisations of
+ * this project take well under a second and are reused for every solve. */
+void
+PinBlasToOneThread()
+{
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
+    {
+      set(1);
+    }
+  });
 }
 
 void
@@ -298,9 +320,9 @@ LinearElasticModel::Impl::BuildPattern()
   }
   for (std::size_t e = 0; e < M; ++e)
   {
-    double       g[4][3];
-    const double V = ElementGradients(mesh, e, g);
-    double       lambda, mu;
+    double                     g[4][3];
+    const double               V = ElementGradients(mesh, e, g);
+    double                     lambda, mu;
     const MaterialParameters & material = materials.at(mesh.labels[e]);
     LameParameters(1.0, material.poissonRatio, lambda, mu);
     if (material.averagedPressure)
@@ -336,7 +358,7 @@ LinearElasticModel::Impl::BuildPattern()
   // operator gbar = sum_e (V_e / 4) g_e / V_p and V_p = sum_e V_e / 4 over the patch's elements.
   for (const AveragingPatch & patch : patches)
   {
-    const double kappa = 1.0 / (3.0 * (1.0 - 2.0 * materials.at(patch.label).poissonRatio)); // unit E
+    const double        kappa = 1.0 / (3.0 * (1.0 - 2.0 * materials.at(patch.label).poissonRatio)); // unit E
     std::vector<double> gbar(3 * patch.nodes.size(), 0.0);
     double              volume = 0.0;
     for (std::int32_t e : patch.elements)
@@ -613,6 +635,7 @@ LinearElasticModel::Factorize()
   {
     return;
   }
+  PinBlasToOneThread();
   auto t0 = Clock::now();
   if (!d.analysed)
   {

@@ -4,7 +4,7 @@
 #   one voxel (1.25 mm in-plane; the seeds move 2-3 mm, the FEM fit is about 0.2-0.5 mm);
 # - the t-test table, the per-landmark/pair/organ CSV files, the summary and the checkerboards exist.
 # Run with: cmake -DDIR=<phantom set dir> -P biomechregCompareCheck.cmake
-file(STRINGS ${DIR}/compare/per_pair.csv lines REGEX "^pair")
+file(STRINGS ${DIR}/compare/per_pair.csv lines REGEX "^pair[0-9]")
 set(pairs "")
 foreach(line ${lines})
   string(REPLACE "," ";" f "${line}")

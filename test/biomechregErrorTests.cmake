@@ -93,8 +93,21 @@ file(WRITE ${TEMP}/nothing.json "${bad}")
 expect_error(nothing_to_estimate "nothing to estimate"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/nothing.json --out ${TEMP}/r3)
 
+# Non-finite voxels, an absurd declared size, images that do not overlap in physical space.
+string(REPEAT "40 " 63 values)
+file(WRITE ${TEMP}/nan_ct.nrrd "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nspacings: 4 4 4\nencoding: ascii\n\n${values} nan\n")
+expect_error(nan_voxel "moving CT .*voxel \\[3, 3, 3\\] is not finite" simulate --moving-labels ${labels}
+  --moving-ct ${TEMP}/nan_ct.nrrd --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s11)
+file(WRITE ${TEMP}/huge.mha "ObjectType = Image\nNDims = 3\nDimSize = 100000 100000 100000\nElementType = MET_INT\nElementDataFile = LOCAL\n0000")
+expect_error(huge_size "declares 1e\\+15 voxels \\(more than 2\\^31\\)" simulate --moving-labels ${TEMP}/huge.mha
+  --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s12)
+file(WRITE ${TEMP}/far_labels.nrrd "NRRD0004\ntype: int\ndimension: 3\nsizes: 4 4 4\nspace: left-posterior-superior\n"
+  "space origin: (10000,10000,10000)\nspace directions: (4,0,0) (0,4,0) (0,0,4)\nencoding: ascii\n\n${zeros}\n")
+expect_error(no_overlap "the moving and fixed label images do not overlap in physical space"
+  register ${ok_register} --fixed-labels ${TEMP}/far_labels.nrrd --scene ${TEMP}/ok/scene.json --out ${TEMP}/r4)
+
 # No partial outputs: none of the failed runs may have left a directory or temporary file.
-foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 r1 r2 r3 x)
+foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 s11 s12 r1 r2 r3 r4 x)
   if(EXISTS ${TEMP}/${dir})
     file(GLOB leftovers ${TEMP}/${dir}/*)
     if(leftovers)

@@ -19,128 +19,13 @@
 // (bmr::TwoLayerSphereSolution): accuracy at the default mesh over nu <= 0.45 and
 // stiffness ratios 1e-3 ... 1e3, near incompressibility (nu 0.49, 0.499) with the nodal-averaged
 // pressure formulation, and the L2 convergence order under refinement.
-#include "bmrDisplacementFieldRasterizer.h"
-#include "bmrMesher.h"
-#include "bmrSimulation.h"
-#include "bmrTwoLayerSphere.h"
+#include "bmrTwoLayerSphereCase.h"
 
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
 
-namespace {
-constexpr double InnerRadius = 5.0;  // mm; a shell of half the radius keeps several elements through its thickness
-constexpr double OuterRadius = 10.0; // mm
-constexpr double Pressure = 1.0;     // kPa
-
-bmr::TetrahedralMesh
-SphereMesh(double h)
-{
-  bmr::MeshingParameters p;
-  p.cellSize = h;
-  p.facetSize = h;
-  // The sagitta of a chord of length h on the inner sphere: surface error of the order of the element error.
-  p.facetDistance = h * h / (8.0 * InnerRadius);
-  p.facetAngle = 25.0;
-  p.exude = true; // sliver exudation: perturbation alone can leave a flat element on the curved interface
-  auto label = [](double x, double y, double z) -> std::int32_t {
-    const double r2 = x * x + y * y + z * z;
-    return r2 < InnerRadius * InnerRadius ? 2 : (r2 < OuterRadius * OuterRadius ? 1 : 0);
-  };
-  return bmr::ExtractSubmesh(bmr::MeshImplicitLabels(label, { { 0, 0, 0 } }, 1.2 * OuterRadius, p), {});
-}
-
-struct Errors
-{
-  double nodalRadialRelative; // sqrt(sum (ur_h - ur)^2 / sum ur^2) over nodes
-  double l2;                  // || u_h - u ||_L2 over the domain [mm * mm^1.5]
-  double l2Relative;
-};
-
-/** Pressure on the outer surface; rigid-body modes removed by prescribing the exact
- * displacement at three interior nodes (so the constraint adds no error of its own). */
-Errors
-Solve(const bmr::TetrahedralMesh & mesh, double E1, double nu1, double E2, double nu2, bool averagedPressure = false)
-{
-  const bmr::TwoLayerSphereSolution exact(InnerRadius, OuterRadius, E1, nu1, E2, nu2, Pressure);
-  bmr::Scene                        scene;
-  scene.labels = { { "outside", 0, bmr::LabelRole::Outside },
-                   { "shell", 1, bmr::LabelRole::Material, E2, nu2 },
-                   { "core", 2, bmr::LabelRole::Material, E1, nu1 } };
-  scene.loads = { { "outside", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, Pressure } };
-  scene.nodalAveragedPressure = averagedPressure;
-  bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(scene, mesh);
-
-  const std::array<std::array<double, 3>, 3> targets{ { { { 0, 0, 0 } }, { { 4, 0, 0 } }, { { 0, 4, 0 } } } };
-  for (const auto & t : targets)
-  {
-    std::size_t best = 0;
-    double      bestD = 1e300;
-    for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
-    {
-      const double d =
-        std::hypot(mesh.points[3 * n] - t[0], mesh.points[3 * n + 1] - t[1], mesh.points[3 * n + 2] - t[2]);
-      if (d < bestD)
-      {
-        bestD = d;
-        best = n;
-      }
-    }
-    bc.dirichletNodes.push_back(static_cast<std::int32_t>(best));
-    const auto u =
-      exact.Displacement({ { mesh.points[3 * best], mesh.points[3 * best + 1], mesh.points[3 * best + 2] } }, true);
-    bc.dirichletValues.insert(bc.dirichletValues.end(), u.begin(), u.end());
-  }
-  bmr::LinearElasticModel model(mesh, bmr::SceneMaterials(scene));
-  model.SetDirichletConditions(bc.dirichletNodes, bc.dirichletValues);
-  const std::vector<double> u = model.Solve(bc.forces);
-
-  // Nodal radial error (nodes on the interface use the core formula: both agree there).
-  double num = 0.0, den = 0.0;
-  for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
-  {
-    const double * x = &mesh.points[3 * n];
-    const double   r = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-    if (r < 1e-9)
-    {
-      continue;
-    }
-    const double ur = (u[3 * n] * x[0] + u[3 * n + 1] * x[1] + u[3 * n + 2] * x[2]) / r;
-    const double ue = exact.RadialDisplacement(r, r <= InnerRadius);
-    num += (ur - ue) * (ur - ue);
-    den += ue * ue;
-  }
-  // L2 error with the 4-point (degree 2) tetrahedron rule; the exact solution is
-  // evaluated with the formula of the element's own material.
-  const double alpha = 0.5854101966249685, beta = 0.1381966011250105;
-  double       l2 = 0.0, l2u = 0.0;
-  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
-  {
-    const double V = bmr::TetrahedronVolume(mesh, e);
-    for (int q = 0; q < 4; ++q)
-    {
-      std::array<double, 3> x{ { 0, 0, 0 } }, uh{ { 0, 0, 0 } };
-      for (int a = 0; a < 4; ++a)
-      {
-        const double w = a == q ? alpha : beta;
-        const auto   node = mesh.tetrahedra[4 * e + a];
-        for (int c = 0; c < 3; ++c)
-        {
-          x[c] += w * mesh.points[3 * node + c];
-          uh[c] += w * u[3 * node + c];
-        }
-      }
-      const auto ue = exact.Displacement(x, mesh.labels[e] == 2);
-      for (int c = 0; c < 3; ++c)
-      {
-        l2 += 0.25 * V * (uh[c] - ue[c]) * (uh[c] - ue[c]);
-        l2u += 0.25 * V * ue[c] * ue[c];
-      }
-    }
-  }
-  return { std::sqrt(num / den), std::sqrt(l2), std::sqrt(l2 / l2u) };
-}
-} // namespace
+using namespace bmr::test;
 
 int
 bmrTwoLayerSphereTest(int, char *[])
