@@ -419,6 +419,7 @@ struct SimulationOutputs
   bmr::ForwardSimulation simulation;
   FieldType::Pointer     pullBack;
   FieldType::Pointer     push;
+  std::size_t            invertedElements{ 0 }; ///< elements the displacement inverts (no pull-back there)
 };
 
 /** Meshes the moving labels for \a scene (CGAL Mesh_3), timing it. */
@@ -454,6 +455,7 @@ ComputeFields(SimulationOutputs &       out,
   pull->SetReferenceImage(fixedReference);
   pull->Update();
   out.pullBack = pull->GetOutput();
+  out.invertedElements = pull->GetNumberOfInvertedElements();
   timer.End();
   timer.Begin("push field (moving -> fixed)");
   auto push = itk::PhysicsDeformationFieldSource<FieldType>::New();
@@ -465,7 +467,6 @@ ComputeFields(SimulationOutputs &       out,
   timer.End();
 }
 
-/** Mesh -> FEM -> fields, timing each stage. */
 /** Prints the scene's warnings (bmr::Scene::Warnings) on stdout, one line each. */
 inline void
 PrintSceneWarnings(const bmr::Scene & scene)
@@ -476,6 +477,7 @@ PrintSceneWarnings(const bmr::Scene & scene)
   }
 }
 
+/** Mesh -> FEM -> fields, timing each stage. */
 inline SimulationOutputs
 RunSimulation(const LabelImageType *    movingLabels,
               const bmr::Scene &        scene,
@@ -609,6 +611,8 @@ struct RegisterReport
   std::map<std::string, double> dice;
   double                        jacobianMinimum{ 0.0 };
   double                        jacobianNonPositiveFraction{ 0.0 };
+  std::size_t                   invertedElements{ 0 }; ///< mesh elements inverted by the estimated deformation
+  std::vector<std::string>      warnings;
   double                        finalValue{ 0.0 };
   bool                          identifiable{ true };
   std::string                   identifiability;
@@ -637,7 +641,8 @@ RunRegistration(const RegisterInputs & inputs, StageTimer & timer);
 int
 RegisterCommand(const Arguments & args);
 
-/** Reads --mesh-scale, --max-outer-iterations and --outer-tolerance into \a in (register, compare). */
+/** Reads the FEM settings --sweep-samples, --coarse-factor, --wall-spacing-mm, --wall-regularization,
+ * --mesh-scale, --max-outer-iterations and --outer-tolerance into \a in (register, compare). */
 void
 ParseFemSettings(const Arguments & args, RegisterInputs & in);
 

@@ -337,17 +337,6 @@ CompareCommand(const Arguments & args)
   o.seedOrgan = args.Get("--seed-organ");
   o.flatten = args.Get("--flatten");
   o.demons = ParseDemonsSettings(args);
-  const double samples = args.Number("--sweep-samples", o.fem.sweepSamples);
-  if (!(samples >= 3 && samples <= 100 && samples == std::floor(samples)))
-  {
-    throw UsageError("--sweep-samples must be an integer in [3, 100]");
-  }
-  o.fem.sweepSamples = static_cast<unsigned int>(samples);
-  o.fem.coarseFactor = args.Number("--coarse-factor", o.fem.coarseFactor);
-  if (!(o.fem.coarseFactor > 0.0 && o.fem.coarseFactor <= 10.0))
-  {
-    throw UsageError("--coarse-factor must lie in (0, 10] (1 or less: sweep on the fine mesh)");
-  }
   ParseFemSettings(args, o.fem);
   args.CheckAllUsed();
   // Every input is checked before anything is written: a bad list leaves no partial output.
