@@ -130,7 +130,8 @@ main(int argc, char * argv[])
               << tets << " | " << std::fixed << std::setprecision(2) << dihedral << " | " << std::setprecision(3)
               << 100.0 * e.nodalRadialRelative << " % | " << std::scientific << std::setprecision(1) << e.residual
               << " | " << std::fixed << std::setprecision(2) << seconds << " | " << verdict
-              << (reason.empty() ? "" : ": " + reason) << " |" << std::defaultfloat << std::setprecision(6) << std::endl;
+              << (reason.empty() ? "" : ": " + reason) << " |" << std::defaultfloat << std::setprecision(6)
+              << std::endl;
   }
   return 0;
 }
