@@ -94,6 +94,11 @@ PhantomCommand(const Arguments & args)
   o.prostateNu = args.Number("--true-nu", 0.40);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
+  o.rectumLoad = args.Get("--rectum-load", "tube");
+  if (o.rectumLoad != "tube" && o.rectumLoad != "point")
+  {
+    throw UsageError("--rectum-load must be tube or point");
+  }
   o.tumourFraction = args.Number("--tumour-fraction", 0.0);
   o.tumourE = args.Number("--tumour-E-kPa", 100.0);
   if (!(o.tumourFraction >= 0.0 && o.tumourFraction < 1.0) || !(o.tumourE > 0.0))
@@ -226,7 +231,8 @@ PrintUsage(std::ostream & os)
        "  biomechreg                      run the demo into ./biomechreg-demo\n"
        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-       "                     [--rectum-mm D] [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
+       "                     [--rectum-mm D] [--rectum-load tube|point]\n"
+       "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
@@ -294,6 +300,14 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
         o.bladderMM },
       { "rectum", bmr::SceneLoad::Type::RadialDisplacement, { { centre[0], centre[1] + 38, centre[2] } }, o.rectumMM }
     };
+    if (o.rectumLoad == "tube")
+    {
+      // Filling inflates the rectum along its own normals: radial from its axis, and from the centre of
+      // its dome at the top. The old "point" load (radial from one point on the axis) also slid the wall
+      // next to the prostate by up to 0.8 |d| along the axis, which no segmentation shows (README).
+      truth.loads[1].center = { { centre[0], centre[1] + 38, centre[2] + 15 } };
+      truth.loads[1].axis = { { 0, 0, 1 } };
+    }
   }
   else
   {
@@ -462,8 +476,12 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
     }
     else
     {
-      t << "\"type\": \"radial_displacement\", \"center_mm\": " << Json3(l.center)
-        << ", \"magnitude_mm\": " << l.magnitude << "}";
+      t << "\"type\": \"radial_displacement\", \"center_mm\": " << Json3(l.center);
+      if (l.axis != std::array<double, 3>{ { 0, 0, 0 } })
+      {
+        t << ", \"axis\": " << Json3(l.axis);
+      }
+      t << ", \"magnitude_mm\": " << l.magnitude << "}";
     }
   }
   t << "],\n  \"truth_mesh\": {\"tetrahedra\": " << sim.mesh.GetNumberOfTetrahedra()

@@ -658,6 +658,7 @@ struct PhantomOptions
   double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
   double            bladderMM{ 4.0 };
   double            rectumMM{ 3.0 };
+  std::string       rectumLoad{ "tube" };  ///< "tube": radial from the rectum's axis; "point": from one point on it
   double            tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour (truth only)
   double            tumourE{ 100.0 };      ///< kPa
   double            bladderKPa{ 0.0 };     ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead

@@ -57,6 +57,11 @@ struct BiomechanicalRegistration_EXPORT ObjectiveTerm
  * excluded label (hollow organ) or to the outer boundary ("outside").
  * RadialDisplacement: every wall node moves by magnitude [mm] along the unit
  * vector from \c center [LPS mm] (positive = expansion, bladder filling).
+ * With a non-zero \c axis (scene key "axis", normalised on reading) the
+ * direction is taken from the nearest point of the half-line
+ * {center - t axis, t >= 0} instead: a tube along the axis capped by a
+ * hemisphere at \c center inflates along its own normals (rectal filling),
+ * where a single centre would also slide the tube's wall along its length.
  * Pressure: a uniform pressure [kPa] on the wall, pushing into the tissue,
  * lumped to nodal forces [mN] (one third of each face's area per node). */
 struct BiomechanicalRegistration_EXPORT SceneLoad
@@ -69,7 +74,8 @@ struct BiomechanicalRegistration_EXPORT SceneLoad
   std::string           surface;
   Type                  type{ Type::RadialDisplacement };
   std::array<double, 3> center{ { 0, 0, 0 } };
-  double                magnitude{ 0.0 }; ///< mm for RadialDisplacement, kPa for Pressure
+  double                magnitude{ 0.0 };    ///< mm for RadialDisplacement, kPa for Pressure
+  std::array<double, 3> axis{ { 0, 0, 0 } }; ///< RadialDisplacement: unit vector, or zero (radial from center)
 };
 
 /** \brief A scene: what each label is, what carries loads, what is matched.

@@ -560,7 +560,7 @@ ParseScene(const std::string & text, const std::string & source)
     {
       const Json &      j = root["loads"][i];
       const std::string entry = "loads[" + std::to_string(i) + "]";
-      CheckKeys(j, { "surface", "type", "center_mm", "magnitude_mm", "pressure_kPa" }, source, entry);
+      CheckKeys(j, { "surface", "type", "center_mm", "axis", "magnitude_mm", "pressure_kPa" }, source, entry);
       SceneLoad load;
       if (!j.contains("surface") || !j.contains("type"))
       {
@@ -577,6 +577,20 @@ ParseScene(const std::string & text, const std::string & source)
         }
         load.center = GetPoint(j, "center_mm", source, entry);
         load.magnitude = GetNumber(j, "magnitude_mm", source, entry);
+        if (j.contains("axis"))
+        {
+          load.axis = GetPoint(j, "axis", source, entry);
+          const double norm =
+            std::sqrt(load.axis[0] * load.axis[0] + load.axis[1] * load.axis[1] + load.axis[2] * load.axis[2]);
+          if (!(norm > 0.0) || !std::isfinite(norm))
+          {
+            SceneError(source, entry + ".axis", "must be a non-zero direction [x, y, z]");
+          }
+          for (double & a : load.axis)
+          {
+            a /= norm;
+          }
+        }
       }
       else if (type == "pressure")
       {
@@ -742,10 +756,17 @@ SceneToJson(const Scene & scene)
     for (const auto & l : scene.loads)
     {
       if (l.type == SceneLoad::Type::RadialDisplacement)
-        loads.push_back({ { "surface", l.surface },
-                          { "type", "radial_displacement" },
-                          { "center_mm", l.center },
-                          { "magnitude_mm", l.magnitude } });
+      {
+        Json load = { { "surface", l.surface },
+                      { "type", "radial_displacement" },
+                      { "center_mm", l.center },
+                      { "magnitude_mm", l.magnitude } };
+        if (l.axis != std::array<double, 3>{ { 0, 0, 0 } })
+        {
+          load["axis"] = l.axis;
+        }
+        loads.push_back(load);
+      }
       else
         loads.push_back({ { "surface", l.surface }, { "type", "pressure" }, { "pressure_kPa", l.magnitude } });
     }

@@ -176,10 +176,16 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
     {
       for (std::int32_t node : NodesOnBoundary(mesh, label))
       {
-        double d[3], r = 0.0;
+        double d[3], along = 0.0, r = 0.0;
         for (int c = 0; c < 3; ++c)
         {
           d[c] = mesh.points[3 * node + c] - load.center[c];
+          along += d[c] * load.axis[c];
+        }
+        // Behind the centre along the axis: radial from the axis (the tube); otherwise from the centre (the cap).
+        for (int c = 0; c < 3; ++c)
+        {
+          d[c] -= std::min(along, 0.0) * load.axis[c];
           r += d[c] * d[c];
         }
         r = std::sqrt(r);

@@ -17,8 +17,11 @@
  *=========================================================================*/
 // Scene files: a valid scene parses and round-trips; every invalid entry is named in the error.
 #include "bmrScene.h"
+#include "bmrSimulation.h"
 #include "bmrTestUtilities.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 namespace {
@@ -67,6 +70,37 @@ bmrSceneTest(int, char *[])
   const bmr::Scene again = bmr::ParseScene(bmr::SceneToJson(s), "roundtrip");
   ok = ok && bmr::SceneToJson(again) == bmr::SceneToJson(s);
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
+  // A tube load: the axis is normalised on reading and survives the round trip.
+  const std::string tube = Replace(ValidScene, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 2], \"magnitude_mm\": 6");
+  const bmr::Scene  withAxis = bmr::ParseScene(tube, "tube.json");
+  const bool        axisOk = withAxis.loads[0].axis == std::array<double, 3>{ { 0, 0, 1 } } &&
+                      withAxis.loads[0].magnitude == 6 &&
+                      bmr::ParseScene(bmr::SceneToJson(withAxis), "roundtrip").loads[0].axis == withAxis.loads[0].axis;
+  std::cout << "load axis: " << (axisOk ? "ok" : "FAIL") << std::endl;
+  ok = ok && axisOk;
+  // The tube load moves wall nodes behind the centre radially from the axis, those beyond it from the centre:
+  // one tetrahedron whose face {1, 2, 3} is bladder wall; centre (0, 0, 15), axis +z, 6 mm.
+  {
+    bmr::Scene capsule = withAxis;
+    capsule.loads[0].center = { { 0, 0, 15 } };
+    bmr::TetrahedralMesh mesh;
+    mesh.points = { 0, 0, -30, 13, 0, -10, 0, 13, -10, 0, 0, 28 };
+    mesh.tetrahedra = { 0, 1, 2, 3 };
+    mesh.labels = { 1 };
+    mesh.boundaryFaces = { 1, 2, 3 };
+    mesh.boundaryFaceLabels = { 3 };
+    const bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(capsule, mesh);
+    // Expected: node 1 -> (6, 0, 0), node 2 -> (0, 6, 0) (tube), node 3 -> (0, 0, 6) (cap).
+    const std::vector<double> expected = { 6, 0, 0, 0, 6, 0, 0, 0, 6 };
+    double                    worst = bc.dirichletNodes == std::vector<std::int32_t>({ 1, 2, 3 }) ? 0.0 : 1e9;
+    for (std::size_t i = 0; i < expected.size() && i < bc.dirichletValues.size(); ++i)
+    {
+      worst = std::max(worst, std::abs(bc.dirichletValues[i] - expected[i]));
+    }
+    // Exact up to rounding: the directions are unit vectors of axis-aligned differences.
+    std::cout << "tube load directions: largest error " << worst << " mm" << std::endl;
+    ok = ok && worst < 1e-12;
+  }
 
   auto              parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
   const std::string v = ValidScene;
@@ -89,6 +123,9 @@ bmrSceneTest(int, char *[])
   ok &= ExpectException("loads on a material",
                         parse(Replace(v, "\"surface\": \"bladder\"", "\"surface\": \"prostate\"")),
                         "loads[0].surface");
+  ok &= ExpectException("zero load axis",
+                        parse(Replace(v, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 0], \"magnitude_mm\": 6")),
+                        "loads[0].axis: must be a non-zero direction");
   ok &= ExpectException("bounds", parse(Replace(v, "[30, 300]", "[60, 300]")), "labels[prostate].bounds_kPa");
   ok &= ExpectException("duplicate value", parse(Replace(v, "\"value\": 5", "\"value\": 3")), "labels[bone].value");
   ok &= ExpectException("broken JSON", parse("{\"labels\": ["), "bad.json: JSON");
