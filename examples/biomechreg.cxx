@@ -94,10 +94,10 @@ PhantomCommand(const Arguments & args)
   o.prostateNu = args.Number("--true-nu", 0.40);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
-  o.rectumLoad = args.Get("--rectum-load", "tube");
-  if (o.rectumLoad != "tube" && o.rectumLoad != "point")
+  o.wallLoad = args.Get("--wall-load", "normal");
+  if (o.wallLoad != "normal" && o.wallLoad != "point")
   {
-    throw UsageError("--rectum-load must be tube or point");
+    throw UsageError("--wall-load must be normal or point");
   }
   o.tumourFraction = args.Number("--tumour-fraction", 0.0);
   o.tumourE = args.Number("--tumour-E-kPa", 100.0);
@@ -231,14 +231,14 @@ PrintUsage(std::ostream & os)
        "  biomechreg                      run the demo into ./biomechreg-demo\n"
        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-       "                     [--rectum-mm D] [--rectum-load tube|point]\n"
+       "                     [--rectum-mm D] [--wall-load normal|point]\n"
        "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
-       "                      [--wall-spacing-mm D] [--wall-regularization A] [--max-outer-iterations N]\n"
-       "                      [--outer-tolerance T]\n"
+       "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free]\n"
+       "                      [--max-outer-iterations N] [--outer-tolerance T]\n"
        "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
        "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
        "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching "
@@ -300,11 +300,14 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
         o.bladderMM },
       { "rectum", bmr::SceneLoad::Type::RadialDisplacement, { { centre[0], centre[1] + 38, centre[2] } }, o.rectumMM }
     };
-    if (o.rectumLoad == "tube")
+    if (o.wallLoad == "normal")
     {
-      // Filling inflates the rectum along its own normals: radial from its axis, and from the centre of
-      // its dome at the top. The old "point" load (radial from one point on the axis) also slid the wall
-      // next to the prostate by up to 0.8 |d| along the axis, which no segmentation shows (README).
+      // Filling moves each wall along its own normals: the bladder along those of its ellipsoid
+      // (semi-axes as in bmrPhantom.cxx), the rectum radially from its axis and from the centre of its
+      // dome. The "point" loads (radial from one point each) also slide the walls along themselves, the
+      // rectal wall next to the prostate by up to 0.8 |d| along its axis: motion that no segmentation
+      // shows and that the estimate absorbs into E (README, "What limits the modulus estimate").
+      truth.loads[0].semiAxes = { { 34, 28, 24 } };
       truth.loads[1].center = { { centre[0], centre[1] + 38, centre[2] + 15 } };
       truth.loads[1].axis = { { 0, 0, 1 } };
     }
@@ -480,6 +483,10 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
       if (l.axis != std::array<double, 3>{ { 0, 0, 0 } })
       {
         t << ", \"axis\": " << Json3(l.axis);
+      }
+      if (l.semiAxes != std::array<double, 3>{ { 0, 0, 0 } })
+      {
+        t << ", \"semi_axes_mm\": " << Json3(l.semiAxes);
       }
       t << ", \"magnitude_mm\": " << l.magnitude << "}";
     }

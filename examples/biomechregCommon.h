@@ -597,9 +597,10 @@ struct RegisterInputs
   std::string             out;
   unsigned int            sweepSamples{ 10 };
   double                  coarseFactor{ 1.6 };        ///< coarse mesh sizes = scene sizes x this (<= 1: no coarse mesh)
-  double                  wallControlSpacing{ 12.0 }; ///< mm, FEMElasticityOptimizer::SetWallControlSpacing
+  double                  wallControlSpacing{ 0.0 };  ///< mm, FEMElasticityOptimizer::SetWallControlSpacing
   double                  wallRegularization{ 0.01 }; ///< FEMElasticityOptimizer::SetWallRegularization
-  double                  meshScale{ 1.0 };           ///< mesh sizes = scene sizes x this (> 1: coarser, faster)
+  std::string             wallMotion{ "normal" }; ///< "normal": walls move along their normals; "free": any direction
+  double                  meshScale{ 1.0 };       ///< mesh sizes = scene sizes x this (> 1: coarser, faster)
   unsigned int            maximumOuterIterations{ 20 }; ///< FEMElasticityOptimizer::SetMaximumNumberOfOuterIterations
   double                  outerTolerance{ 1e-4 };       ///< FEMElasticityOptimizer::SetOuterGradientTolerance
 };
@@ -658,7 +659,7 @@ struct PhantomOptions
   double            prostateNu{ 0.40 }; ///< true Poisson's ratio of the prostate (the estimation scene assumes 0.40)
   double            bladderMM{ 4.0 };
   double            rectumMM{ 3.0 };
-  std::string       rectumLoad{ "tube" };  ///< "tube": radial from the rectum's axis; "point": from one point on it
+  std::string       wallLoad{ "normal" };  ///< "normal": walls move along their normals; "point": radial from a point
   double            tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour (truth only)
   double            tumourE{ 100.0 };      ///< kPa
   double            bladderKPa{ 0.0 };     ///< > 0: the bladder and rectum are loaded by pressure [kPa] instead

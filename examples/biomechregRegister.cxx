@@ -226,6 +226,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   optimizer->SetNumberOfSweepSamples(in.sweepSamples);
   optimizer->SetWallControlSpacing(in.wallControlSpacing);
   optimizer->SetWallRegularization(in.wallRegularization);
+  optimizer->SetWallMotionAlongNormals(in.wallMotion == "normal");
   optimizer->SetMaximumNumberOfOuterIterations(in.maximumOuterIterations);
   optimizer->SetOuterGradientTolerance(in.outerTolerance);
   optimizer->AddObserver(itk::IterationEvent(), ProgressPrinter::New());
@@ -392,6 +393,11 @@ ParseFemSettings(const Arguments & args, RegisterInputs & in)
   if (!(in.wallRegularization >= 0.0))
   {
     throw UsageError("--wall-regularization must be >= 0");
+  }
+  in.wallMotion = args.Get("--wall-motion", in.wallMotion);
+  if (in.wallMotion != "normal" && in.wallMotion != "free")
+  {
+    throw UsageError("--wall-motion must be normal or free");
   }
   if (!(in.wallControlSpacing >= 0.0))
   {

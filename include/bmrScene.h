@@ -62,6 +62,10 @@ struct BiomechanicalRegistration_EXPORT ObjectiveTerm
  * {center - t axis, t >= 0} instead: a tube along the axis capped by a
  * hemisphere at \c center inflates along its own normals (rectal filling),
  * where a single centre would also slide the tube's wall along its length.
+ * With \c semiAxes (scene key "semi_axes_mm", all > 0) the direction is the
+ * normal of the ellipsoid with these semi-axes about \c center, \f$ \propto
+ * ((x-c)_i / a_i^2)_i \f$: an ellipsoidal bladder grows along its normals
+ * (radial from the centre, its wall would also slide along itself).
  * Pressure: a uniform pressure [kPa] on the wall, pushing into the tissue,
  * lumped to nodal forces [mN] (one third of each face's area per node). */
 struct BiomechanicalRegistration_EXPORT SceneLoad
@@ -74,8 +78,9 @@ struct BiomechanicalRegistration_EXPORT SceneLoad
   std::string           surface;
   Type                  type{ Type::RadialDisplacement };
   std::array<double, 3> center{ { 0, 0, 0 } };
-  double                magnitude{ 0.0 };    ///< mm for RadialDisplacement, kPa for Pressure
-  std::array<double, 3> axis{ { 0, 0, 0 } }; ///< RadialDisplacement: unit vector, or zero (radial from center)
+  double                magnitude{ 0.0 };        ///< mm for RadialDisplacement, kPa for Pressure
+  std::array<double, 3> axis{ { 0, 0, 0 } };     ///< RadialDisplacement: unit vector, or zero (radial from center)
+  std::array<double, 3> semiAxes{ { 0, 0, 0 } }; ///< RadialDisplacement: ellipsoid semi-axes [mm], or zero
 };
 
 /** \brief A scene: what each label is, what carries loads, what is matched.

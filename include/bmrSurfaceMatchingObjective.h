@@ -105,8 +105,9 @@ public:
   SurfaceMatchingObjective &
   operator=(const SurfaceMatchingObjective &) = delete;
 
-  /** Number of parameters p of the wall displacement d = W p: 3 per control
-   * point of the wall basis (3 per control node without one). */
+  /** Number of parameters p of the wall displacement: per control point of the
+   * wall basis (per control node without one) 1 with motion along the normals,
+   * else 3. */
   std::size_t
   GetNumberOfParameters() const;
   /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis);
@@ -121,6 +122,19 @@ public:
    * moduli one way; a small alpha only picks the least-displacement optimum. */
   void
   SetWallRegularization(double alpha);
+  /** true (default): every wall moves along its own normals, d_k = n_k (W s)_k
+   * with one scalar parameter per control point; n_k is the unit wall normal at
+   * control node k (area-weighted face normals averaged over 4 mm of the same
+   * wall, which removes the tilt of the voxel staircase). false: d = W p, three
+   * parameters per control point.
+   * Why the default: the distance objective sees only the normal part of a
+   * wall's motion. The tangential part is seen only through the organs it
+   * drags, where it competes with the unknown moduli; left free it shapes
+   * the stiff organ's surface and biases E (a rectal wall sliding 5 mm along
+   * itself next to the prostate doubled the estimate on a phantom, README).
+   * A lumen that fills or empties moves its wall along the normal. */
+  void
+  SetWallMotionAlongNormals(bool normal);
   /** Labels whose modulus is estimated, in scene order. */
   const std::vector<std::int32_t> &
   GetUnknownLabels() const;
@@ -129,7 +143,7 @@ public:
   void
   SetYoungsModuli(const std::vector<double> & moduli);
 
-  /** Phi(E, d) + alpha/2 |p|^2 [mm^2] with d = W p; fills the gradients when not
+  /** Phi(E, d) + alpha/2 |p|^2 [mm^2] with d = W p (or n (W s)); fills the gradients when not
    * null (with respect to p [mm], and one per unknown label [mm^2 per unit log E]). */
   double
   Evaluate(const std::vector<double> & d, std::vector<double> * gradientD, std::vector<double> * gradientLogE);

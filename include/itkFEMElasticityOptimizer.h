@@ -164,6 +164,10 @@ public:
   /** Weight of the E-independent regulariser alpha/2 |p|^2 on the wall parameters (bmr::SurfaceMatchingObjective). */
   itkSetMacro(WallRegularization, double);
   itkGetConstMacro(WallRegularization, double);
+  /** Walls move along their normals (default on; bmr::SurfaceMatchingObjective::SetWallMotionAlongNormals). */
+  itkSetMacro(WallMotionAlongNormals, bool);
+  itkGetConstMacro(WallMotionAlongNormals, bool);
+  itkBooleanMacro(WallMotionAlongNormals);
   itkSetMacro(FlatnessThreshold, double);
   itkGetConstMacro(FlatnessThreshold, double);
 
@@ -250,8 +254,9 @@ private:
   double                        m_InnerGradientTolerance{ 1e-5 };
   double                        m_OuterGradientTolerance{ 1e-4 };
   double                        m_FlatnessThreshold{ 0.01 };
-  double                        m_WallControlSpacing{ 12.0 };
+  double                        m_WallControlSpacing{ 0.0 };
   double                        m_WallRegularization{ 0.01 };
+  bool                          m_WallMotionAlongNormals{ true };
   std::map<std::string, double> m_EstimatedYoungsModuli;
   std::string                   m_GaugeLabel;
   std::vector<IterationRecord>  m_Sweep;

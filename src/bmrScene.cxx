@@ -560,7 +560,8 @@ ParseScene(const std::string & text, const std::string & source)
     {
       const Json &      j = root["loads"][i];
       const std::string entry = "loads[" + std::to_string(i) + "]";
-      CheckKeys(j, { "surface", "type", "center_mm", "axis", "magnitude_mm", "pressure_kPa" }, source, entry);
+      CheckKeys(
+        j, { "surface", "type", "center_mm", "axis", "semi_axes_mm", "magnitude_mm", "pressure_kPa" }, source, entry);
       SceneLoad load;
       if (!j.contains("surface") || !j.contains("type"))
       {
@@ -589,6 +590,21 @@ ParseScene(const std::string & text, const std::string & source)
           for (double & a : load.axis)
           {
             a /= norm;
+          }
+        }
+        if (j.contains("semi_axes_mm"))
+        {
+          if (j.contains("axis"))
+          {
+            SceneError(source, entry, "give either axis or semi_axes_mm, not both");
+          }
+          load.semiAxes = GetPoint(j, "semi_axes_mm", source, entry);
+          for (double a : load.semiAxes)
+          {
+            if (!(a > 0.0) || !std::isfinite(a))
+            {
+              SceneError(source, entry + ".semi_axes_mm", "must be three positive lengths [mm]");
+            }
           }
         }
       }
@@ -764,6 +780,10 @@ SceneToJson(const Scene & scene)
         if (l.axis != std::array<double, 3>{ { 0, 0, 0 } })
         {
           load["axis"] = l.axis;
+        }
+        if (l.semiAxes != std::array<double, 3>{ { 0, 0, 0 } })
+        {
+          load["semi_axes_mm"] = l.semiAxes;
         }
         loads.push_back(load);
       }

@@ -183,9 +183,14 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
           along += d[c] * load.axis[c];
         }
         // Behind the centre along the axis: radial from the axis (the tube); otherwise from the centre (the cap).
+        // With semi-axes: the normal of the ellipsoid through the node.
         for (int c = 0; c < 3; ++c)
         {
           d[c] -= std::min(along, 0.0) * load.axis[c];
+          if (load.semiAxes[c] > 0.0)
+          {
+            d[c] /= load.semiAxes[c] * load.semiAxes[c];
+          }
           r += d[c] * d[c];
         }
         r = std::sqrt(r);

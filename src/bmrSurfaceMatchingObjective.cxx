@@ -31,6 +31,10 @@
 
 namespace bmr {
 namespace {
+/** Width [mm] of the Gaussian that averages wall face normals for the sliding penalty: several voxels
+ * (the staircase of a voxelised wall), below the walls' radii of curvature (13 mm for the rectum). */
+constexpr double NormalSmoothing = 4.0;
+
 /** Nodes of the wall of an excluded label, or of the surface of a simulated one. */
 std::vector<std::int32_t>
 SurfaceNodes(const Scene & scene, const TetrahedralMesh & mesh, const SceneLabel & label)
@@ -93,6 +97,75 @@ struct SurfaceMatchingObjective::Impl
   std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> walls;
   std::unique_ptr<WallBasis>                                      basis;
   double                                                          regularization{ 0.0 };
+  bool                                                            normalMotion{ true };
+  std::vector<double> wallNormals; // 3 per control node: unit normal of the wall there
+
+  std::size_t
+  ParametersPerControlPoint() const
+  {
+    return normalMotion ? 1 : 3;
+  }
+  /** Wall displacement d (3 per control node) from the parameters: d = W p, or with normal motion
+   * d_k = n_k (W s)_k, the scalar s blended by the same weights (component 0 of the 3-vector basis). */
+  std::vector<double>
+  Expand(const std::vector<double> & p) const
+  {
+    if (!normalMotion)
+    {
+      return basis->Expand(p);
+    }
+    std::vector<double> q(3 * p.size(), 0.0);
+    for (std::size_t j = 0; j < p.size(); ++j)
+    {
+      q[3 * j] = p[j];
+    }
+    std::vector<double> d = basis->Expand(q);
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      const double amplitude = d[3 * k];
+      for (int c = 0; c < 3; ++c)
+      {
+        d[3 * k + c] = amplitude * wallNormals[3 * k + c];
+      }
+    }
+    return d;
+  }
+  /** Projects per-node vectors on the normals (normal motion) into component 0; identity otherwise. */
+  std::vector<double>
+  NormalComponents(const std::vector<double> & v) const
+  {
+    std::vector<double> n(v.size(), 0.0);
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        n[3 * k] += wallNormals[3 * k + c] * v[3 * k + c];
+      }
+    }
+    return n;
+  }
+  static std::vector<double>
+  FirstComponents(const std::vector<double> & q)
+  {
+    std::vector<double> p(q.size() / 3);
+    for (std::size_t j = 0; j < p.size(); ++j)
+    {
+      p[j] = q[3 * j];
+    }
+    return p;
+  }
+  /** The gradient with respect to the parameters of a function of d with gradient g. */
+  std::vector<double>
+  ExpandTranspose(const std::vector<double> & g) const
+  {
+    return normalMotion ? FirstComponents(basis->ExpandTranspose(NormalComponents(g))) : basis->ExpandTranspose(g);
+  }
+  /** Least-squares parameters of a wall displacement (its normal part with normal motion). */
+  std::vector<double>
+  Fit(const std::vector<double> & d) const
+  {
+    return normalMotion ? FirstComponents(basis->Fit(NormalComponents(d))) : basis->Fit(d);
+  }
 
   explicit Impl(const TetrahedralMesh & m)
     : mesh(m)
@@ -175,6 +248,81 @@ SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &      
     }
   }
   d.basis.reset(new WallBasis(mesh.points, d.walls, d.controlNodes.size(), 0.0));
+  // Wall normals: area-weighted normals of the boundary faces of the force surfaces around each control node.
+  {
+    std::set<std::int32_t> wallLabels;
+    for (const std::string & name : scene.forceSurfaces)
+    {
+      const SceneLabel * label = scene.FindLabel(name);
+      wallLabels.insert(label->role == LabelRole::Outside ? 0 : label->value);
+    }
+    std::vector<std::int32_t> controlIndex(N, -1);
+    for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+    {
+      controlIndex[d.controlNodes[k]] = static_cast<std::int32_t>(k);
+    }
+    d.wallNormals.assign(3 * d.controlNodes.size(), 0.0);
+    for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
+    {
+      if (wallLabels.count(mesh.boundaryFaceLabels[f]) == 0)
+      {
+        continue;
+      }
+      const std::int32_t * v = &mesh.boundaryFaces[3 * f];
+      const double *       x0 = &mesh.points[3 * static_cast<std::size_t>(v[0])];
+      const double *       x1 = &mesh.points[3 * static_cast<std::size_t>(v[1])];
+      const double *       x2 = &mesh.points[3 * static_cast<std::size_t>(v[2])];
+      const double         a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+      const double         b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+      const double areaNormal[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
+      for (int i = 0; i < 3; ++i)
+      {
+        if (controlIndex[v[i]] >= 0)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            d.wallNormals[3 * static_cast<std::size_t>(controlIndex[v[i]]) + c] += areaNormal[c];
+          }
+        }
+      }
+    }
+    // The faces of a mesh of a voxelised wall tilt with the voxel staircase: Gaussian average of the face
+    // normals over NormalSmoothing mm of the same wall, so that "along the normal" means the organ's normal.
+    const double        sigma = NormalSmoothing;
+    std::vector<double> smoothed(d.wallNormals.size(), 0.0);
+    for (const auto & wall : d.walls)
+    {
+      for (const auto & a : wall)
+      {
+        const double * xa = &mesh.points[3 * static_cast<std::size_t>(a.second)];
+        for (const auto & b : wall)
+        {
+          const double * xb = &mesh.points[3 * static_cast<std::size_t>(b.second)];
+          const double   r2 =
+            (xa[0] - xb[0]) * (xa[0] - xb[0]) + (xa[1] - xb[1]) * (xa[1] - xb[1]) + (xa[2] - xb[2]) * (xa[2] - xb[2]);
+          if (r2 < 9.0 * sigma * sigma)
+          {
+            const double w = std::exp(-0.5 * r2 / (sigma * sigma));
+            for (int c = 0; c < 3; ++c)
+            {
+              smoothed[3 * static_cast<std::size_t>(a.first) + c] +=
+                w * d.wallNormals[3 * static_cast<std::size_t>(b.first) + c];
+            }
+          }
+        }
+      }
+    }
+    d.wallNormals.swap(smoothed);
+    for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+    {
+      double *     n = &d.wallNormals[3 * k];
+      const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      for (int c = 0; c < 3; ++c)
+      {
+        n[c] = norm > 0.0 ? n[c] / norm : 0.0; // a node on no wall face gets no sliding penalty
+      }
+    }
+  }
   for (const auto & l : scene.labels)
   {
     if (l.role == LabelRole::UnknownMaterial)
@@ -207,7 +355,7 @@ SurfaceMatchingObjective::~SurfaceMatchingObjective() = default;
 std::size_t
 SurfaceMatchingObjective::GetNumberOfParameters() const
 {
-  return 3 * m_Impl->basis->GetNumberOfControlPoints();
+  return m_Impl->ParametersPerControlPoint() * m_Impl->basis->GetNumberOfControlPoints();
 }
 
 void
@@ -218,6 +366,12 @@ SurfaceMatchingObjective::SetWallRegularization(double alpha)
     Fail("SurfaceMatchingObjective::SetWallRegularization", "the regularisation weight must be finite and >= 0");
   }
   m_Impl->regularization = alpha;
+}
+
+void
+SurfaceMatchingObjective::SetWallMotionAlongNormals(bool normal)
+{
+  m_Impl->normalMotion = normal;
 }
 
 void
@@ -261,7 +415,7 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & parameters,
          "expected " + std::to_string(GetNumberOfParameters()) + " parameters, got " +
            std::to_string(parameters.size()));
   }
-  const std::vector<double> dWall = d.basis->Expand(parameters);
+  const std::vector<double> dWall = d.Expand(parameters);
   const std::vector<double> u = d.model->Solve(d.bc.forces, d.Prescribed(dWall));
   const bool                wantGradient = gradientD != nullptr || gradientLogE != nullptr;
   std::vector<double>       g(wantGradient ? u.size() : 0, 0.0);
@@ -309,7 +463,7 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & parameters,
         (*gradientD)[3 * k + c] = g[dof] - Klambda[dof];
       }
     }
-    *gradientD = d.basis->ExpandTranspose(*gradientD);
+    *gradientD = d.ExpandTranspose(*gradientD);
     for (std::size_t i = 0; i < parameters.size(); ++i)
     {
       (*gradientD)[i] += d.regularization * parameters[i];
@@ -335,7 +489,7 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & parameters,
 std::vector<double>
 SurfaceMatchingObjective::ComputeDisplacement(const std::vector<double> & parameters)
 {
-  return m_Impl->model->Solve(m_Impl->bc.forces, m_Impl->Prescribed(m_Impl->basis->Expand(parameters)));
+  return m_Impl->model->Solve(m_Impl->bc.forces, m_Impl->Prescribed(m_Impl->Expand(parameters)));
 }
 
 std::vector<double>
@@ -493,7 +647,7 @@ SurfaceMatchingObjective::MatchSurfaces(unsigned int iterations) const
       dWall[3 * k + c] = v[3 * static_cast<std::size_t>(d.controlNodes[k]) + c];
     }
   }
-  return d.basis->Fit(dWall);
+  return d.Fit(dWall);
 }
 
 WallSolution
@@ -529,7 +683,7 @@ SurfaceMatchingObjective::SolveWalls(const std::vector<double> & start,
   for (std::size_t j = 0; j < np; ++j)
   {
     unit[j] = 1.0;
-    const std::vector<double> dj = d.basis->Expand(unit);
+    const std::vector<double> dj = d.Expand(unit);
     unit[j] = 0.0;
     for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
     {

@@ -454,6 +454,7 @@ FEMElasticityOptimizer::GenerateData()
   bmr::SurfaceMatchingObjective fineObjective(fine, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, fine, samplers));
   fineObjective.SetWallControlSpacing(m_WallControlSpacing);
   fineObjective.SetWallRegularization(m_WallRegularization);
+  fineObjective.SetWallMotionAlongNormals(m_WallMotionAlongNormals);
 
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
   const bool gaussNewton = m_WallControlSpacing > 0.0;
@@ -473,6 +474,7 @@ FEMElasticityOptimizer::GenerateData()
       sweepObjective = coarseOwned.get();
       sweepObjective->SetWallControlSpacing(m_WallControlSpacing);
       sweepObjective->SetWallRegularization(m_WallRegularization);
+      sweepObjective->SetWallMotionAlongNormals(m_WallMotionAlongNormals);
     }
     std::vector<double> wall = sweepObjective->MatchSurfaces();
     const unsigned int  n = m_NumberOfSweepSamples;
@@ -622,6 +624,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
   os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
+  os << indent << "WallMotionAlongNormals: " << (m_WallMotionAlongNormals ? "On" : "Off") << std::endl;
   os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
   for (const auto & kv : m_EstimatedYoungsModuli)
   {

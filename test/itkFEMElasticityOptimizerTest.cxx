@@ -135,8 +135,12 @@ itkFEMElasticityOptimizerTest(int, char *[])
   // allowed does best (its near side yields), so Phi*(E) increases over the whole range. The optimizer
   // must end on the lower bound and say that the modulus is not identifiable there; the accepted outer
   // iterates must not increase Phi*.
+  // The argument holds for walls free to move in any direction (with walls held to their normals the
+  // near side of the inclusion is pushed straight in, and Phi* is no longer monotone): the bound logic
+  // is checked in that mode.
   optimizer->SetScene(bmr::test::CavityInclusionScene(true));
   optimizer->SetNumberOfSweepSamples(5);
+  optimizer->WallMotionAlongNormalsOff();
   ITK_TRY_EXPECT_NO_EXCEPTION(optimizer->Update());
   const double E = optimizer->GetEstimatedYoungsModuli().at("inclusion");
   std::cout << "estimated E " << E << " kPa; " << optimizer->GetIdentifiabilityMessage() << std::endl;
