@@ -48,7 +48,10 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
   std::map<std::int32_t, double> cellSizePerLabel;
   bool                           optimize{ true };
   bool                           exude{ false };
-  double       sliverBound{ 5.0 }; ///< degrees: perturbation works on elements below this dihedral angle
+  double sliverBound{ 5.0 }; ///< degrees: perturbation works on elements below this dihedral angle
+  /** degrees: MeshSceneLabels() refuses a mesh with a smaller dihedral angle, naming the element. Such a
+   * sliver is all but flat: its stiffness matrix is near singular and the pull-back inside it ill defined. */
+  double       minimumDihedralAngle{ 0.1 };
   unsigned int randomSeed{ 0 };
 };
 

@@ -151,6 +151,9 @@ public:
   /** Nodal displacement [mm] (3N) for the wall parameters \a p. */
   std::vector<double>
   ComputeDisplacement(const std::vector<double> & d);
+  /** Elements turned inside out (deformed volume <= 0) by the displacement of the last Evaluate(). */
+  std::size_t
+  GetNumberOfInvertedElements() const;
   /** Nodal forces [mN] (3N): K u - f, the loads the walls exert on the tissue,
    * at the control nodes; zero elsewhere. */
   std::vector<double>

@@ -77,7 +77,8 @@ struct BiomechanicalRegistration_EXPORT MeshQuality
   double       maximumDihedralAngleDegrees{ 0.0 };
   double       minimumRadiusRatio{ 0.0 };
   double       meanRadiusRatio{ 0.0 };
-  std::int64_t worstElement{ -1 }; ///< element with the smallest radius ratio
+  std::int64_t worstElement{ -1 };    ///< element with the smallest radius ratio
+  std::int64_t sharpestElement{ -1 }; ///< element with the smallest dihedral angle
   double       meanEdgeLength{ 0.0 };
   double       volume{ 0.0 }; ///< total volume [mm^3]
 };

@@ -49,13 +49,14 @@ namespace itk {
  *   by the wall displacements d they cause (F = S(E) d with S the Schur
  *   complement on the walls, an exact change of variables, so Phi* is
  *   unchanged), measured in mm, which makes the inner problem well conditioned
- *   and its gradient of the same size as the outer one. By default d is spanned
- *   by a smooth reduced basis (WallControlSpacing, bmr::WallBasis) with the
- *   E-independent regulariser WallRegularization/2 |p|^2, and the inner problem
- *   is solved by Levenberg-Marquardt (bmr::SurfaceMatchingObjective::SolveWalls);
- *   with WallControlSpacing = 0 every wall node is free and L-BFGS
- *   (itk::LBFGS2Optimizerv4, More-Thuente line search) with the adjoint gradient
- *   is used instead;
+ *   and its gradient of the same size as the outer one. By default every wall
+ *   node moves along its wall's normal, d_k = n_k s_k (WallMotionAlongNormals:
+ *   the tangential part, invisible to the objective, would otherwise compete
+ *   with E), with the E-independent regulariser WallRegularization/2 |s|^2, and
+ *   the inner problem is solved by L-BFGS (itk::LBFGS2Optimizerv4, More-Thuente
+ *   line search) with the adjoint gradient. With WallControlSpacing > 0 the wall
+ *   motion is spanned by a smooth reduced basis (bmr::WallBasis) and solved by
+ *   Levenberg-Marquardt (bmr::SurfaceMatchingObjective::SolveWalls);
  * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the scene's bounds by
  *   itk::LBFGSBOptimizerv4, with the envelope-theorem gradient
  *   \f$ d\Phi^{*} / d\log E_m = -E_m \lambda^T \hat K_m u \f$ at the inner optimum;

@@ -347,6 +347,10 @@ Scene::Validate() const
       SceneError(src, "mesh.cell_size_per_label_mm", "sizes must be > 0");
     }
   }
+  if (!(m.minimumDihedralAngle >= 0.0 && m.minimumDihedralAngle < 70.0))
+  {
+    SceneError(src, "mesh.minimum_dihedral_angle_deg", "must lie in [0, 70) degrees");
+  }
 }
 
 void
@@ -667,7 +671,8 @@ ParseScene(const std::string & text, const std::string & source)
                 "cell_size_per_label_mm",
                 "optimize",
                 "exude",
-                "random_seed" },
+                "random_seed",
+                "minimum_dihedral_angle_deg" },
               source,
               "mesh");
     MeshingParameters & m = scene.mesh;
@@ -685,6 +690,8 @@ ParseScene(const std::string & text, const std::string & source)
       m.optimize = GetBool(j, "optimize", source, "mesh");
     if (j.contains("exude"))
       m.exude = GetBool(j, "exude", source, "mesh");
+    if (j.contains("minimum_dihedral_angle_deg"))
+      m.minimumDihedralAngle = GetNumber(j, "minimum_dihedral_angle_deg", source, "mesh");
     if (j.contains("random_seed"))
     {
       if (!j["random_seed"].is_number_unsigned())
@@ -810,6 +817,7 @@ SceneToJson(const Scene & scene)
                 { "cell_radius_edge_ratio", scene.mesh.cellRadiusEdgeRatio },
                 { "optimize", scene.mesh.optimize },
                 { "exude", scene.mesh.exude },
+                { "minimum_dihedral_angle_deg", scene.mesh.minimumDihedralAngle },
                 { "random_seed", scene.mesh.randomSeed } };
   if (!scene.mesh.cellSizePerLabel.empty())
   {

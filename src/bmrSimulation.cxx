@@ -23,6 +23,7 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <sstream>
 
 namespace bmr {
 
@@ -134,6 +135,27 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
   const TetrahedralMesh full = MeshLabelVolume(cropped.data(), roi, parameters);
   TetrahedralMesh       mesh = ExtractSubmesh(full, excluded);
 
+  const MeshQuality quality = ComputeMeshQuality(mesh);
+  if (quality.sharpestElement >= 0 && quality.minimumDihedralAngleDegrees < scene.mesh.minimumDihedralAngle)
+  {
+    const auto         e = static_cast<std::size_t>(quality.sharpestElement);
+    const SceneLabel * l = scene.FindLabelValue(mesh.labels[e]);
+    double             centroid[3] = { 0.0, 0.0, 0.0 };
+    for (int i = 0; i < 4; ++i)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        centroid[c] += 0.25 * mesh.points[3 * static_cast<std::size_t>(mesh.tetrahedra[4 * e + i]) + c];
+      }
+    }
+    std::ostringstream msg;
+    msg << "element " << e << " (label \"" << (l ? l->name : std::to_string(mesh.labels[e])) << "\", centroid ["
+        << centroid[0] << ", " << centroid[1] << ", " << centroid[2] << "] mm) has a dihedral angle of "
+        << quality.minimumDihedralAngleDegrees
+        << " deg, below mesh.minimum_dihedral_angle_deg = " << scene.mesh.minimumDihedralAngle
+        << ": enable mesh.optimize (sliver perturbation) or mesh.exude";
+    Fail("MeshSceneLabels", msg.str());
+  }
   std::set<std::int32_t> meshed(mesh.labels.begin(), mesh.labels.end());
   std::set<std::int32_t> walls(mesh.boundaryFaceLabels.begin(), mesh.boundaryFaceLabels.end());
   for (const auto & l : scene.labels)

@@ -151,7 +151,11 @@ ComputeMeshQuality(const TetrahedralMesh & mesh)
       {
         const double c = -Dot(n[f], n[g]) / (Norm(n[f]) * Norm(n[g]));
         const double angle = std::acos(std::max(-1.0, std::min(1.0, c))) * degrees;
-        q.minimumDihedralAngleDegrees = std::min(q.minimumDihedralAngleDegrees, angle);
+        if (angle < q.minimumDihedralAngleDegrees)
+        {
+          q.minimumDihedralAngleDegrees = angle;
+          q.sharpestElement = static_cast<std::int64_t>(e);
+        }
         q.maximumDihedralAngleDegrees = std::max(q.maximumDihedralAngleDegrees, angle);
       }
     }

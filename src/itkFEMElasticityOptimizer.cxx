@@ -232,6 +232,7 @@ struct SweepAnalysis
 {
   double      modulus{ 0.0 };
   bool        identifiable{ true };
+  bool        onBound{ false }; ///< not flat, but no sign change of dPhi*/dlogE: the coarse minimum is on a bound
   std::string message;
 };
 
@@ -278,6 +279,7 @@ AnalyseSweep(const std::vector<FEMElasticityOptimizer::IterationRecord> & sweep,
   else if (!bracketed)
   {
     a.identifiable = false;
+    a.onBound = true;
     msg << "the minimum of Phi*(E) of \"" << name << "\" lies on the bound " << sweep[best].youngsModuli[0]
         << " kPa: the true modulus may lie outside [" << lower << ", " << upper << "] kPa";
   }
@@ -460,6 +462,7 @@ FEMElasticityOptimizer::GenerateData()
   const bool gaussNewton = m_WallControlSpacing > 0.0;
 
   // 1. Sweep of Phi*(E) over the bounds of the first unknown modulus, on the coarse mesh.
+  bool sweepOnBound = false;
   auto t0 = Clock::now();
   if (!unknown.empty())
   {
@@ -495,6 +498,7 @@ FEMElasticityOptimizer::GenerateData()
     moduli[0] = analysis.modulus;
     m_Identifiable = analysis.identifiable;
     m_IdentifiabilityMessage = analysis.message;
+    sweepOnBound = analysis.onBound;
   }
   m_Timings["sweep"] = Seconds(t0);
 
@@ -585,10 +589,21 @@ FEMElasticityOptimizer::GenerateData()
     });
     optimizer->StartOptimization();
     m_OuterStopCondition = optimizer->GetStopConditionDescription();
-    if (moduli.size() == 1 && (bestModuli[0] <= lower[0] * 1.0001 || bestModuli[0] >= upper[0] * 0.9999))
+    const bool estimateOnBound =
+      moduli.size() == 1 && (bestModuli[0] <= lower[0] * 1.0001 || bestModuli[0] >= upper[0] * 0.9999);
+    if (estimateOnBound)
     {
       m_Identifiable = false;
       m_IdentifiabilityMessage += "; the estimate lies on a bound";
+    }
+    else if (moduli.size() == 1 && sweepOnBound)
+    {
+      // The coarse mesh only starts the search; what counts is where the fine-mesh minimum lies.
+      std::ostringstream msg;
+      msg << "the coarse-mesh sweep's minimum lay on a bound, the fine-mesh minimum lies inside the bounds at "
+          << bestModuli[0] << " kPa (" << m_IdentifiabilityMessage << ")";
+      m_Identifiable = true;
+      m_IdentifiabilityMessage = msg.str();
     }
   }
   m_Timings["fine"] = Seconds(t0);

@@ -52,6 +52,12 @@ file(WRITE ${TEMP}/truncated.mha "ObjectType = Image\nNDims = 3\nDimSize = 40 40
 expect_error(truncated_file "cannot read moving label image" simulate --moving-labels ${TEMP}/truncated.mha
   --scene ${TEMP}/ok/truth_scene.json --out ${TEMP}/s4)
 
+# A mesh-quality threshold no tetrahedral mesh meets: refused, naming the element.
+string(REPLACE "\"minimum_dihedral_angle_deg\": 0.1" "\"minimum_dihedral_angle_deg\": 69" bad "${scene}")
+file(WRITE ${TEMP}/quality.json "${bad}")
+expect_error(mesh_quality "element [0-9]+ \\(label .*dihedral angle of .* below mesh.minimum_dihedral_angle_deg"
+  simulate --moving-labels ${labels} --scene ${TEMP}/quality.json --out ${TEMP}/s_quality)
+
 string(REPLACE "\"poisson_ratio\": 0.35" "\"poisson_ratio\": 0.5" bad "${scene}")
 file(WRITE ${TEMP}/nu.json "${bad}")
 expect_error(poisson_half "labels\\[outer\\].poisson_ratio" simulate --moving-labels ${labels} --scene ${TEMP}/nu.json --out ${TEMP}/s5)

@@ -24,6 +24,7 @@
 #include "bmrSurfaceMatchingObjective.h"
 #include "bmrTestUtilities.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -190,7 +191,52 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     ge[0],
     0.1);
 
-  // 3. Bad set-ups are named.
+  // 3. Walls move along their normals: with every parameter 1, each cavity wall node moves by 1 mm along the
+  // wall normal, which on this sphere points to the centre (out of the tissue). The normals average face
+  // normals over 4 mm of a 3 mm mesh, so they deviate from the exact radial direction by a few degrees:
+  // cos > 0.98 (11 degrees) allows for the facets' tilt and fails for any unaveraged or flipped normal.
+  {
+    const std::vector<double> u = objective.ComputeDisplacement(std::vector<double>(d.size(), 1.0));
+    double                    worstCos = 1.0, worstLength = 0.0;
+    for (std::int32_t n : bmr::NodesOnBoundary(mesh, 3))
+    {
+      double r[3], len = 0.0, dot = 0.0, ulen = 0.0;
+      for (int c = 0; c < 3; ++c)
+      {
+        r[c] = CavityCenter[c] - mesh.points[3 * n + c];
+        len += r[c] * r[c];
+        ulen += u[3 * n + c] * u[3 * n + c];
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        dot += u[3 * n + c] * r[c] / std::sqrt(len * ulen);
+      }
+      worstCos = std::min(worstCos, dot);
+      worstLength = std::max(worstLength, std::abs(std::sqrt(ulen) - 1.0));
+    }
+    std::cout << "wall normals: smallest cos to the radial direction " << worstCos << ", largest | |d| - 1 | "
+              << worstLength << " mm" << std::endl;
+    if (!(worstCos > 0.98 && worstLength < 1e-12))
+    {
+      std::cerr << "FAIL: the wall displacement is not 1 mm along the wall normal" << std::endl;
+      ok = false;
+    }
+  }
+  // 4. Inverted elements are counted: none at the start, many when the walls are pushed through the
+  // cavity (3 radii along the normal).
+  objective.Evaluate(d, nullptr, nullptr);
+  const std::size_t invertedAtStart = objective.GetNumberOfInvertedElements();
+  objective.Evaluate(std::vector<double>(d.size(), 3.0 * CavityRadius), nullptr, nullptr);
+  const std::size_t invertedCollapsed = objective.GetNumberOfInvertedElements();
+  std::cout << "inverted elements: " << invertedAtStart << " at the start, " << invertedCollapsed
+            << " with the walls pushed through the cavity" << std::endl;
+  if (invertedAtStart != 0 || invertedCollapsed == 0)
+  {
+    std::cerr << "FAIL: inverted elements miscounted" << std::endl;
+    ok = false;
+  }
+
+  // 5. Bad set-ups are named.
   ok &= bmr::test::ExpectException(
     "missing map",
     [&] {
