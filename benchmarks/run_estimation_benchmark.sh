@@ -9,6 +9,7 @@
 #            (Table 3.4); the error is against the volume-weighted mean modulus
 #   mesh:    estimation mesh 1.5x / 1x / 0.75x the default sizes, RUNS repeats each: error against run time
 # Usage: benchmarks/run_estimation_benchmark.sh [RUNS (default 3)]   (STUDIES="table31 poisson mesh")
+#        APPEND=1 adds the rows to the existing estimation_runs.csv instead of starting it afresh.
 # Writes benchmarks/results/estimation_runs.csv, estimation.csv (medians), estimation.png and prints tables.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -20,7 +21,9 @@ mkdir -p "$out"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 csv="$out/estimation_runs.csv"
-echo "study,scene,true_E_kPa,true_nu,mesh_scale,run,recovered_E_kPa,relative_error,tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable,tumour_fraction" > "$csv"
+if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
+  echo "study,scene,true_E_kPa,true_nu,mesh_scale,run,recovered_E_kPa,relative_error,tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable,tumour_fraction" > "$csv"
+fi
 
 # run STUDY SCENE E NU SCALE RUN BLADDER RECTUM [TUMOUR_FRACTION]
 run() {
