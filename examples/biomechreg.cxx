@@ -94,6 +94,11 @@ PhantomCommand(const Arguments & args)
   o.prostateNu = args.Number("--true-nu", 0.40);
   o.bladderMM = args.Number("--bladder-mm", o.scene == "pelvis" ? 4.0 : 1.5);
   o.rectumMM = args.Number("--rectum-mm", 3.0);
+  o.truthRefinement = args.Number("--truth-mesh-scale", 0.75);
+  if (!(o.truthRefinement >= 0.3 && o.truthRefinement <= 2.0))
+  {
+    throw UsageError("--truth-mesh-scale must lie in [0.3, 2] (the truth's mesh sizes relative to the scene's)");
+  }
   o.wallLoad = args.Get("--wall-load", "normal");
   if (o.wallLoad != "normal" && o.wallLoad != "point")
   {
@@ -231,7 +236,7 @@ PrintUsage(std::ostream & os)
        "  biomechreg                      run the demo into ./biomechreg-demo\n"
        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-       "                     [--rectum-mm D] [--wall-load normal|point]\n"
+       "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F]\n"
        "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
