@@ -311,7 +311,7 @@ MakePhantom(const PhantomOptions & o, StageTimer & timer)
       // (semi-axes as in bmrPhantom.cxx), the rectum radially from its axis and from the centre of its
       // dome. The "point" loads (radial from one point each) also slide the walls along themselves, the
       // rectal wall next to the prostate by up to 0.8 |d| along its axis: motion that no segmentation
-      // shows and that the estimate absorbs into E (README, "What limits the modulus estimate").
+      // shows and that the estimate absorbs into E (README, "What the walls do to the estimate").
       truth.loads[0].semiAxes = { { 34, 28, 24 } };
       truth.loads[1].center = { { centre[0], centre[1] + 38, centre[2] + 15 } };
       truth.loads[1].axis = { { 0, 0, 1 } };

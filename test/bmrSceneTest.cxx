@@ -100,6 +100,21 @@ bmrSceneTest(int, char *[])
     // Exact up to rounding: the directions are unit vectors of axis-aligned differences.
     std::cout << "tube load directions: largest error " << worst << " mm" << std::endl;
     ok = ok && worst < 1e-12;
+    // An ellipsoid load (semi-axes 26, 13, 13 about the centre): the direction of node 1, (13, 0, -25)
+    // from the centre, is the ellipsoid's normal there, proportional to (13 / 26^2, 0, -25 / 13^2).
+    bmr::Scene ellipsoid = capsule;
+    ellipsoid.loads[0].axis = { { 0, 0, 0 } };
+    ellipsoid.loads[0].semiAxes = { { 26, 13, 13 } };
+    const bmr::BoundaryConditions be = bmr::SceneBoundaryConditions(ellipsoid, mesh);
+    const double                  n[3] = { 13.0 / 676.0, 0.0, -25.0 / 169.0 };
+    const double                  norm = std::sqrt(n[0] * n[0] + n[2] * n[2]);
+    double                        worstEllipsoid = 0.0;
+    for (int c = 0; c < 3; ++c)
+    {
+      worstEllipsoid = std::max(worstEllipsoid, std::abs(be.dirichletValues[c] - 6.0 * n[c] / norm));
+    }
+    std::cout << "ellipsoid load direction: largest error " << worstEllipsoid << " mm" << std::endl;
+    ok = ok && worstEllipsoid < 1e-12;
   }
 
   auto              parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
