@@ -382,7 +382,7 @@ PelvisScene(double prostateE, bool unknown, double prostateNu = 0.40)
   s.roiMargin = 25.0;
   s.mesh.cellSize = 7.0;
   s.mesh.facetSize = 6.0;
-  s.mesh.facetDistance = 1.5;
+  s.mesh.facetDistance = 0.5;
   s.mesh.cellSizePerLabel[bmr::PelvisProstate] = 4.5;
   return s;
 }
