@@ -22,7 +22,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 csv="$out/estimation_runs.csv"
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
-  echo "study,scene,true_E_kPa,true_nu,mesh_scale,run,recovered_E_kPa,relative_error,tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable,tumour_fraction" > "$csv"
+  echo "study,scene,true_E_kPa,true_nu,mesh_scale,run,recovered_E_kPa,relative_error,tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable,tumour_fraction,sigma_log_E" > "$csv"
 fi
 
 # run STUDY SCENE E NU SCALE RUN BLADDER RECTUM [TUMOUR_FRACTION]
@@ -53,7 +53,8 @@ E = (1 - f) * moduli["prostate"] + f * moduli.get("tumour", 0.0)
 Er = rep["youngs_modulus_kPa"]["prostate"]; t = rep["wall_time_s"]
 est = sum(v for k, v in t.items() if k.startswith("estimation"))
 print(f'{study},{scene},{E:g},{nu},{scale},{r},{Er:.3f},{(Er - E) / E:.4f},{rep["mesh"]["tetrahedra"]},'
-      f'{est:.2f},{t["total"]:.2f},{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{int(rep["identifiable"])},{f:g}')
+      f'{est:.2f},{t["total"]:.2f},{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{int(rep["identifiable"])},{f:g},'
+      f'{rep.get("youngs_modulus_uncertainty", {}).get("prostate", {}).get("sigma_log_E") or ""}')
 PY
   tail -1 "$csv"
 }

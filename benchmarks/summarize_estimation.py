@@ -2,6 +2,7 @@
 a plot (estimation.png: recovered vs true E; relative error against run time over mesh sizes)
 and markdown tables on stdout."""
 import csv
+import math
 import statistics
 import sys
 from collections import OrderedDict
@@ -24,22 +25,25 @@ for (study, scene, E, nu, scale, tumour), rs in groups.items():
     med.append(dict(study=study, scene=scene, E=float(E), nu=float(nu), scale=float(scale), runs=len(rs),
                     Er=m("recovered_E_kPa"), err=m("relative_error"), tets=int(m("tetrahedra")),
                     est=m("estimation_s"), total=m("total_s"), rms=m("prostate_rms_mm"),
-                    ident=min(int(x["identifiable"]) for x in rs), tumour=float(tumour or 0)))
+                    ident=min(int(x["identifiable"]) for x in rs), tumour=float(tumour or 0),
+                    # standard deviation of log E reported by register (empty in rows from before it existed)
+                    sigma=statistics.median(float(x.get("sigma_log_E") or "nan") for x in rs)))
 with open(f"{out}/estimation.csv", "w") as f:
     f.write("study,scene,true_E_kPa,true_nu,mesh_scale,tumour_fraction,runs,recovered_E_kPa,relative_error,"
-            "tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable\n")
+            "tetrahedra,estimation_s,total_s,prostate_rms_mm,identifiable,sigma_log_E\n")
     for d in med:
         f.write(f'{d["study"]},{d["scene"]},{d["E"]:g},{d["nu"]:g},{d["scale"]:g},{d["tumour"]:g},{d["runs"]},{d["Er"]:.2f},'
-                f'{d["err"]:.4f},{d["tets"]},{d["est"]:.2f},{d["total"]:.2f},{d["rms"]:.4f},{d["ident"]}\n')
+                f'{d["err"]:.4f},{d["tets"]},{d["est"]:.2f},{d["total"]:.2f},{d["rms"]:.4f},{d["ident"]},{d["sigma"]:.4f}\n')
 
 for study in OrderedDict((d["study"], 0) for d in med):
     print(f"\n{study} (medians; times in s, moduli in kPa)\n")
-    print("| scene | true E | true nu | tumour fraction | mesh scale | tets | recovered E | rel. error | estimation | total | prostate RMS mm | identifiable |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print("| scene | true E | true nu | tumour fraction | mesh scale | tets | recovered E | rel. error | estimation | total | prostate RMS mm | identifiable | ±1σ (reported) | error / σ |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|")
     for d in med:
         if d["study"] == study:
             print(f'| {d["scene"]} | {d["E"]:g} | {d["nu"]:.2f} | {d["tumour"]:g} | {d["scale"]:g} | {d["tets"]} | {d["Er"]:.1f} | '
-                  f'{100 * d["err"]:+.1f} % | {d["est"]:.1f} | {d["total"]:.1f} | {d["rms"]:.3f} | {"yes" if d["ident"] else "no"} |')
+                  f'{100 * d["err"]:+.1f} % | {d["est"]:.1f} | {d["total"]:.1f} | {d["rms"]:.3f} | {"yes" if d["ident"] else "no"} | '
+                  f'{100 * d["sigma"]:.1f} % | {math.log(d["Er"] / d["E"]) / d["sigma"]:+.2f} |')
 
 fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
 for scene, marker in (("A", "o"), ("B", "s")):

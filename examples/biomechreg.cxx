@@ -206,7 +206,7 @@ DemoCommand()
   const double recovered = report.youngsModulus.at("prostate");
   std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
             << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
-            << std::noshowpos << " %), gauge soft_tissue 10 kPa"
+            << std::noshowpos << " %)" << UncertaintyText(report, "prostate") << ", gauge soft_tissue 10 kPa"
             << "\n  (the error over 50-350 kPa on this phantom: README, estimation benchmark)"
             << (report.identifiable ? "" : "\n  warning: ") << (report.identifiable ? "" : report.identifiability)
             << "\n  Dice after warping:";

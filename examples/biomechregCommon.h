@@ -617,9 +617,30 @@ struct RegisterReport
   double                        finalValue{ 0.0 };
   bool                          identifiable{ true };
   std::string                   identifiability;
+  std::map<std::string, double> modulusUncertainty;               ///< standard deviation of log E by unknown label
+  double                        residualStandardDeviation{ 0.0 }; ///< mm, objective nodes at the estimate
   std::size_t                   tetrahedra{ 0 };
   FieldType::Pointer            pullBack; ///< fixed -> moving field [mm], as written to field.nrrd
 };
+
+/** " (x/ exp(sigma) = +-N %, one standard deviation)" for an unknown label whose uncertainty was computed. */
+inline std::string
+UncertaintyText(const RegisterReport & report, const std::string & label)
+{
+  const auto it = report.modulusUncertainty.find(label);
+  if (it == report.modulusUncertainty.end())
+  {
+    return std::string();
+  }
+  if (!std::isfinite(it->second))
+  {
+    return " (uncertainty: not determined, Phi* has no positive curvature there)";
+  }
+  std::ostringstream os;
+  os << " (uncertainty x/ exp(" << std::setprecision(3) << it->second << "), i.e. +-" << std::setprecision(2)
+     << 100.0 * it->second << " %, one standard deviation)";
+  return os.str();
+}
 
 /** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
 inline bmr::Scene

@@ -117,6 +117,22 @@ JsonString(const std::string & s)
   }
   return o + "\"";
 }
+
+/** A number for JSON, which has no infinity: null when not finite. */
+std::string
+JsonNumber(double x)
+{
+  if (!std::isfinite(x))
+  {
+    return "null";
+  }
+  std::ostringstream o;
+  o << std::setprecision(8) << x;
+  return o.str();
+}
+
+// Standard deviation of log E above which register warns: one sigma beyond the 10 % the estimate aims at.
+constexpr double kUncertaintyWarningLogSigma = 0.1;
 } // namespace
 
 /** Axis-aligned physical bounding box [mm] of an image's voxel box (the corners at +-half a voxel). */
@@ -281,6 +297,29 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   report.finalValue = optimizer->GetFinalValue();
   report.identifiable = optimizer->GetIdentifiable();
   report.identifiability = optimizer->GetIdentifiabilityMessage();
+  report.modulusUncertainty = optimizer->GetModulusUncertainty();
+  report.residualStandardDeviation = optimizer->GetResidualStandardDeviation();
+  for (const auto & kv : report.modulusUncertainty)
+  {
+    if (!std::isfinite(kv.second))
+    {
+      const std::string message = "Phi* has no positive curvature in the modulus of \"" + kv.first +
+                                  "\" at the estimate: the surfaces do not determine it";
+      report.warnings.push_back(message);
+      std::cout << "warning: " << message << std::endl;
+    }
+    else if (kv.second > kUncertaintyWarningLogSigma)
+    {
+      std::ostringstream os;
+      os << "the surfaces determine the modulus of \"" << kv.first << "\" only to a factor exp(+-"
+         << std::setprecision(3) << kv.second << ") (one standard deviation from the residual "
+         << report.residualStandardDeviation << " mm and the curvature of Phi*): treat it as "
+         << report.youngsModulus[kv.first] * std::exp(-kv.second) << " to "
+         << report.youngsModulus[kv.first] * std::exp(kv.second) << " kPa";
+      report.warnings.push_back(os.str());
+      std::cout << "warning: " << os.str() << std::endl;
+    }
+  }
   report.tetrahedra = sim.mesh.GetNumberOfTetrahedra();
   report.pullBack = sim.pullBack;
   report.invertedElements = sim.invertedElements;
@@ -310,7 +349,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
       unknownNames.push_back(l.name);
     }
   }
-  // Every fine-mesh inner solve (stage "fine"), then the accepted outer iterates (stage "outer").
+  // Every fine-mesh inner solve (stages "fine" and "curvature"), then the accepted outer iterates (stage "outer").
   auto history = optimizer->GetHistory();
   history.insert(history.end(), optimizer->GetOuterIterations().begin(), optimizer->GetOuterIterations().end());
   bmr::WriteTextFileAtomically(in.out + "/history.csv", HistoryCsv(history, unknownNames));
@@ -333,7 +372,17 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   j << "},\n  \"gauge\": {\"label\": " << JsonString(optimizer->GetGaugeLabel())
     << ", \"youngs_modulus_kPa\": " << (gauge ? gauge->youngsModulus : 0.0) << "},\n"
     << "  \"identifiable\": " << (report.identifiable ? "true" : "false")
-    << ",\n  \"identifiability\": " << JsonString(report.identifiability)
+    << ",\n  \"identifiability\": " << JsonString(report.identifiability) << ",\n  \"youngs_modulus_uncertainty\": {";
+  first = true;
+  for (const auto & kv : report.modulusUncertainty)
+  {
+    const double E = report.youngsModulus[kv.first];
+    j << (first ? "" : ", ") << JsonString(kv.first) << ": {\"sigma_log_E\": " << JsonNumber(kv.second)
+      << ", \"one_sigma_interval_kPa\": [" << JsonNumber(E * std::exp(-kv.second)) << ", "
+      << JsonNumber(E * std::exp(kv.second)) << "]}";
+    first = false;
+  }
+  j << "},\n  \"residual_standard_deviation_mm\": " << report.residualStandardDeviation
     << ",\n  \"final_phi_mm2\": " << report.finalValue << ",\n  \"surface_distance_mm\": {";
   first = true;
   for (const auto & s : optimizer->GetSurfaceDistances())
@@ -448,7 +497,8 @@ RegisterCommand(const Arguments & args)
   std::cout << "\n  recovered Young's moduli:";
   for (const auto & kv : report.youngsModulus)
   {
-    std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa";
+    std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa"
+              << UncertaintyText(report, kv.first);
   }
   std::cout << (report.identifiable ? "" : "\n  warning: ") << (report.identifiable ? "" : report.identifiability)
             << std::endl;

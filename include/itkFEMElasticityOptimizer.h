@@ -82,6 +82,22 @@ namespace itk {
  * relative variation over the bounds is below FlatnessThreshold, or its
  * minimum lies on a bound, IsIdentifiable() is false with a message.
  *
+ * Uncertainty (EstimateUncertainty, default on): how well the surfaces determine
+ * log E. At the estimate the curvature \f$H = \partial^2\Phi^{*} / \partial(\log E)^2\f$
+ * is taken from central differences of the envelope gradient at
+ * \f$\log E \pm \delta\f$ (UncertaintyStep, default 0.05; two inner solves per
+ * unknown), and the residual variance of the objective nodes from the fit,
+ * \f$s^2 = \sum_s w_s \sum_{l \in s}\phi_s^2 / \sum_s w_s n_s\f$ [mm^2].
+ * Treating the residuals as independent noise of variance s^2 (the voxel
+ * staircase of the fixed labels is about h/\sqrt{12} per node), the
+ * linearised least-squares estimate has
+ * \f$\mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1}\f$ with
+ * \f$w_{\mathrm{eff}} = \sum_s w_s^2 n_s / \sum_s w_s n_s\f$ (exact for equal
+ * weights; invariant under scaling all weights), and
+ * GetModulusUncertainty() returns its standard deviations: E is known to a
+ * factor \f$e^{\pm\sigma}\f$. Not computed when the estimate lies on a bound;
+ * infinite when H is not positive definite.
+ *
  * Output: the mesh with nodal displacement [mm] and the estimated wall forces
  * [mN]; the estimated moduli [kPa]; every fine-mesh inner solve (GetHistory())
  * and the accepted outer iterates (GetOuterIterations()); the surface
@@ -105,7 +121,7 @@ public:
   itkNewMacro(Self);
   itkTypeMacro(FEMElasticityOptimizer, ProcessObject);
 
-  /** One inner solve: stage ("sweep" or "fine"), E [kPa] of the unknown labels,
+  /** One inner solve: stage ("sweep", "fine" or "curvature"), E [kPa] of the unknown labels,
    * Phi* [mm^2], |dPhi/dd| [mm] at the inner optimum, dPhi* / dlogE [mm^2], inner iterations. */
   struct IterationRecord
   {
@@ -171,6 +187,13 @@ public:
   itkBooleanMacro(WallMotionAlongNormals);
   itkSetMacro(FlatnessThreshold, double);
   itkGetConstMacro(FlatnessThreshold, double);
+  /** Compute the standard uncertainty of log E at the estimate (two extra inner solves per unknown). */
+  itkSetMacro(EstimateUncertainty, bool);
+  itkGetConstMacro(EstimateUncertainty, bool);
+  itkBooleanMacro(EstimateUncertainty);
+  /** Step delta in log E of the central differences for the curvature of Phi* (default 0.05). */
+  itkSetClampMacro(UncertaintyStep, double, 1e-4, 1.0);
+  itkGetConstMacro(UncertaintyStep, double);
 
   /** The mesh with displacement [mm] and estimated wall forces [mN]. */
   MeshObjectType *
@@ -214,13 +237,24 @@ public:
     return m_SurfaceDistances;
   }
   itkGetConstMacro(FinalValue, double);
+  /** Standard deviation of log E [dimensionless] by unknown label name: E is known to a factor exp(+-sigma).
+   * Empty when not computed (EstimateUncertainty off, no unknown, estimate on a bound). */
+  const std::map<std::string, double> &
+  GetModulusUncertainty() const
+  {
+    return m_ModulusUncertainty;
+  }
+  /** Residual standard deviation s of the objective nodes at the estimate [mm]. */
+  itkGetConstMacro(ResidualStandardDeviation, double);
+  /** Curvature d2 Phi* / d(log E)^2 [mm^2] at the estimate (first unknown; 0 when not computed). */
+  itkGetConstMacro(ModulusCurvature, double);
   itkGetConstMacro(Identifiable, bool);
   const std::string &
   GetIdentifiabilityMessage() const
   {
     return m_IdentifiabilityMessage;
   }
-  /** Wall time [s] of the stages: "sweep", "initial loads", "fine". */
+  /** Wall time [s] of the stages: "sweep", "initial loads", "fine", "uncertainty". */
   const std::map<std::string, double> &
   GetTimings() const
   {
@@ -255,6 +289,11 @@ private:
   double                        m_InnerGradientTolerance{ 1e-5 };
   double                        m_OuterGradientTolerance{ 1e-4 };
   double                        m_FlatnessThreshold{ 0.01 };
+  bool                          m_EstimateUncertainty{ true };
+  double                        m_UncertaintyStep{ 0.05 };
+  std::map<std::string, double> m_ModulusUncertainty;
+  double                        m_ResidualStandardDeviation{ 0.0 };
+  double                        m_ModulusCurvature{ 0.0 };
   double                        m_WallControlSpacing{ 0.0 };
   double                        m_WallRegularization{ 0.01 };
   bool                          m_WallMotionAlongNormals{ true };

@@ -24,8 +24,11 @@
 #include "itkLBFGSBOptimizerv4.h"
 #include "itkObjectToObjectMetricBase.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <functional>
 #include <memory>
 #include <cmath>
@@ -227,6 +230,63 @@ MakeRecord(const char *                stage,
   return r;
 }
 
+/** Residual noise of the objective nodes at the estimate: the weighted mean square
+ * s^2 = sum_s w_s n_s rms_s^2 / sum_s w_s n_s [mm^2], and the effective weight
+ * w_eff = sum_s w_s^2 n_s / sum_s w_s n_s, with which Cov(log E) = s^2 w_eff H^-1 holds
+ * exactly for equal weights (H grows with the weights, the noise of a residual does not). */
+struct ResidualNoise
+{
+  double variance{ 0.0 };
+  double weight{ 1.0 };
+};
+
+ResidualNoise
+EstimateResidualNoise(const bmr::Scene & scene, const std::vector<bmr::SurfaceDistanceStatistics> & surfaces)
+{
+  double squares = 0.0, weightedCount = 0.0, squaredWeights = 0.0;
+  for (const auto & s : surfaces)
+  {
+    double weight = 1.0;
+    for (const auto & term : scene.objective)
+    {
+      if (term.label == s.name)
+      {
+        weight = term.weight;
+      }
+    }
+    squares += weight * double(s.nodes) * s.rms * s.rms;
+    weightedCount += weight * double(s.nodes);
+    squaredWeights += weight * weight * double(s.nodes);
+  }
+  ResidualNoise noise;
+  if (weightedCount > 0.0)
+  {
+    noise.variance = squares / weightedCount;
+    noise.weight = squaredWeights / weightedCount;
+  }
+  return noise;
+}
+
+/** Standard deviations of log E, sqrt(diag(v H^-1)) with v = s^2 w_eff [mm^2], from the symmetrised
+ * Hessian \a hessian [mm^2]; infinite when it is not positive definite (no curvature to determine E). */
+std::vector<double>
+LogModulusStandardDeviations(const Eigen::MatrixXd & hessian, double residualVariance)
+{
+  const Eigen::MatrixXd             H = 0.5 * (hessian + hessian.transpose());
+  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  std::vector<double>               sigma(H.rows(), std::numeric_limits<double>::infinity());
+  if (llt.info() != Eigen::Success)
+  {
+    return sigma;
+  }
+  const Eigen::MatrixXd covariance = residualVariance * llt.solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
+  for (Eigen::Index k = 0; k < H.rows(); ++k)
+  {
+    sigma[k] = std::sqrt(std::max(0.0, covariance(k, k)));
+  }
+  return sigma;
+}
+
 /** Initial modulus and identifiability from the sweep of Phi*(E). */
 struct SweepAnalysis
 {
@@ -418,6 +478,9 @@ FEMElasticityOptimizer::GenerateData()
   m_Timings.clear();
   m_Identifiable = true;
   m_IdentifiabilityMessage.clear();
+  m_ModulusUncertainty.clear();
+  m_ResidualStandardDeviation = 0.0;
+  m_ModulusCurvature = 0.0;
 
   // Distance maps are shared by the coarse and the fine objective.
   std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> samplers;
@@ -618,9 +681,51 @@ FEMElasticityOptimizer::GenerateData()
   bmr::TetrahedralMesh out = fine;
   out.displacement = fineObjective.ComputeDisplacement(bestWall);
   out.force = fineObjective.ComputeBoundaryForces(out.displacement);
-  for (const auto & s : fineObjective.ComputeSurfaceDistances(out.displacement))
+  const std::vector<bmr::SurfaceDistanceStatistics> residuals = fineObjective.ComputeSurfaceDistances(out.displacement);
+  for (const auto & s : residuals)
   {
     m_SurfaceDistances.push_back({ s.name, s.rms, s.maximum, s.mean });
+  }
+  const ResidualNoise noise = EstimateResidualNoise(m_Scene, residuals);
+  m_ResidualStandardDeviation = std::sqrt(noise.variance);
+
+  // 5. Uncertainty of log E: curvature of Phi* by central differences of the envelope gradient, each
+  // inner solve warm-started from the optimum's walls. Meaningless on a bound, where Phi* is not stationary.
+  bool onBound = false;
+  for (std::size_t k = 0; k < unknown.size(); ++k)
+  {
+    onBound = onBound || bestModuli[k] <= lower[k] * 1.0001 || bestModuli[k] >= upper[k] * 0.9999;
+  }
+  if (m_EstimateUncertainty && !unknown.empty() && !onBound)
+  {
+    t0 = Clock::now();
+    const Eigen::Index m = static_cast<Eigen::Index>(unknown.size());
+    Eigen::MatrixXd    hessian(m, m);
+    for (Eigen::Index k = 0; k < m; ++k)
+    {
+      std::vector<double> gradient[2];
+      for (int side = 0; side < 2; ++side)
+      {
+        const auto          ts = Clock::now();
+        std::vector<double> E = bestModuli;
+        E[k] *= std::exp(side == 0 ? m_UncertaintyStep : -m_UncertaintyStep);
+        const InnerSolution s = SolveInner(
+          fineObjective, E, bestWall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
+        gradient[side] = s.logModulusGradient;
+        this->Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, Seconds(ts)), m_History);
+      }
+      for (Eigen::Index i = 0; i < m; ++i)
+      {
+        hessian(i, k) = (gradient[0][i] - gradient[1][i]) / (2.0 * m_UncertaintyStep);
+      }
+    }
+    m_ModulusCurvature = hessian(0, 0);
+    const std::vector<double> sigma = LogModulusStandardDeviations(hessian, noise.variance * noise.weight);
+    for (std::size_t k = 0; k < unknown.size(); ++k)
+    {
+      m_ModulusUncertainty[unknown[k]->name] = sigma[k];
+    }
+    m_Timings["uncertainty"] = Seconds(t0);
   }
   this->GetOutput()->Set(out);
   this->UpdateProgress(1.0f);
@@ -637,6 +742,8 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
   os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
+  os << indent << "EstimateUncertainty: " << (m_EstimateUncertainty ? "On" : "Off") << std::endl;
+  os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;
   os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
   os << indent << "WallMotionAlongNormals: " << (m_WallMotionAlongNormals ? "On" : "Off") << std::endl;
@@ -646,6 +753,13 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
     os << indent << "EstimatedYoungsModulus[" << kv.first << "]: " << kv.second << " kPa" << std::endl;
   }
   os << indent << "FinalValue: " << m_FinalValue << " mm^2" << std::endl;
+  for (const auto & kv : m_ModulusUncertainty)
+  {
+    os << indent << "ModulusUncertainty[" << kv.first << "]: " << kv.second << " (standard deviation of log E)"
+       << std::endl;
+  }
+  os << indent << "ResidualStandardDeviation: " << m_ResidualStandardDeviation << " mm" << std::endl;
+  os << indent << "ModulusCurvature: " << m_ModulusCurvature << " mm^2" << std::endl;
   os << indent << "Identifiable: " << m_Identifiable << " (" << m_IdentifiabilityMessage << ")" << std::endl;
   os << indent << "Sweep samples: " << m_Sweep.size() << ", fine iterations: " << m_History.size() << std::endl;
 }

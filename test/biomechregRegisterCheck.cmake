@@ -6,6 +6,8 @@
 # - the RMS distance of the deformed prostate surface nodes to the fixed prostate surface is below half
 #   a voxel (0.5 mm);
 # - the accepted outer iterates (history.csv, stage "outer") never increase Phi*;
+# - report.json gives the standard deviation of log E; the benchmark measures 4-14 % over 50-350 kPa, so a
+#   value outside [0.01, 0.2] at 100 kPa means the curvature of Phi* or the residual is wrong;
 # - every promised output exists and report.json names the gauge.
 # Run with: cmake -DDIR=<phantom dir> -P biomechregRegisterCheck.cmake
 file(READ ${DIR}/truth.json truth)
@@ -24,6 +26,11 @@ endif()
 message(STATUS "prostate surface RMS ${rms} mm (limit 0.5 mm)")
 if(NOT rms LESS 0.5)
   message(SEND_ERROR "prostate surface RMS ${rms} mm is not below half a voxel (0.5 mm)")
+endif()
+string(JSON sigma GET "${report}" youngs_modulus_uncertainty prostate sigma_log_E)
+message(STATUS "prostate sigma(log E) ${sigma} (accepted 0.01..0.2)")
+if(NOT sigma GREATER 0.01 OR NOT sigma LESS 0.2)
+  message(SEND_ERROR "report.json: sigma_log_E of the prostate is ${sigma}, expected 0.01..0.2")
 endif()
 if(NOT gauge STREQUAL "soft_tissue")
   message(SEND_ERROR "report.json: gauge is '${gauge}', expected soft_tissue")
