@@ -243,7 +243,7 @@ PrintUsage(std::ostream & os)
        "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
        "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free]\n"
-       "                      [--max-outer-iterations N] [--outer-tolerance T]\n"
+       "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
        "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
        "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
        "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching "

@@ -600,9 +600,10 @@ struct RegisterInputs
   double                  wallControlSpacing{ 0.0 };  ///< mm, FEMElasticityOptimizer::SetWallControlSpacing
   double                  wallRegularization{ 0.01 }; ///< FEMElasticityOptimizer::SetWallRegularization
   std::string             wallMotion{ "normal" }; ///< "normal": walls move along their normals; "free": any direction
-  double                  meshScale{ 1.0 };       ///< mesh sizes = scene sizes x this (> 1: coarser, faster)
-  unsigned int            maximumOuterIterations{ 20 }; ///< FEMElasticityOptimizer::SetMaximumNumberOfOuterIterations
-  double                  outerTolerance{ 1e-4 };       ///< FEMElasticityOptimizer::SetOuterGradientTolerance
+  std::string  elementInversion{ "allow" };       ///< "limit": FEMElasticityOptimizer::SetLimitElementInversion(true)
+  double       meshScale{ 1.0 };                  ///< mesh sizes = scene sizes x this (> 1: coarser, faster)
+  unsigned int maximumOuterIterations{ 20 };      ///< FEMElasticityOptimizer::SetMaximumNumberOfOuterIterations
+  double       outerTolerance{ 1e-4 };            ///< FEMElasticityOptimizer::SetOuterGradientTolerance
 };
 
 /** What a registration run measured, as written to report.json. */

@@ -243,6 +243,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   optimizer->SetWallControlSpacing(in.wallControlSpacing);
   optimizer->SetWallRegularization(in.wallRegularization);
   optimizer->SetWallMotionAlongNormals(in.wallMotion == "normal");
+  optimizer->SetLimitElementInversion(in.elementInversion == "limit");
   optimizer->SetMaximumNumberOfOuterIterations(in.maximumOuterIterations);
   optimizer->SetOuterGradientTolerance(in.outerTolerance);
   optimizer->AddObserver(itk::IterationEvent(), ProgressPrinter::New());
@@ -400,7 +401,9 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   }
   j << "},\n  \"jacobian_determinant\": {\"minimum\": " << report.jacobianMinimum
     << ", \"fraction_nonpositive\": " << report.jacobianNonPositiveFraction << "},\n"
-    << "  \"inverted_elements\": " << report.invertedElements << ",\n  \"warnings\": [";
+    << "  \"inverted_elements\": " << report.invertedElements
+    << ",\n  \"step_limit\": {\"element_inversion\": " << JsonString(in.elementInversion)
+    << ", \"rejected_trial_points\": " << optimizer->GetNumberOfRejectedSteps() << "},\n  \"warnings\": [";
   for (std::size_t i = 0; i < report.warnings.size(); ++i)
   {
     j << (i ? ", " : "") << JsonString(report.warnings[i]);
@@ -451,6 +454,15 @@ ParseFemSettings(const Arguments & args, RegisterInputs & in)
   if (!(in.wallControlSpacing >= 0.0))
   {
     throw UsageError("--wall-spacing-mm must be >= 0 (0: every wall node free)");
+  }
+  in.elementInversion = args.Get("--element-inversion", in.elementInversion);
+  if (in.elementInversion != "allow" && in.elementInversion != "limit")
+  {
+    throw UsageError("--element-inversion must be allow or limit");
+  }
+  if (in.elementInversion == "limit" && in.wallControlSpacing > 0.0)
+  {
+    throw UsageError("--element-inversion limit needs --wall-spacing-mm 0 (one parameter per wall node)");
   }
   in.meshScale = args.Number("--mesh-scale", in.meshScale);
   if (!(in.meshScale >= 0.25 && in.meshScale <= 4.0))

@@ -87,6 +87,11 @@ struct BiomechanicalRegistration_EXPORT MeshQuality
 BiomechanicalRegistration_EXPORT double
 TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e);
 
+/** Number of elements whose deformed volume (points + \a displacement [mm], 3 per node) is <= 0:
+ * turned inside out, where linear elasticity no longer describes the tissue. */
+BiomechanicalRegistration_EXPORT std::size_t
+CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement);
+
 /** Minimum/maximum dihedral angle and radius ratio over all elements. */
 BiomechanicalRegistration_EXPORT MeshQuality
 ComputeMeshQuality(const TetrahedralMesh & mesh);

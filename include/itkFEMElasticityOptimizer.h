@@ -98,6 +98,17 @@ namespace itk {
  * factor \f$e^{\pm\sigma}\f$. Not computed when the estimate lies on a bound;
  * infinite when H is not positive definite.
  *
+ * Step limit (LimitElementInversion, default off): linear elasticity lets an
+ * element turn inside out when the walls move far. With the limit on, every
+ * trial point of the inner L-BFGS line search that inverts more elements than
+ * the inner solve's start point is answered with a value above Phi(start), so
+ * the line search shortens the step and the walls stop where the mesh would
+ * invert. The inner result is then the best fit without new inversions, not a
+ * stationary point, and the envelope gradient there is approximate; the count
+ * of rejected trial points is GetNumberOfRejectedSteps(). Only with one
+ * parameter per wall node (the reduced-basis solver evaluates the objective
+ * nodes only).
+ *
  * Output: the mesh with nodal displacement [mm] and the estimated wall forces
  * [mN]; the estimated moduli [kPa]; every fine-mesh inner solve (GetHistory())
  * and the accepted outer iterates (GetOuterIterations()); the surface
@@ -187,6 +198,15 @@ public:
   itkBooleanMacro(WallMotionAlongNormals);
   itkSetMacro(FlatnessThreshold, double);
   itkGetConstMacro(FlatnessThreshold, double);
+  /** Step limit against element inversion (default off; needs WallControlSpacing 0): the inner L-BFGS line
+   * search rejects every trial point that inverts more elements than its start point. */
+  itkSetMacro(LimitElementInversion, bool);
+  itkGetConstMacro(LimitElementInversion, bool);
+  itkBooleanMacro(LimitElementInversion);
+  /** Trial points rejected by LimitElementInversion over the last Update(). */
+  itkGetConstMacro(NumberOfRejectedSteps, SizeValueType);
+  /** Elements turned inside out by the estimated displacement (deformed volume <= 0). */
+  itkGetConstMacro(NumberOfInvertedElements, SizeValueType);
   /** Compute the standard uncertainty of log E at the estimate (two extra inner solves per unknown). */
   itkSetMacro(EstimateUncertainty, bool);
   itkGetConstMacro(EstimateUncertainty, bool);
@@ -290,6 +310,9 @@ private:
   double                        m_OuterGradientTolerance{ 1e-4 };
   double                        m_FlatnessThreshold{ 0.01 };
   bool                          m_EstimateUncertainty{ true };
+  bool                          m_LimitElementInversion{ false };
+  SizeValueType                 m_NumberOfRejectedSteps{ 0 };
+  SizeValueType                 m_NumberOfInvertedElements{ 0 };
   double                        m_UncertaintyStep{ 0.05 };
   std::map<std::string, double> m_ModulusUncertainty;
   double                        m_ResidualStandardDeviation{ 0.0 };

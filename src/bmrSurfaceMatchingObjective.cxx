@@ -100,30 +100,6 @@ struct SurfaceMatchingObjective::Impl
   bool                                                            normalMotion{ true };
   std::size_t                                                     inverted{ 0 }; // by the last Evaluate()
 
-  static std::size_t
-  CountInverted(const TetrahedralMesh & mesh, const std::vector<double> & u)
-  {
-    std::size_t count = 0;
-    for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
-    {
-      double x[4][3];
-      for (int i = 0; i < 4; ++i)
-      {
-        const std::size_t n = static_cast<std::size_t>(mesh.tetrahedra[4 * e + i]);
-        for (int c = 0; c < 3; ++c)
-        {
-          x[i][c] = mesh.points[3 * n + c] + u[3 * n + c];
-        }
-      }
-      const double a[3] = { x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2] };
-      const double b[3] = { x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2] };
-      const double c[3] = { x[3][0] - x[0][0], x[3][1] - x[0][1], x[3][2] - x[0][2] };
-      const double det =
-        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-      count += det <= 0.0;
-    }
-    return count;
-  }
   std::vector<double> wallNormals; // 3 per control node: unit normal of the wall there
 
   std::size_t
@@ -443,7 +419,7 @@ SurfaceMatchingObjective::Evaluate(const std::vector<double> & parameters,
   }
   const std::vector<double> dWall = d.Expand(parameters);
   const std::vector<double> u = d.model->Solve(d.bc.forces, d.Prescribed(dWall));
-  d.inverted = Impl::CountInverted(d.mesh, u);
+  d.inverted = CountInvertedElements(d.mesh, u);
   const bool          wantGradient = gradientD != nullptr || gradientLogE != nullptr;
   std::vector<double> g(wantGradient ? u.size() : 0, 0.0);
   double              phiSum = 0.0;

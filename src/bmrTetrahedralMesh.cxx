@@ -115,6 +115,32 @@ TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e)
          6.0;
 }
 
+std::size_t
+CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
+{
+  if (displacement.size() != mesh.points.size())
+  {
+    Fail("CountInvertedElements",
+         "the displacement holds " + std::to_string(displacement.size()) + " values, expected " +
+           std::to_string(mesh.points.size()));
+  }
+  std::size_t count = 0;
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    double x[4][3];
+    for (int i = 0; i < 4; ++i)
+    {
+      const std::size_t n = static_cast<std::size_t>(mesh.tetrahedra[4 * e + i]);
+      for (int c = 0; c < 3; ++c)
+      {
+        x[i][c] = mesh.points[3 * n + c] + displacement[3 * n + c];
+      }
+    }
+    count += !(Dot(Sub(x[1], x[0]), Cross(Sub(x[2], x[0]), Sub(x[3], x[0]))) > 0.0);
+  }
+  return count;
+}
+
 MeshQuality
 ComputeMeshQuality(const TetrahedralMesh & mesh)
 {

@@ -159,15 +159,57 @@ struct InnerSolution
   std::string         stop;
 };
 
+/** \a start, or when it inverts more elements than the unloaded walls (p = 0) do, the largest
+ * fraction t start (bisection to 1/1024) that does not: the step limit's feasible start, e.g. after
+ * surface matching pulled the walls through thin tissue. */
+std::vector<double>
+WithoutNewInversions(bmr::SurfaceMatchingObjective & objective, const std::vector<double> & start)
+{
+  objective.Evaluate(start, nullptr, nullptr);
+  const std::size_t atStart = objective.GetNumberOfInvertedElements();
+  if (atStart == 0)
+  {
+    return start;
+  }
+  const std::vector<double> zero(start.size(), 0.0);
+  objective.Evaluate(zero, nullptr, nullptr);
+  const std::size_t unloaded = objective.GetNumberOfInvertedElements();
+  if (atStart <= unloaded)
+  {
+    return start;
+  }
+  const auto scaled = [&start](double t) {
+    std::vector<double> s(start);
+    for (double & x : s)
+    {
+      x *= t;
+    }
+    return s;
+  };
+  double feasible = 0.0, infeasible = 1.0;
+  for (int k = 0; k < 10; ++k)
+  {
+    const double middle = 0.5 * (feasible + infeasible);
+    objective.Evaluate(scaled(middle), nullptr, nullptr);
+    (objective.GetNumberOfInvertedElements() > unloaded ? infeasible : feasible) = middle;
+  }
+  return scaled(feasible);
+}
+
 /** min_p Phi(E, p) from \a start: Levenberg-Marquardt in the reduced wall basis, or L-BFGS
- * (libLBFGS through ITK) with one parameter per wall node; then the gradients at the optimum. */
+ * (libLBFGS through ITK) with one parameter per wall node; then the gradients at the optimum.
+ * With \a limitInversion (L-BFGS only) a trial point that inverts more elements than \a start is
+ * answered with a value above Phi(start), so that the line search shortens the step; the
+ * number of such rejections is added to \a rejected. */
 InnerSolution
 SolveInner(bmr::SurfaceMatchingObjective & objective,
            const std::vector<double> &     moduli,
            const std::vector<double> &     start,
            unsigned int                    maximumIterations,
            double                          tolerance,
-           bool                            gaussNewton)
+           bool                            gaussNewton,
+           bool                            limitInversion = false,
+           std::size_t *                   rejected = nullptr)
 {
   objective.SetYoungsModuli(moduli);
   InnerSolution result;
@@ -185,12 +227,41 @@ SolveInner(bmr::SurfaceMatchingObjective & objective,
   }
   if (objective.GetNumberOfParameters() > 0)
   {
+    std::size_t         allowed = 0;
+    double              ceiling = 0.0;
+    double              bestFeasibleValue = 0.0;
+    std::vector<double> bestFeasible = start;
+    if (limitInversion)
+    {
+      bestFeasible = WithoutNewInversions(objective, start);
+      bestFeasibleValue = objective.Evaluate(bestFeasible, nullptr, nullptr);
+      allowed = objective.GetNumberOfInvertedElements();
+      ceiling = 2.0 * bestFeasibleValue + 1.0; // above Phi(start): fails the line search's sufficient decrease
+    }
     auto metric = FunctionMetric::New();
-    metric->m_Function = [&objective](const std::vector<double> & d, std::vector<double> * g) {
-      return objective.Evaluate(d, g, nullptr);
+    metric->m_Function = [&](const std::vector<double> & d, std::vector<double> * g) {
+      const double value = objective.Evaluate(d, g, nullptr);
+      if (!limitInversion)
+      {
+        return value;
+      }
+      if (objective.GetNumberOfInvertedElements() > allowed)
+      {
+        if (rejected)
+        {
+          ++*rejected;
+        }
+        return std::max(value, ceiling);
+      }
+      if (value < bestFeasibleValue)
+      {
+        bestFeasibleValue = value;
+        bestFeasible = d;
+      }
+      return value;
     };
     FunctionMetric::ParametersType p(static_cast<unsigned int>(start.size()));
-    std::copy(start.begin(), start.end(), p.begin());
+    std::copy(bestFeasible.begin(), bestFeasible.end(), p.begin());
     metric->SetParameters(p);
     auto optimizer = LBFGS2Optimizerv4::New();
     optimizer->SetMetric(metric);
@@ -201,7 +272,9 @@ SolveInner(bmr::SurfaceMatchingObjective & objective,
     optimizer->SetDeltaConvergenceDistance(10);
     optimizer->SetDeltaConvergenceTolerance(1e-10);
     optimizer->StartOptimization();
-    result.wall = metric->AsVector();
+    // libLBFGS returns its last accepted point, which never inverts; the best feasible point visited is
+    // kept in case an implementation does otherwise.
+    result.wall = limitInversion ? bestFeasible : metric->AsVector();
     result.iterations = static_cast<unsigned int>(optimizer->GetCurrentIteration() + 1);
     result.stop = optimizer->GetStopConditionDescription();
   }
@@ -456,6 +529,11 @@ FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
   {
     itkExceptionMacro(<< "the gradient tolerances must be positive");
   }
+  if (m_LimitElementInversion && m_WallControlSpacing > 0.0)
+  {
+    itkExceptionMacro(<< "LimitElementInversion needs one parameter per wall node (WallControlSpacing 0, got "
+                      << m_WallControlSpacing << " mm): the reduced-basis solver sees only the objective nodes");
+  }
 }
 
 void
@@ -479,6 +557,8 @@ FEMElasticityOptimizer::GenerateData()
   m_Identifiable = true;
   m_IdentifiabilityMessage.clear();
   m_ModulusUncertainty.clear();
+  m_NumberOfRejectedSteps = 0;
+  m_NumberOfInvertedElements = 0;
   m_ResidualStandardDeviation = 0.0;
   m_ModulusCurvature = 0.0;
 
@@ -551,8 +631,14 @@ FEMElasticityOptimizer::GenerateData()
       E[0] = lower[0] * std::pow(upper[0] / lower[0], double(k) / double(n - 1));
       // Continuation: each sample starts from the previous optimum, so that the sweep follows one branch of
       // minima of the (non-convex) distance objective and Phi*(E) is smooth.
-      const InnerSolution s =
-        SolveInner(*sweepObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
+      const InnerSolution s = SolveInner(*sweepObjective,
+                                         E,
+                                         wall,
+                                         m_MaximumNumberOfInnerIterations,
+                                         m_InnerGradientTolerance,
+                                         gaussNewton,
+                                         m_LimitElementInversion,
+                                         &m_NumberOfRejectedSteps);
       wall = s.wall;
       this->Record(MakeRecord("sweep", k, E, s, Seconds(ts)), m_Sweep);
       this->UpdateProgress(0.5f * float(k + 1) / float(n));
@@ -580,7 +666,14 @@ FEMElasticityOptimizer::GenerateData()
       return last.value; // L-BFGS-B starts by evaluating the point it was given
     }
     const auto ts = Clock::now();
-    last = SolveInner(fineObjective, E, wall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
+    last = SolveInner(fineObjective,
+                      E,
+                      wall,
+                      m_MaximumNumberOfInnerIterations,
+                      m_InnerGradientTolerance,
+                      gaussNewton,
+                      m_LimitElementInversion,
+                      &m_NumberOfRejectedSteps);
     wall = last.wall;
     this->Record(MakeRecord("fine", outerIteration++, E, last, Seconds(ts)), m_History);
     this->UpdateProgress(std::min(0.99f, 0.5f + 0.02f * float(outerIteration)));
@@ -681,6 +774,7 @@ FEMElasticityOptimizer::GenerateData()
   bmr::TetrahedralMesh out = fine;
   out.displacement = fineObjective.ComputeDisplacement(bestWall);
   out.force = fineObjective.ComputeBoundaryForces(out.displacement);
+  m_NumberOfInvertedElements = bmr::CountInvertedElements(out, out.displacement);
   const std::vector<bmr::SurfaceDistanceStatistics> residuals = fineObjective.ComputeSurfaceDistances(out.displacement);
   for (const auto & s : residuals)
   {
@@ -709,8 +803,14 @@ FEMElasticityOptimizer::GenerateData()
         const auto          ts = Clock::now();
         std::vector<double> E = bestModuli;
         E[k] *= std::exp(side == 0 ? m_UncertaintyStep : -m_UncertaintyStep);
-        const InnerSolution s = SolveInner(
-          fineObjective, E, bestWall, m_MaximumNumberOfInnerIterations, m_InnerGradientTolerance, gaussNewton);
+        const InnerSolution s = SolveInner(fineObjective,
+                                           E,
+                                           bestWall,
+                                           m_MaximumNumberOfInnerIterations,
+                                           m_InnerGradientTolerance,
+                                           gaussNewton,
+                                           m_LimitElementInversion,
+                                           &m_NumberOfRejectedSteps);
         gradient[side] = s.logModulusGradient;
         this->Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, Seconds(ts)), m_History);
       }
@@ -744,6 +844,9 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
   os << indent << "EstimateUncertainty: " << (m_EstimateUncertainty ? "On" : "Off") << std::endl;
   os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;
+  os << indent << "LimitElementInversion: " << (m_LimitElementInversion ? "On" : "Off") << std::endl;
+  os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
+  os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
   os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
   os << indent << "WallMotionAlongNormals: " << (m_WallMotionAlongNormals ? "On" : "Off") << std::endl;

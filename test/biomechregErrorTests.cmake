@@ -98,6 +98,12 @@ string(JSON bad SET "${scene}" force_surfaces "[]")
 file(WRITE ${TEMP}/nothing.json "${bad}")
 expect_error(nothing_to_estimate "nothing to estimate"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/nothing.json --out ${TEMP}/r3)
+expect_error(bad_step_limit "--element-inversion must be allow or limit"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --element-inversion sometimes --out ${TEMP}/r4)
+expect_error(step_limit_reduced_basis "--element-inversion limit needs --wall-spacing-mm 0"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --element-inversion limit --wall-spacing-mm 6 --out ${TEMP}/r5)
 
 # Non-finite voxels, an absurd declared size, images that do not overlap in physical space.
 string(REPEAT "40 " 63 values)

@@ -196,7 +196,32 @@ itkFEMElasticityOptimizerTest(int, char *[])
       ok = false;
     }
   }
+
+  // Step limit: a fixed cavity grown by 7 mm (radius 13 mm) asks the wall to crush the 8 mm of tissue
+  // between the cavity and the fixed outer boundary. Without the limit the fit inverts elements there; with
+  // it, the line search stops the wall before any element inverts (the start inverts none), at a worse fit.
+  optimizer->SetDistanceMap("cavity", SphereMap(-6.0, 13.0));
+  ITK_TRY_EXPECT_NO_EXCEPTION(optimizer->Update());
+  const itk::SizeValueType freeInverted = optimizer->GetNumberOfInvertedElements();
+  const double             freeValue = optimizer->GetFinalValue();
+  optimizer->LimitElementInversionOn();
+  ITK_TRY_EXPECT_NO_EXCEPTION(optimizer->Update());
+  const itk::SizeValueType limitedInverted = optimizer->GetNumberOfInvertedElements();
+  const double             limitedValue = optimizer->GetFinalValue();
+  std::cout << "cavity +7 mm: " << freeInverted << " inverted elements, Phi " << freeValue
+            << " mm^2 without the limit; " << limitedInverted << " inverted, Phi " << limitedValue << " mm^2, "
+            << optimizer->GetNumberOfRejectedSteps() << " trial points rejected with it" << std::endl;
+  if (freeInverted == 0 || limitedInverted != 0 || optimizer->GetNumberOfRejectedSteps() == 0 ||
+      !(limitedValue >= freeValue) || !std::isfinite(limitedValue))
+  {
+    std::cerr << "FAIL: the step limit should prevent the inversions the free fit makes" << std::endl;
+    ok = false;
+  }
   optimizer->SetWallControlSpacing(6.0);
+  ok &= bmr::test::ExpectException(
+    "step limit with a reduced basis", [&] { optimizer->Update(); }, "LimitElementInversion");
+  optimizer->LimitElementInversionOff();
+  optimizer->SetDistanceMap("cavity", SphereMap(-6.0, 7.5));
 
   // Joint estimation. The fixed inclusion map is the undeformed inclusion while the cavity grows by
   // 1.5 mm: the inclusion can only stay put by deforming as little as it can, which the softest modulus
