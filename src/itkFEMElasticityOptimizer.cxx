@@ -604,6 +604,19 @@ FEMElasticityOptimizer::GenerateData()
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
   const bool gaussNewton = m_WallControlSpacing > 0.0;
 
+  // Every inner solve, with the same stopping rules and step limit.
+  const auto solve =
+    [&](bmr::SurfaceMatchingObjective & objective, const std::vector<double> & E, const std::vector<double> & start) {
+      return SolveInner(objective,
+                        E,
+                        start,
+                        m_MaximumNumberOfInnerIterations,
+                        m_InnerGradientTolerance,
+                        gaussNewton,
+                        m_LimitElementInversion,
+                        &m_NumberOfRejectedSteps);
+    };
+
   // 1. Sweep of Phi*(E) over the bounds of the first unknown modulus, on the coarse mesh.
   bool sweepOnBound = false;
   auto t0 = Clock::now();
@@ -631,14 +644,7 @@ FEMElasticityOptimizer::GenerateData()
       E[0] = lower[0] * std::pow(upper[0] / lower[0], double(k) / double(n - 1));
       // Continuation: each sample starts from the previous optimum, so that the sweep follows one branch of
       // minima of the (non-convex) distance objective and Phi*(E) is smooth.
-      const InnerSolution s = SolveInner(*sweepObjective,
-                                         E,
-                                         wall,
-                                         m_MaximumNumberOfInnerIterations,
-                                         m_InnerGradientTolerance,
-                                         gaussNewton,
-                                         m_LimitElementInversion,
-                                         &m_NumberOfRejectedSteps);
+      const InnerSolution s = solve(*sweepObjective, E, wall);
       wall = s.wall;
       this->Record(MakeRecord("sweep", k, E, s, Seconds(ts)), m_Sweep);
       this->UpdateProgress(0.5f * float(k + 1) / float(n));
@@ -666,14 +672,7 @@ FEMElasticityOptimizer::GenerateData()
       return last.value; // L-BFGS-B starts by evaluating the point it was given
     }
     const auto ts = Clock::now();
-    last = SolveInner(fineObjective,
-                      E,
-                      wall,
-                      m_MaximumNumberOfInnerIterations,
-                      m_InnerGradientTolerance,
-                      gaussNewton,
-                      m_LimitElementInversion,
-                      &m_NumberOfRejectedSteps);
+    last = solve(fineObjective, E, wall);
     wall = last.wall;
     this->Record(MakeRecord("fine", outerIteration++, E, last, Seconds(ts)), m_History);
     this->UpdateProgress(std::min(0.99f, 0.5f + 0.02f * float(outerIteration)));
@@ -803,14 +802,7 @@ FEMElasticityOptimizer::GenerateData()
         const auto          ts = Clock::now();
         std::vector<double> E = bestModuli;
         E[k] *= std::exp(side == 0 ? m_UncertaintyStep : -m_UncertaintyStep);
-        const InnerSolution s = SolveInner(fineObjective,
-                                           E,
-                                           bestWall,
-                                           m_MaximumNumberOfInnerIterations,
-                                           m_InnerGradientTolerance,
-                                           gaussNewton,
-                                           m_LimitElementInversion,
-                                           &m_NumberOfRejectedSteps);
+        const InnerSolution s = solve(fineObjective, E, bestWall);
         gradient[side] = s.logModulusGradient;
         this->Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, Seconds(ts)), m_History);
       }
