@@ -186,30 +186,20 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
   PrintSceneWarnings(scene);
   RegisterReport report;
   report.warnings = scene.Warnings();
-  // Measured (benchmarks/run_extreme_cases.py): the modulus carried by the organ's shape change is of the
-  // size of the label staircase; at 1 mm voxels it is recovered to 1-25 %, at 3 mm slices it is 73 % off.
-  bool estimatesModulus = false;
-  for (const auto & l : scene.labels)
-  {
-    estimatesModulus |= l.role == bmr::LabelRole::UnknownMaterial;
-  }
-  double coarsest = 0.0;
+  double finest = std::numeric_limits<double>::infinity(), coarsest = 0.0;
   for (const itk::ImageBase<3> * image : { static_cast<const itk::ImageBase<3> *>(in.movingLabels),
                                            static_cast<const itk::ImageBase<3> *>(in.fixedLabels) })
   {
     for (unsigned int a = 0; a < 3; ++a)
     {
+      finest = std::min(finest, image->GetSpacing()[a]);
       coarsest = std::max(coarsest, image->GetSpacing()[a]);
     }
   }
-  if (estimatesModulus && coarsest > 1.5)
+  for (const std::string & w : scene.EstimationWarnings(finest, coarsest))
   {
-    std::ostringstream os;
-    os << "label voxels of up to " << coarsest
-       << " mm: the estimated modulus is unreliable above about 1.5 mm (it rests on sub-voxel shape changes; "
-          "the registration itself is not affected)";
-    report.warnings.push_back(os.str());
-    std::cout << "warning: " << os.str() << std::endl;
+    report.warnings.push_back(w);
+    std::cout << "warning: " << w << std::endl;
   }
 
   timer.Begin("distance maps (fixed labels)");

@@ -113,6 +113,15 @@ struct BiomechanicalRegistration_EXPORT Scene
   std::vector<std::string>
   Warnings() const;
 
+  /** Warnings about estimating a modulus from label images whose voxels are \a finestVoxel ..
+   * \a coarsestVoxel mm (the smallest and largest spacing of the moving and fixed label images); none
+   * when no label has the role unknown_material. The modulus rests on sub-voxel changes of the organs'
+   * shapes (benchmarks/run_extreme_cases.py): voxels coarser than 1.5 mm (1 x 1 x 3 mm: -13 to -73 %),
+   * and a mesh whose surfaces may leave the labels' by more than half the finest voxel
+   * (mesh.facet_distance_mm; at 1 mm voxels 0.75 mm gave +29 %, 1.25 mm -76 %, 0.5 mm -1 %). */
+  std::vector<std::string>
+  EstimationWarnings(double finestVoxel, double coarsestVoxel) const;
+
   const SceneLabel *
   FindLabel(const std::string & name) const;
   const SceneLabel *

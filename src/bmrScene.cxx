@@ -21,6 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -220,6 +221,35 @@ Scene::Warnings() const
             "\"nodal_averaged_pressure\" in the scene";
       warnings.push_back(os.str());
     }
+  }
+  return warnings;
+}
+
+std::vector<std::string>
+Scene::EstimationWarnings(double finestVoxel, double coarsestVoxel) const
+{
+  std::vector<std::string> warnings;
+  if (std::none_of(
+        labels.begin(), labels.end(), [](const SceneLabel & l) { return l.role == LabelRole::UnknownMaterial; }))
+  {
+    return warnings;
+  }
+  if (coarsestVoxel > 1.5)
+  {
+    std::ostringstream os;
+    os << "label voxels of up to " << coarsestVoxel
+       << " mm: the estimated modulus is unreliable above about 1.5 mm (it rests on sub-voxel shape changes; "
+          "the registration itself is not affected)";
+    warnings.push_back(os.str());
+  }
+  if (mesh.facetDistance > 0.5 * finestVoxel)
+  {
+    std::ostringstream os;
+    os << "mesh.facet_distance_mm = " << mesh.facetDistance << " exceeds half the finest label voxel ("
+       << 0.5 * finestVoxel
+       << " mm): the mesh's organ surfaces may leave the labels' by more than the shape changes that carry the "
+          "modulus, which is then unreliable (the registration itself is not affected)";
+    warnings.push_back(os.str());
   }
   return warnings;
 }

@@ -117,6 +117,30 @@ bmrSceneTest(int, char *[])
     ok = ok && worstEllipsoid < 1e-12;
   }
 
+  // Warnings about estimating a modulus from coarse labels (none without an unknown modulus). The valid
+  // scene's facet distance is 1 mm: half the finest voxel is the limit, so 2 mm voxels pass, 1.5 mm ones do
+  // not; any spacing above 1.5 mm warns.
+  {
+    const auto count = [](const std::vector<std::string> & w, const std::string & what) {
+      return std::count_if(
+        w.begin(), w.end(), [&](const std::string & m) { return m.find(what) != std::string::npos; });
+    };
+    const auto fine = s.EstimationWarnings(2.0, 2.0);
+    const auto facet = s.EstimationWarnings(1.5, 1.5);
+    const auto slices = s.EstimationWarnings(1.0, 3.0);
+    bmr::Scene known = s;
+    known.labels[2].role = bmr::LabelRole::Material;
+    bmr::Scene half = s; // both limits reached, neither exceeded
+    half.mesh.facetDistance = 0.5;
+    const bool warningsOk =
+      fine.size() == 1 && count(fine, "voxels of up to 2 mm") == 1 && facet.size() == 1 &&
+      count(facet, "mesh.facet_distance_mm = 1 exceeds half the finest label voxel (0.75 mm)") == 1 &&
+      slices.size() == 2 && count(slices, "voxels of up to 3 mm") == 1 && known.EstimationWarnings(1.0, 3.0).empty() &&
+      half.EstimationWarnings(1.0, 1.5).empty();
+    std::cout << "estimation warnings: " << (warningsOk ? "ok" : "FAIL") << std::endl;
+    ok = ok && warningsOk;
+  }
+
   auto              parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
   const std::string v = ValidScene;
   ok &= ExpectException("nu = 0.5",
