@@ -487,6 +487,10 @@ RunSimulation(const LabelImageType *    movingLabels,
   PrintSceneWarnings(scene);
   SimulationOutputs out;
   out.mesh = MeshLabels(movingLabels, scene, timer, "mesh (CGAL Mesh_3)");
+  for (const std::string & w : bmr::MeshResolutionWarnings(scene, out.mesh))
+  {
+    std::cout << "warning: " << w << std::endl;
+  }
 
   timer.Begin("FEM (assemble, factorise, solve)");
   out.simulation = bmr::SimulateScene(scene, out.mesh);

@@ -208,6 +208,11 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
 
   SimulationOutputs sim;
   sim.mesh = MeshLabels(in.movingLabels, scene, timer, "mesh (CGAL Mesh_3)");
+  for (const std::string & w : bmr::MeshResolutionWarnings(scene, sim.mesh))
+  {
+    report.warnings.push_back(w);
+    std::cout << "warning: " << w << std::endl;
+  }
   bool hasUnknown = false;
   for (const auto & l : scene.labels)
   {

@@ -125,6 +125,23 @@ BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 
 /** Number of connected components (elements sharing a face). \a componentOfNode
  * receives, when not null, the component index of every node. */
+/** How finely the mesh resolves one label: its volume V [mm^3], the area A of its surface [mm^2] (faces
+ * shared with no element of the same label), the mean edge length h of its elements [mm], and
+ * \f$ n = 2V / (A h) \f$, the number of elements across it: a slab of thickness t has 2V / A = t, a ball
+ * of radius R has 2V / A = 2R / 3. */
+struct BiomechanicalRegistration_EXPORT LabelResolution
+{
+  std::int32_t label{ 0 };
+  double       volume{ 0.0 };
+  double       surfaceArea{ 0.0 };
+  double       meanEdgeLength{ 0.0 };
+  double       elementsAcross{ 0.0 };
+};
+
+/** LabelResolution of every label of \a mesh, in ascending label order. */
+BiomechanicalRegistration_EXPORT std::vector<LabelResolution>
+                                 ComputeLabelResolution(const TetrahedralMesh & mesh);
+
 BiomechanicalRegistration_EXPORT std::size_t
 ConnectedComponents(const TetrahedralMesh & mesh, std::vector<std::int32_t> * componentOfNode);
 

@@ -21,11 +21,38 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <set>
 #include <sstream>
 
 namespace bmr {
+
+std::vector<std::string>
+MeshResolutionWarnings(const Scene & scene, const TetrahedralMesh & mesh)
+{
+  std::vector<std::string> warnings;
+  for (const LabelResolution & r : ComputeLabelResolution(mesh))
+  {
+    const SceneLabel * l = nullptr;
+    for (const SceneLabel & candidate : scene.labels)
+    {
+      l = candidate.value == r.label ? &candidate : l;
+    }
+    const bool simulated = l && (l->role == LabelRole::Material || l->role == LabelRole::UnknownMaterial);
+    if (simulated && r.elementsAcross < MinimumElementsAcross)
+    {
+      std::ostringstream os;
+      os << std::setprecision(2) << "label \"" << l->name << "\" is only " << r.elementsAcross
+         << " elements across (2 x volume / surface area " << 2.0 * r.volume / r.surfaceArea << " mm, mean edge "
+         << r.meanEdgeLength
+         << " mm): linear tetrahedra stiffen in so thin a layer; reduce mesh.cell_size_mm or its "
+            "cell_size_per_label_mm";
+      warnings.push_back(os.str());
+    }
+  }
+  return warnings;
+}
 
 std::map<std::int32_t, MaterialParameters>
 SceneMaterials(const Scene & scene)

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <sstream>
 
@@ -384,6 +385,51 @@ std::vector<std::int32_t>
 NodesOnLabelSurface(const TetrahedralMesh & mesh, std::int32_t label)
 {
   return UniqueNodes(LabelSurfaceFaces(mesh, label));
+}
+
+std::vector<LabelResolution>
+ComputeLabelResolution(const TetrahedralMesh & mesh)
+{
+  std::map<std::int32_t, LabelResolution> byLabel;
+  std::map<std::int32_t, std::size_t>     elements;
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    LabelResolution & r = byLabel[mesh.labels[e]];
+    r.label = mesh.labels[e];
+    r.volume += std::abs(TetrahedronVolume(mesh, e));
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = a + 1; b < 4; ++b)
+      {
+        const double * xa = &mesh.points[3 * static_cast<std::size_t>(mesh.tetrahedra[4 * e + a])];
+        const double * xb = &mesh.points[3 * static_cast<std::size_t>(mesh.tetrahedra[4 * e + b])];
+        r.meanEdgeLength += std::sqrt((xa[0] - xb[0]) * (xa[0] - xb[0]) + (xa[1] - xb[1]) * (xa[1] - xb[1]) +
+                                      (xa[2] - xb[2]) * (xa[2] - xb[2]));
+      }
+    }
+    ++elements[mesh.labels[e]];
+  }
+  std::vector<LabelResolution> result;
+  for (auto & kv : byLabel)
+  {
+    LabelResolution & r = kv.second;
+    r.meanEdgeLength /= 6.0 * static_cast<double>(elements[kv.first]);
+    const std::vector<std::int32_t> faces = LabelSurfaceFaces(mesh, kv.first);
+    for (std::size_t f = 0; f + 2 < faces.size(); f += 3)
+    {
+      const double * x0 = &mesh.points[3 * static_cast<std::size_t>(faces[f])];
+      const double * x1 = &mesh.points[3 * static_cast<std::size_t>(faces[f + 1])];
+      const double * x2 = &mesh.points[3 * static_cast<std::size_t>(faces[f + 2])];
+      const double   a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+      const double   b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+      r.surfaceArea += 0.5 * std::sqrt(std::pow(a[1] * b[2] - a[2] * b[1], 2) + std::pow(a[2] * b[0] - a[0] * b[2], 2) +
+                                       std::pow(a[0] * b[1] - a[1] * b[0], 2));
+    }
+    r.elementsAcross =
+      r.surfaceArea > 0.0 && r.meanEdgeLength > 0.0 ? 2.0 * r.volume / (r.surfaceArea * r.meanEdgeLength) : 0.0;
+    result.push_back(r);
+  }
+  return result;
 }
 
 std::size_t

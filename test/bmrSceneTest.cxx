@@ -141,6 +141,38 @@ bmrSceneTest(int, char *[])
     ok = ok && warningsOk;
   }
 
+  // Mesh resolution of a label: the unit cube cut into the six tetrahedra of the Kuhn triangulation
+  // (edges 1, sqrt 2 and sqrt 3, 3 : 2 : 1 per element) has V = 1, A = 6 and
+  // n = 2V / (A h) = 2 / (6 (3 + 2 sqrt 2 + sqrt 3) / 6), exact up to rounding; at 0.26 elements across
+  // a simulated label is warned about, naming it, a hollow one is not.
+  {
+    bmr::TetrahedralMesh cube;
+    for (int k = 0; k < 8; ++k)
+    {
+      cube.points.insert(cube.points.end(), { double(k & 1), double((k >> 1) & 1), double((k >> 2) & 1) });
+    }
+    const int paths[6][2] = { { 1, 3 }, { 1, 5 }, { 2, 3 }, { 2, 6 }, { 4, 5 }, { 4, 6 } };
+    for (const auto & p : paths)
+    {
+      cube.tetrahedra.insert(cube.tetrahedra.end(), { 0, p[0], p[1], 7 });
+      cube.labels.push_back(1);
+    }
+    const auto   resolution = bmr::ComputeLabelResolution(cube);
+    const double expected = 2.0 / (3.0 + 2.0 * std::sqrt(2.0) + std::sqrt(3.0));
+    bmr::Scene   material = s;
+    material.labels[1].value = 1; // soft_tissue
+    bmr::Scene hollow = material;
+    hollow.labels[1].role = bmr::LabelRole::Hollow;
+    const auto warnings = bmr::MeshResolutionWarnings(material, cube);
+    const bool resolutionOk = resolution.size() == 1 && std::abs(resolution[0].volume - 1.0) < 1e-12 &&
+                              std::abs(resolution[0].surfaceArea - 6.0) < 1e-12 &&
+                              std::abs(resolution[0].elementsAcross - expected) < 1e-12 && warnings.size() == 1 &&
+                              warnings[0].find("label \"soft_tissue\" is only 0.26 elements across") == 0 &&
+                              bmr::MeshResolutionWarnings(hollow, cube).empty();
+    std::cout << "label resolution: " << (resolutionOk ? "ok" : "FAIL") << std::endl;
+    ok = ok && resolutionOk;
+  }
+
   auto              parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };
   const std::string v = ValidScene;
   ok &= ExpectException("nu = 0.5",
