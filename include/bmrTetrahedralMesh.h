@@ -123,8 +123,6 @@ BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
                                  LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label);
 
-/** Number of connected components (elements sharing a face). \a componentOfNode
- * receives, when not null, the component index of every node. */
 /** How finely the mesh resolves one label: its volume V [mm^3], the area A of its surface [mm^2] (faces
  * shared with no element of the same label), the mean edge length h of its elements [mm], and
  * \f$ n = 2V / (A h) \f$, the number of elements across it: a slab of thickness t has 2V / A = t, a ball
@@ -142,6 +140,8 @@ struct BiomechanicalRegistration_EXPORT LabelResolution
 BiomechanicalRegistration_EXPORT std::vector<LabelResolution>
                                  ComputeLabelResolution(const TetrahedralMesh & mesh);
 
+/** Number of connected components (elements sharing a face). \a componentOfNode
+ * receives, when not null, the component index of every node. */
 BiomechanicalRegistration_EXPORT std::size_t
 ConnectedComponents(const TetrahedralMesh & mesh, std::vector<std::int32_t> * componentOfNode);
 

@@ -34,12 +34,8 @@ MeshResolutionWarnings(const Scene & scene, const TetrahedralMesh & mesh)
   std::vector<std::string> warnings;
   for (const LabelResolution & r : ComputeLabelResolution(mesh))
   {
-    const SceneLabel * l = nullptr;
-    for (const SceneLabel & candidate : scene.labels)
-    {
-      l = candidate.value == r.label ? &candidate : l;
-    }
-    const bool simulated = l && (l->role == LabelRole::Material || l->role == LabelRole::UnknownMaterial);
+    const SceneLabel * l = scene.FindLabelValue(r.label);
+    const bool         simulated = l && (l->role == LabelRole::Material || l->role == LabelRole::UnknownMaterial);
     if (simulated && r.elementsAcross < MinimumElementsAcross)
     {
       std::ostringstream os;
