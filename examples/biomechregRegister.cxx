@@ -196,11 +196,14 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
       coarsest = std::max(coarsest, image->GetSpacing()[a]);
     }
   }
-  for (const std::string & w : scene.EstimationWarnings(finest, coarsest))
-  {
-    report.warnings.push_back(w);
-    std::cout << "warning: " << w << std::endl;
-  }
+  const auto warn = [&report](const std::vector<std::string> & warnings) {
+    for (const std::string & w : warnings)
+    {
+      report.warnings.push_back(w);
+      std::cout << "warning: " << w << std::endl;
+    }
+  };
+  warn(scene.EstimationWarnings(finest, coarsest));
 
   timer.Begin("distance maps (fixed labels)");
   const auto maps = itk::ComputeSceneDistanceMaps(in.fixedLabels.GetPointer(), scene);
@@ -208,11 +211,7 @@ RunRegistration(const RegisterInputs & in, StageTimer & timer)
 
   SimulationOutputs sim;
   sim.mesh = MeshLabels(in.movingLabels, scene, timer, "mesh (CGAL Mesh_3)");
-  for (const std::string & w : bmr::MeshResolutionWarnings(scene, sim.mesh))
-  {
-    report.warnings.push_back(w);
-    std::cout << "warning: " << w << std::endl;
-  }
+  warn(bmr::MeshResolutionWarnings(scene, sim.mesh));
   bool hasUnknown = false;
   for (const auto & l : scene.labels)
   {

@@ -390,21 +390,33 @@ NodesOnLabelSurface(const TetrahedralMesh & mesh, std::int32_t label)
 std::vector<LabelResolution>
 ComputeLabelResolution(const TetrahedralMesh & mesh)
 {
+  // One pass over the elements: volume, edges, and the faces whose neighbour has another label (or none).
+  const std::vector<std::int64_t>         neighbour = FaceNeighbours(mesh);
   std::map<std::int32_t, LabelResolution> byLabel;
   std::map<std::int32_t, std::size_t>     elements;
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
+    const std::int32_t * t = &mesh.tetrahedra[4 * e];
+    const double *       x[4] = {
+            &mesh.points[3 * t[0]], &mesh.points[3 * t[1]], &mesh.points[3 * t[2]], &mesh.points[3 * t[3]]
+    };
     LabelResolution & r = byLabel[mesh.labels[e]];
     r.label = mesh.labels[e];
     r.volume += std::abs(TetrahedronVolume(mesh, e));
-    for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 4; ++i)
     {
-      for (int b = a + 1; b < 4; ++b)
+      for (int j = i + 1; j < 4; ++j)
       {
-        const double * xa = &mesh.points[3 * static_cast<std::size_t>(mesh.tetrahedra[4 * e + a])];
-        const double * xb = &mesh.points[3 * static_cast<std::size_t>(mesh.tetrahedra[4 * e + b])];
-        r.meanEdgeLength += std::sqrt((xa[0] - xb[0]) * (xa[0] - xb[0]) + (xa[1] - xb[1]) * (xa[1] - xb[1]) +
-                                      (xa[2] - xb[2]) * (xa[2] - xb[2]));
+        r.meanEdgeLength += Norm(Sub(x[j], x[i]));
+      }
+    }
+    for (int f = 0; f < 4; ++f)
+    {
+      const std::int64_t other = neighbour[4 * e + f];
+      if (other < 0 || mesh.labels[other] != mesh.labels[e])
+      {
+        r.surfaceArea +=
+          0.5 * Norm(Cross(Sub(x[FaceNodes[f][1]], x[FaceNodes[f][0]]), Sub(x[FaceNodes[f][2]], x[FaceNodes[f][0]])));
       }
     }
     ++elements[mesh.labels[e]];
@@ -414,17 +426,6 @@ ComputeLabelResolution(const TetrahedralMesh & mesh)
   {
     LabelResolution & r = kv.second;
     r.meanEdgeLength /= 6.0 * static_cast<double>(elements[kv.first]);
-    const std::vector<std::int32_t> faces = LabelSurfaceFaces(mesh, kv.first);
-    for (std::size_t f = 0; f + 2 < faces.size(); f += 3)
-    {
-      const double * x0 = &mesh.points[3 * static_cast<std::size_t>(faces[f])];
-      const double * x1 = &mesh.points[3 * static_cast<std::size_t>(faces[f + 1])];
-      const double * x2 = &mesh.points[3 * static_cast<std::size_t>(faces[f + 2])];
-      const double   a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
-      const double   b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
-      r.surfaceArea += 0.5 * std::sqrt(std::pow(a[1] * b[2] - a[2] * b[1], 2) + std::pow(a[2] * b[0] - a[0] * b[2], 2) +
-                                       std::pow(a[0] * b[1] - a[1] * b[0], 2));
-    }
     r.elementsAcross =
       r.surfaceArea > 0.0 && r.meanEdgeLength > 0.0 ? 2.0 * r.volume / (r.surfaceArea * r.meanEdgeLength) : 0.0;
     result.push_back(r);
