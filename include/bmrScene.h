@@ -122,6 +122,14 @@ struct BiomechanicalRegistration_EXPORT Scene
   std::vector<std::string>
   EstimationWarnings(double finestVoxel, double coarsestVoxel) const;
 
+  /** Labels with the role unknown_material, in scene order: the moduli an estimation recovers. */
+  std::vector<const SceneLabel *>
+  UnknownLabels() const;
+  /** The label whose modulus anchors the scale of the estimated moduli: \c gauge, or the first label with
+   * the role material when the scene names none; nullptr when there is neither. */
+  const SceneLabel *
+  GaugeLabel() const;
+
   const SceneLabel *
   FindLabel(const std::string & name) const;
   const SceneLabel *

@@ -19,12 +19,13 @@
 #define itkFEMElasticityOptimizer_h
 
 #include "BiomechanicalRegistrationExport.h"
-#include "bmrScene.h"
+#include "bmrElasticityEstimator.h"
 #include "itkImage.h"
 #include "itkProcessObject.h"
 #include "itkTetrahedralMeshObject.h"
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -132,26 +133,9 @@ public:
   itkNewMacro(Self);
   itkTypeMacro(FEMElasticityOptimizer, ProcessObject);
 
-  /** One inner solve: stage ("sweep", "fine" or "curvature"), E [kPa] of the unknown labels,
-   * Phi* [mm^2], |dPhi/dd| [mm] at the inner optimum, dPhi* / dlogE [mm^2], inner iterations. */
-  struct IterationRecord
-  {
-    std::string         stage;
-    unsigned int        iteration{ 0 };
-    std::vector<double> youngsModuli;
-    double              value{ 0.0 };
-    double              wallGradientNorm{ 0.0 };
-    std::vector<double> logModulusGradient;
-    unsigned int        innerIterations{ 0 };
-    double              seconds{ 0.0 };
-  };
-  struct SurfaceDistance
-  {
-    std::string name;
-    double      rms{ 0.0 };     ///< mm
-    double      maximum{ 0.0 }; ///< mm
-    double      mean{ 0.0 };    ///< mm, signed (> 0: outside the fixed organ on average)
-  };
+  /** One inner solve (bmr::IterationRecord) and the distance of one objective surface [mm]. */
+  using IterationRecord = bmr::IterationRecord;
+  using SurfaceDistance = bmr::ResidualStatistics;
 
   void
   SetMesh(const MeshObjectType * mesh);
@@ -298,28 +282,37 @@ protected:
   GenerateData() override;
 
 private:
+  /** The estimator's settings from this object's. */
+  bmr::EstimatorSettings
+  Settings() const;
+  /** The scene's objective on \a mesh with this object's wall settings. */
+  std::unique_ptr<bmr::SurfaceMatchingObjective>
+  MakeObjective(const bmr::TetrahedralMesh &                                                                 mesh,
+                const std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> & samplers) const;
+  /** Copies the estimator's result into the outputs. */
   void
-  Record(const IterationRecord & record, std::vector<IterationRecord> & list);
+  TakeResult(const bmr::EstimationResult & result);
 
   bmr::Scene                    m_Scene;
   std::vector<std::string>      m_DistanceMapNames;
-  unsigned int                  m_NumberOfSweepSamples{ 10 };
-  unsigned int                  m_MaximumNumberOfInnerIterations{ 2000 };
-  unsigned int                  m_MaximumNumberOfOuterIterations{ 20 };
-  double                        m_InnerGradientTolerance{ 1e-5 };
-  double                        m_OuterGradientTolerance{ 1e-4 };
-  double                        m_FlatnessThreshold{ 0.01 };
-  bool                          m_EstimateUncertainty{ true };
-  bool                          m_LimitElementInversion{ false };
+  // Defaults: those of the library's estimator and wall loads (one place, read by the CLI too).
+  unsigned int m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
+  unsigned int m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
+  unsigned int m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
+  double       m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
+  double       m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
+  double       m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
+  bool         m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
+  bool         m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
+  double       m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
+  double       m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
+  double       m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
+  bool         m_WallMotionAlongNormals{ bmr::WallLoadSettings{}.motion == bmr::WallMotionEnum::AlongNormals };
   SizeValueType                 m_NumberOfRejectedSteps{ 0 };
   SizeValueType                 m_NumberOfInvertedElements{ 0 };
-  double                        m_UncertaintyStep{ 0.05 };
   std::map<std::string, double> m_ModulusUncertainty;
   double                        m_ResidualStandardDeviation{ 0.0 };
   double                        m_ModulusCurvature{ 0.0 };
-  double                        m_WallControlSpacing{ 0.0 };
-  double                        m_WallRegularization{ 0.01 };
-  bool                          m_WallMotionAlongNormals{ true };
   std::map<std::string, double> m_EstimatedYoungsModuli;
   std::string                   m_GaugeLabel;
   std::vector<IterationRecord>  m_Sweep;

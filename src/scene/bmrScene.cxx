@@ -149,6 +149,37 @@ LabelRoleName(LabelRole role)
   return "?";
 }
 
+std::vector<const SceneLabel *>
+Scene::UnknownLabels() const
+{
+  std::vector<const SceneLabel *> unknown;
+  for (const SceneLabel & l : labels)
+  {
+    if (l.role == LabelRole::UnknownMaterial)
+    {
+      unknown.push_back(&l);
+    }
+  }
+  return unknown;
+}
+
+const SceneLabel *
+Scene::GaugeLabel() const
+{
+  if (!gauge.empty())
+  {
+    return FindLabel(gauge);
+  }
+  for (const SceneLabel & l : labels)
+  {
+    if (l.role == LabelRole::Material)
+    {
+      return &l;
+    }
+  }
+  return nullptr;
+}
+
 const SceneLabel *
 Scene::FindLabel(const std::string & labelName) const
 {

@@ -1,0 +1,151 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrElasticityEstimator_h
+#define bmrElasticityEstimator_h
+
+#include "bmrSurfaceMatchingObjective.h"
+
+#include <functional>
+#include <map>
+
+namespace bmr {
+
+/** A modulus to estimate: label, name, and the bounds of the search [kPa]. */
+struct BiomechanicalRegistration_EXPORT UnknownModulus
+{
+  std::string  name;
+  std::int32_t label{ 0 };
+  double       initial{ 0.0 }; ///< kPa, used until the sweep has set it
+  double       lowerBound{ 0.0 };
+  double       upperBound{ 0.0 };
+};
+
+/** The unknown moduli of a scene (role unknown_material), in scene order. */
+BiomechanicalRegistration_EXPORT std::vector<UnknownModulus>
+                                 SceneUnknownModuli(const Scene & scene);
+
+/** One inner solve: stage ("sweep", "fine", "curvature" or "outer"), E [kPa] of the unknown labels,
+ * Phi* [mm^2], |dPhi/dp| at the inner optimum, dPhi* / dlogE [mm^2], inner iterations, wall time [s]. */
+struct BiomechanicalRegistration_EXPORT IterationRecord
+{
+  std::string         stage;
+  unsigned int        iteration{ 0 };
+  std::vector<double> youngsModuli;
+  double              value{ 0.0 };
+  double              wallGradientNorm{ 0.0 };
+  std::vector<double> logModulusGradient;
+  unsigned int        innerIterations{ 0 };
+  double              seconds{ 0.0 };
+};
+
+/** Settings of ElasticityEstimator; the defaults are those of FEMElasticityOptimizer and biomechreg. */
+struct BiomechanicalRegistration_EXPORT EstimatorSettings
+{
+  unsigned int numberOfSweepSamples{ 10 };    ///< per unknown modulus, >= 3
+  unsigned int maximumInnerIterations{ 2000 };
+  unsigned int maximumOuterIterations{ 20 };  ///< function evaluations of the outer L-BFGS-B
+  double       innerGradientTolerance{ 1e-5 };
+  double       outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
+  double       flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds
+  bool         estimateUncertainty{ true };
+  double       uncertaintyStep{ 0.05 };        ///< delta in log E of the curvature's central differences
+  bool         limitElementInversion{ false }; ///< one parameter per wall node only
+  bool         gaussNewtonInner{ false };      ///< Levenberg-Marquardt inner solve (reduced wall basis)
+};
+
+/** What ElasticityEstimator::Run() found. Vectors over the unknowns are in the order they were given. */
+struct BiomechanicalRegistration_EXPORT EstimationResult
+{
+  std::vector<double>             youngsModuli;   ///< kPa
+  std::vector<double>             loadParameters; ///< at the estimate
+  std::vector<double>             displacement;   ///< mm, 3N on the fine mesh
+  std::vector<double>             boundaryForces; ///< mN, 3N
+  double                          value{ 0.0 };   ///< Phi* [mm^2]
+  std::vector<IterationRecord>    sweep, history, outerIterations;
+  std::string                     outerStopCondition;
+  bool                            identifiable{ true };
+  std::string                     identifiabilityMessage;
+  std::vector<double>             logModulusSigma; ///< standard deviations of log E; empty when not computed
+  std::vector<double>             curvature;       ///< d2 Phi* / dlogE_i dlogE_j [mm^2], row-major, or empty
+  double                          residualStandardDeviation{ 0.0 }; ///< mm
+  std::vector<ResidualStatistics> residuals;
+  std::size_t                     rejectedSteps{ 0 };
+  std::size_t                     invertedElements{ 0 };
+  std::map<std::string, double>   timings; ///< s: "sweep", "initial loads", "fine", "uncertainty"
+};
+
+/** \brief Joint estimation of the loads and the unknown moduli over any EstimationObjective
+ * (dissertation chapter 3): sweep, outer bounded optimisation, uncertainty, identifiability.
+ *
+ * - inner: \f$\Phi^*(E) = \min_p \Phi(E, p)\f$ by L-BFGS (itk::LBFGS2Optimizerv4, More-Thuente line
+ *   search) with the adjoint gradient, or Levenberg-Marquardt (EstimationObjective::SolveLoadsGaussNewton)
+ *   with gaussNewtonInner; each warm-started from the previous optimum;
+ * - sweep (coarse objective, or the fine one): a coordinate sweep. For each unknown in turn, with the
+ *   others at their current values, Phi* is sampled at numberOfSweepSamples log-spaced moduli over its
+ *   bounds (each sample warm-started from the previous one, so that the sweep follows one branch of
+ *   minima); the minimum is bracketed by the first sign change of \f$d\Phi^{*}/d\log E_k\f$ from - to + and
+ *   interpolated linearly in log E_k. One unknown gives one sweep (dissertation), two or more give one
+ *   pass of coordinate descent, which only starts the joint outer search;
+ * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the bounds by itk::LBFGSBOptimizerv4 with the envelope
+ *   gradient \f$ d\Phi^{*}/d\log E_m = \partial\Phi/\partial\log E_m \f$ at the inner optimum; the result is
+ *   the best point visited;
+ * - identifiability, per unknown: flat (relative variation of Phi* over its bounds below
+ *   flatnessThreshold), or the sweep's minimum on a bound, or the estimate on a bound;
+ * - uncertainty: \f$ H = \partial^2\Phi^{*}/\partial\log E^2 \f$ by central differences of the envelope
+ *   gradient at \f$\pm\delta\f$ (two inner solves per unknown), residual variance
+ *   \f$ s^2 = \sum_s w_s n_s \mathrm{rms}_s^2 / \sum_s w_s n_s \f$, effective weight
+ *   \f$ w_{\mathrm{eff}} = \sum_s w_s^2 n_s / \sum_s w_s n_s \f$ and
+ *   \f$ \mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1} \f$; not computed when an estimate lies on a
+ *   bound, infinite when H is not positive definite.
+ * Deterministic: sequential, no random numbers.
+ * \ingroup BiomechanicalRegistrationEstimation
+ */
+class BiomechanicalRegistration_EXPORT ElasticityEstimator
+{
+public:
+  /** Called after every inner solve with its record and the fraction of the work done. */
+  using Observer = std::function<void(const IterationRecord &, double progress)>;
+
+  /** \a fine must outlive the estimator; \a coarse (optional) is the same anatomy on a coarser mesh, used
+   * for the sweep only. The unknowns must be those of the objectives (same order). Throws on an invalid
+   * setting or unknown. */
+  ElasticityEstimator(EstimationObjective &       fine,
+                      EstimationObjective *       coarse,
+                      std::vector<UnknownModulus> unknowns,
+                      EstimatorSettings           settings);
+
+  void
+  SetObserver(Observer observer)
+  {
+    m_Observer = std::move(observer);
+  }
+  EstimationResult
+  Run();
+
+private:
+  struct Stages;
+  EstimationObjective &       m_Fine;
+  EstimationObjective *       m_Coarse;
+  std::vector<UnknownModulus> m_Unknowns;
+  EstimatorSettings           m_Settings;
+  Observer                    m_Observer;
+};
+
+} // namespace bmr
+
+#endif

@@ -1,0 +1,135 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrForwardModel_h
+#define bmrForwardModel_h
+
+#include "bmrLinearElasticModel.h"
+
+#include <memory>
+
+namespace bmr {
+
+/** \brief The forward model of an estimation: the state u for given loads and moduli, and what the
+ * adjoint gradients need from it.
+ *
+ * The model's equilibrium is \f$ f_{int}(u; E) = f \f$ on the free degrees of freedom, with u
+ * prescribed on the constrained ones (SetConstrainedNodes()). For the gradient of a function
+ * \f$\Phi(u)\f$ with \f$g = \partial\Phi/\partial u\f$ the estimator solves one adjoint system with
+ * the tangent at the last state, \f$ K_T \lambda = g \f$ on the free dofs (\f$\lambda = 0\f$ on the
+ * constrained ones), and then
+ * \f[ \frac{\partial\Phi}{\partial f} = \lambda, \qquad
+ *     \frac{\partial\Phi}{\partial \bar u_c} = g_c - (K_T \lambda)_c, \qquad
+ *     \frac{\partial\Phi}{\partial E_m} = -\lambda^T \frac{\partial f_{int}}{\partial E_m} \f]
+ * for the forces f, the prescribed displacements \f$\bar u\f$ and the moduli E_m.
+ * Units: u in mm, f in mN, E in kPa.
+ * \ingroup BiomechanicalRegistrationFEM
+ */
+class BiomechanicalRegistration_EXPORT ForwardModel
+{
+public:
+  virtual ~ForwardModel() = default;
+
+  virtual const TetrahedralMesh &
+  GetMesh() const = 0;
+  /** The nodes whose displacement is prescribed in every SolveState(); changing them refactorises. */
+  virtual void
+  SetConstrainedNodes(const std::vector<std::int32_t> & nodes) = 0;
+  /** Modulus [kPa] of every element of \a label. */
+  virtual void
+  SetYoungsModulus(std::int32_t label, double youngsModulus) = 0;
+  virtual double
+  GetYoungsModulus(std::int32_t label) const = 0;
+
+  /** Equilibrium state u [mm] (3N) for nodal forces [mN] (3N, or empty for none; ignored on constrained
+   * dofs) and prescribed displacements [mm] (3N, read on the constrained dofs only). */
+  virtual std::vector<double>
+  SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed) = 0;
+  /** lambda with K_T lambda = g on the free dofs and lambda = 0 on the constrained ones, K_T the tangent
+   * at the last state (3N in, 3N out). */
+  virtual std::vector<double>
+  SolveAdjoint(const std::vector<double> & g) = 0;
+  /** K_T v at every dof (3N): the tangent applied to a nodal vector. */
+  virtual std::vector<double>
+  ApplyTangent(const std::vector<double> & v) const = 0;
+  /** f_int(u) at every dof [mN] (3N). */
+  virtual std::vector<double>
+  InternalForces(const std::vector<double> & u) const = 0;
+  /** \f$\partial f_{int}/\partial E_m\f$ at u [mN per kPa] (3N), m the material of \a label. */
+  virtual std::vector<double>
+  ModulusDerivative(std::int32_t label, const std::vector<double> & u) const = 0;
+  /** True when u is affine in the forces and prescribed displacements at fixed moduli, so that
+   * du/dp can be computed once per modulus (the Gauss-Newton inner solver needs it). */
+  virtual bool
+  IsLinear() const = 0;
+};
+
+/** \brief The linear-elastic forward model: P1 tetrahedra, standard or nodal-averaged pressure per
+ * material (bmr::LinearElasticModel), \f$ f_{int} = K(E) u = \sum_m E_m \hat K_m u \f$, so
+ * \f$K_T = K\f$ and \f$\partial f_{int}/\partial E_m = \hat K_m u\f$. One sparse Cholesky factorisation
+ * per value of the moduli serves every state and adjoint solve.
+ * \ingroup BiomechanicalRegistrationFEM
+ */
+class BiomechanicalRegistration_EXPORT LinearForwardModel : public ForwardModel
+{
+public:
+  /** \a mesh must outlive the model. */
+  LinearForwardModel(const TetrahedralMesh & mesh, const std::map<std::int32_t, MaterialParameters> & materials);
+  ~LinearForwardModel() override;
+
+  const TetrahedralMesh &
+  GetMesh() const override
+  {
+    return m_Mesh;
+  }
+  void
+  SetConstrainedNodes(const std::vector<std::int32_t> & nodes) override;
+  void
+  SetYoungsModulus(std::int32_t label, double youngsModulus) override;
+  double
+  GetYoungsModulus(std::int32_t label) const override;
+  std::vector<double>
+  SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed) override;
+  std::vector<double>
+  SolveAdjoint(const std::vector<double> & g) override;
+  std::vector<double>
+  ApplyTangent(const std::vector<double> & v) const override;
+  std::vector<double>
+  InternalForces(const std::vector<double> & u) const override;
+  std::vector<double>
+  ModulusDerivative(std::int32_t label, const std::vector<double> & u) const override;
+  bool
+  IsLinear() const override
+  {
+    return true;
+  }
+
+  /** The underlying assembled model (stress, per-element moduli, timings). */
+  const LinearElasticModel &
+  GetModel() const
+  {
+    return *m_Model;
+  }
+
+private:
+  const TetrahedralMesh &             m_Mesh;
+  std::unique_ptr<LinearElasticModel> m_Model;
+};
+
+} // namespace bmr
+
+#endif

@@ -1,0 +1,198 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrLoadParameterization_h
+#define bmrLoadParameterization_h
+
+#include "bmrTetrahedralMesh.h"
+
+#include <iosfwd>
+#include <memory>
+#include <string>
+
+namespace bmr {
+
+/** Boundary conditions of one forward solve: nodal forces [mN] (3N, or empty for none) and the
+ * prescribed displacements [mm] (3N, read on the constrained dofs only). */
+struct BiomechanicalRegistration_EXPORT BoundaryLoad
+{
+  std::vector<double> forces;
+  std::vector<double> prescribed;
+};
+
+/** \brief Maps the unknown load parameters p to the boundary conditions of the forward model, and
+ * owns the choice between prescribing displacements (Dirichlet) and applying forces.
+ *
+ * The constrained nodes (GetConstrainedNodes()) do not depend on p, so the forward model's
+ * factorisation is reused over every p. The estimator minimises
+ * \f$ \Phi(u(p)) + R(p) \f$ with the parameterization's prior R (EvaluatePrior()); the chain rule
+ * through the boundary conditions is PullBackGradient().
+ * \ingroup BiomechanicalRegistrationEstimation
+ */
+class BiomechanicalRegistration_EXPORT LoadParameterization
+{
+public:
+  virtual ~LoadParameterization() = default;
+
+  virtual std::size_t
+  GetNumberOfParameters() const = 0;
+  /** Every node whose displacement is prescribed, sorted (held nodes and load-controlled ones). */
+  virtual const std::vector<std::int32_t> &
+  GetConstrainedNodes() const = 0;
+  /** Nodes held at a prescribed value that does not depend on p (bone walls: u = 0). */
+  virtual const std::vector<std::int32_t> &
+  GetHeldNodes() const = 0;
+  /** The boundary conditions for parameters \a p; throws when p has the wrong size. */
+  virtual BoundaryLoad
+  Apply(const std::vector<double> & p) const = 0;
+  /** True when Apply() is affine in p; then Direction() gives its constant derivative. */
+  virtual bool
+  IsAffine() const = 0;
+  /** Apply(p + e_j) - Apply(p) for an affine parameterization (forces empty when they do not depend on p). */
+  virtual BoundaryLoad
+  Direction(std::size_t j) const = 0;
+  /** \f$\partial\Phi/\partial p\f$ from the sensitivities of Phi to the prescribed displacements (3N,
+   * constrained dofs) and to the forces (3N, free dofs), plus the prior's gradient. */
+  virtual std::vector<double>
+  PullBackGradient(const std::vector<double> & p,
+                   const std::vector<double> & prescribedSensitivity,
+                   const std::vector<double> & forceSensitivity) const = 0;
+  /** The prior R(p) [mm^2] added to the data terms (0 when there is none). */
+  virtual double
+  EvaluatePrior(const std::vector<double> & p) const = 0;
+  /** Parameters whose boundary conditions best reproduce the nodal displacement \a u [mm] (3N) at the
+   * load-controlled nodes: the initial guess from a displacement such as surface matching's. */
+  virtual std::vector<double>
+  FitDisplacement(const std::vector<double> & u) const = 0;
+  /** The loads [mN] (3N) the boundary exerts on the tissue in the state with internal forces \a internal
+   * (3N): f_int - f at the load-controlled nodes, zero elsewhere. */
+  virtual std::vector<double>
+  BoundaryForces(const std::vector<double> & internal) const = 0;
+};
+
+/** How the loaded walls may move (WallLoads). */
+enum class WallMotionEnum : std::uint8_t
+{
+  /** Every wall node moves along its wall's normal: one scalar per control point. */
+  AlongNormals,
+  /** Every wall node moves in any direction: three parameters per control point. */
+  Free
+};
+BiomechanicalRegistration_EXPORT std::ostream &
+operator<<(std::ostream & os, WallMotionEnum value);
+
+/** The settings of WallLoads in an estimation; the defaults are FEMElasticityOptimizer's and biomechreg's. */
+struct BiomechanicalRegistration_EXPORT WallLoadSettings
+{
+  double controlSpacing{ 0.0 }; ///< mm; 0: one control point per wall node
+  /** alpha of the prior alpha/2 |p|^2: small, it picks the least-displacement optimum along the walls'
+   * near-null directions so that Phi*(E) is smooth (README, "What the walls do to the estimate"). */
+  double         regularization{ 0.01 };
+  WallMotionEnum motion{ WallMotionEnum::AlongNormals };
+};
+
+/** A loaded wall of WallLoads: its mesh nodes, and the boundary-face label whose faces give its normals. */
+struct BiomechanicalRegistration_EXPORT LoadedWall
+{
+  std::string               name;
+  std::vector<std::int32_t> nodes;
+  std::int32_t              faceLabel{ 0 };
+};
+
+/** \brief Unknown loads as displacements of the loaded walls (the control nodes), dissertation ch. 3.
+ *
+ * For a given E the map between the wall displacement d and the nodal forces F on the walls is the
+ * (invertible) Schur complement, F = S(E) d, so \f$\min_F \Phi(E,F) = \min_d \Phi(E,d)\f$: both give the
+ * same envelope \f$\Phi^*(E)\f$, but in d the walls' own distance terms are diagonal and the inner
+ * problem is well conditioned whatever E is. The forces F = K u - f at the control nodes [mN] are
+ * BoundaryForces().
+ *
+ * - d = W p with \f$W\f$ the identity (one parameter per control node and direction) or the smooth
+ *   Gaussian basis of bmr::WallBasis (SetControlSpacing());
+ * - WallMotionEnum::AlongNormals (default): \f$ d_k = n_k (W s)_k \f$, one scalar per control point,
+ *   n_k the unit wall normal at control node k: area-weighted face normals averaged over 4 mm of the same
+ *   wall, which removes the tilt of the voxel staircase. The distance objective sees only the normal part
+ *   of a wall's motion; left free, the tangential part shapes the stiff organ's surface and biases E;
+ * - prior \f$ R(p) = \tfrac{\alpha}{2} |p|^2 \f$ (SetRegularization()): independent of E, so it does not
+ *   push the moduli one way, and it picks the least-displacement optimum along the near-null directions
+ *   of a wall sliding along itself.
+ *
+ * Held nodes (u = 0 on fixed walls, and the prescribed values of the scene's own loads) keep their
+ * values; a wall node that is also held is not a control node. Forces (the scene's pressure loads) do
+ * not depend on p.
+ * \ingroup BiomechanicalRegistrationEstimation
+ */
+class BiomechanicalRegistration_EXPORT WallLoads : public LoadParameterization
+{
+public:
+  /** \a held: held nodes with 3 values each [mm]; \a forces: constant nodal forces [mN] (3N or empty).
+   * Throws when a wall has no node that is not held. \a mesh must outlive the object. */
+  WallLoads(const TetrahedralMesh &           mesh,
+            const std::vector<std::int32_t> & heldNodes,
+            const std::vector<double> &       heldValues,
+            std::vector<double>               forces,
+            const std::vector<LoadedWall> &   walls);
+  ~WallLoads() override;
+
+  /** Spacing [mm] of the control points of the smooth wall basis; 0 (default): every control node. */
+  void
+  SetControlSpacing(double spacing);
+  /** Weight alpha [1] of the prior alpha/2 |p|^2 (default 0); finite and >= 0. */
+  void
+  SetRegularization(double alpha);
+  void
+  SetMotion(WallMotionEnum motion);
+  WallMotionEnum
+  GetMotion() const;
+  /** The load-controlled wall nodes, sorted. */
+  const std::vector<std::int32_t> &
+  GetControlNodes() const;
+
+  std::size_t
+  GetNumberOfParameters() const override;
+  const std::vector<std::int32_t> &
+  GetConstrainedNodes() const override;
+  const std::vector<std::int32_t> &
+  GetHeldNodes() const override;
+  BoundaryLoad
+  Apply(const std::vector<double> & p) const override;
+  bool
+  IsAffine() const override
+  {
+    return true;
+  }
+  BoundaryLoad
+  Direction(std::size_t j) const override;
+  std::vector<double>
+  PullBackGradient(const std::vector<double> & p,
+                   const std::vector<double> & prescribedSensitivity,
+                   const std::vector<double> & forceSensitivity) const override;
+  double
+  EvaluatePrior(const std::vector<double> & p) const override;
+  std::vector<double>
+  FitDisplacement(const std::vector<double> & u) const override;
+  std::vector<double>
+  BoundaryForces(const std::vector<double> & internal) const override;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m_Impl;
+};
+
+} // namespace bmr
+
+#endif

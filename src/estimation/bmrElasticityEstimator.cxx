@@ -1,0 +1,513 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrElasticityEstimator.h"
+
+#include "bmrError.h"
+#include "bmrInnerSolve.h"
+
+#include "itkLBFGSBOptimizerv4.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace bmr {
+namespace {
+using Clock = std::chrono::steady_clock;
+double
+Seconds(Clock::time_point start)
+{
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double
+Norm(const std::vector<double> & v)
+{
+  double s = 0.0;
+  for (double x : v)
+  {
+    s += x * x;
+  }
+  return std::sqrt(s);
+}
+
+IterationRecord
+MakeRecord(const char *                stage,
+           unsigned int                iteration,
+           const std::vector<double> & moduli,
+           const LoadSolution &        s,
+           double                      seconds)
+{
+  IterationRecord r;
+  r.stage = stage;
+  r.iteration = iteration;
+  r.youngsModuli = moduli;
+  r.value = s.value;
+  r.wallGradientNorm = Norm(s.gradient);
+  r.logModulusGradient = s.logModulusGradient;
+  r.innerIterations = s.iterations;
+  r.seconds = seconds;
+  return r;
+}
+
+bool
+OnBound(double E, const UnknownModulus & unknown)
+{
+  return E <= unknown.lowerBound * 1.0001 || E >= unknown.upperBound * 0.9999;
+}
+
+/** What the sweep of one unknown says about it. */
+struct SweepAnalysis
+{
+  double      modulus{ 0.0 };
+  bool        identifiable{ true };
+  bool        onBound{ false }; ///< not flat, but no sign change of dPhi*/dlogE: the minimum is on a bound
+  std::string message;
+};
+
+/** The sweep \a sweep of unknown \a k: the minimum is bracketed by the first sign change of the envelope
+ * gradient dPhi* / dlogE_k from - to + (more robust than the sampled values, which carry the inner
+ * solver's tolerance); the zero is interpolated linearly in log E_k. Without a sign change the minimum
+ * lies on a bound; when Phi* varies by less than \a flatness (relative) the modulus is not identifiable. */
+SweepAnalysis
+AnalyseSweep(const std::vector<IterationRecord> & sweep, std::size_t k, const UnknownModulus & unknown, double flatness)
+{
+  double vmin = sweep[0].value, vmax = sweep[0].value;
+  for (const auto & r : sweep)
+  {
+    vmin = std::min(vmin, r.value);
+    vmax = std::max(vmax, r.value);
+  }
+  std::size_t best = sweep.back().logModulusGradient[k] < 0.0 ? sweep.size() - 1 : 0;
+  double      logE = std::log(sweep[best].youngsModuli[k]);
+  bool        bracketed = false;
+  for (std::size_t i = 0; i + 1 < sweep.size() && !bracketed; ++i)
+  {
+    const double g0 = sweep[i].logModulusGradient[k], g1 = sweep[i + 1].logModulusGradient[k];
+    if (g0 < 0.0 && g1 >= 0.0)
+    {
+      const double l0 = std::log(sweep[i].youngsModuli[k]), l1 = std::log(sweep[i + 1].youngsModuli[k]);
+      logE = l0 + (l1 - l0) * g0 / (g0 - g1);
+      bracketed = true;
+    }
+  }
+  SweepAnalysis      a;
+  std::ostringstream msg;
+  a.modulus = std::exp(logE);
+  const double variation = (vmax - vmin) / std::max(vmin, 1e-300);
+  if (variation < flatness)
+  {
+    a.identifiable = false;
+    msg << "Phi*(E) of \"" << unknown.name << "\" varies by only " << 100.0 * variation << " % over ["
+        << unknown.lowerBound << ", " << unknown.upperBound << "] kPa (threshold " << 100.0 * flatness
+        << " %): the modulus is not identifiable from these surfaces";
+  }
+  else if (!bracketed)
+  {
+    a.identifiable = false;
+    a.onBound = true;
+    msg << "the minimum of Phi*(E) of \"" << unknown.name << "\" lies on the bound " << sweep[best].youngsModuli[k]
+        << " kPa: the true modulus may lie outside [" << unknown.lowerBound << ", " << unknown.upperBound << "] kPa";
+  }
+  else
+  {
+    msg << "Phi*(E) varies by " << 100.0 * variation << " % over the bounds, minimum inside";
+  }
+  a.message = msg.str();
+  return a;
+}
+
+/** Residual noise of the data at the estimate: s^2 = sum_s w_s n_s rms_s^2 / sum_s w_s n_s [mm^2], and the
+ * effective weight w_eff = sum_s w_s^2 n_s / sum_s w_s n_s, with which Cov(log E) = s^2 w_eff H^-1 holds
+ * exactly for equal weights (H grows with the weights, the noise of a residual does not). */
+double
+ResidualVarianceTimesWeight(const std::vector<ResidualStatistics> & residuals, double & variance)
+{
+  double squares = 0.0, weightedCount = 0.0, squaredWeights = 0.0;
+  for (const auto & s : residuals)
+  {
+    squares += s.weight * double(s.count) * s.rms * s.rms;
+    weightedCount += s.weight * double(s.count);
+    squaredWeights += s.weight * s.weight * double(s.count);
+  }
+  variance = weightedCount > 0.0 ? squares / weightedCount : 0.0;
+  return variance * (weightedCount > 0.0 ? squaredWeights / weightedCount : 1.0);
+}
+
+/** Standard deviations of log E, sqrt(diag(v H^-1)) with v = s^2 w_eff [mm^2], from the symmetrised
+ * Hessian [mm^2]; infinite when it is not positive definite (no curvature to determine E). */
+std::vector<double>
+LogModulusStandardDeviations(const Eigen::MatrixXd & hessian, double residualVariance)
+{
+  const Eigen::MatrixXd             H = 0.5 * (hessian + hessian.transpose());
+  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  std::vector<double>               sigma(H.rows(), std::numeric_limits<double>::infinity());
+  if (llt.info() != Eigen::Success)
+  {
+    return sigma;
+  }
+  const Eigen::MatrixXd covariance = residualVariance * llt.solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
+  for (Eigen::Index k = 0; k < H.rows(); ++k)
+  {
+    sigma[k] = std::sqrt(std::max(0.0, covariance(k, k)));
+  }
+  return sigma;
+}
+} // namespace
+
+std::vector<UnknownModulus>
+SceneUnknownModuli(const Scene & scene)
+{
+  std::vector<UnknownModulus> unknowns;
+  for (const SceneLabel * l : scene.UnknownLabels())
+  {
+    unknowns.push_back({ l->name, l->value, l->youngsModulus, l->lowerBound, l->upperBound });
+  }
+  return unknowns;
+}
+
+/** The stages of one Run(), sharing the moduli, the warm-start loads and the result. */
+struct ElasticityEstimator::Stages
+{
+  ElasticityEstimator &      estimator;
+  const EstimatorSettings &  settings;
+  EstimationResult           result;
+  std::vector<double>        moduli;
+  std::vector<double>        loads; // warm start of the next inner solve
+  std::vector<SweepAnalysis> status; // per unknown
+  double                     progress{ 0.0 };
+
+  explicit Stages(ElasticityEstimator & e)
+    : estimator(e)
+    , settings(e.m_Settings)
+  {
+    for (const UnknownModulus & u : e.m_Unknowns)
+    {
+      moduli.push_back(u.initial);
+    }
+    status.resize(moduli.size());
+  }
+  const std::vector<UnknownModulus> &
+  Unknowns() const
+  {
+    return estimator.m_Unknowns;
+  }
+  LoadSolution
+  Solve(EstimationObjective & objective, const std::vector<double> & E, const std::vector<double> & start)
+  {
+    InnerSettings inner;
+    inner.maximumIterations = settings.maximumInnerIterations;
+    inner.tolerance = settings.innerGradientTolerance;
+    inner.gaussNewton = settings.gaussNewtonInner;
+    inner.limitInversion = settings.limitElementInversion;
+    return SolveInner(objective, E, start, inner, result.rejectedSteps);
+  }
+  void
+  Record(const IterationRecord & record, std::vector<IterationRecord> & list, double newProgress)
+  {
+    list.push_back(record);
+    progress = newProgress;
+    if (estimator.m_Observer)
+    {
+      estimator.m_Observer(record, progress);
+    }
+  }
+  void
+  Sweep();
+  void
+  Fine();
+  void
+  JudgeIdentifiability(const std::vector<double> & estimate);
+  void
+  Outputs(const std::vector<double> & estimate, const std::vector<double> & estimateLoads);
+  void
+  Uncertainty(const std::vector<double> & estimate, const std::vector<double> & estimateLoads);
+};
+
+void
+ElasticityEstimator::Stages::Sweep()
+{
+  EstimationObjective & objective = estimator.m_Coarse ? *estimator.m_Coarse : estimator.m_Fine;
+  std::vector<double>   start = objective.EstimateInitialParameters();
+  const unsigned int    n = settings.numberOfSweepSamples;
+  const double          total = double(n) * double(moduli.size());
+  for (std::size_t k = 0; k < moduli.size(); ++k)
+  {
+    const UnknownModulus &       unknown = Unknowns()[k];
+    std::vector<IterationRecord> samples;
+    for (unsigned int i = 0; i < n; ++i)
+    {
+      const auto          ts = Clock::now();
+      std::vector<double> E = moduli;
+      E[k] = unknown.lowerBound * std::pow(unknown.upperBound / unknown.lowerBound, double(i) / double(n - 1));
+      // Continuation: each sample starts from the previous optimum, so that the sweep follows one branch of
+      // minima of the (non-convex) distance objective and Phi*(E) is smooth.
+      const LoadSolution s = Solve(objective, E, start);
+      start = s.parameters;
+      const unsigned int index = static_cast<unsigned int>(k * n + i);
+      samples.push_back(MakeRecord("sweep", index, E, s, Seconds(ts)));
+      Record(samples.back(), result.sweep, 0.5 * double(index + 1) / total);
+    }
+    status[k] = AnalyseSweep(samples, k, unknown, settings.flatnessThreshold);
+    moduli[k] = status[k].modulus;
+  }
+}
+
+void
+ElasticityEstimator::Stages::Fine()
+{
+  EstimationObjective & fine = estimator.m_Fine;
+  LoadSolution          last;
+  unsigned int          evaluation = 0;
+  const auto            innerAt = [&](const std::vector<double> & E) {
+    if (!result.history.empty() && result.history.back().youngsModuli == E)
+    {
+      return last.value; // L-BFGS-B starts by evaluating the point it was given
+    }
+    const auto ts = Clock::now();
+    last = Solve(fine, E, loads);
+    loads = last.parameters;
+    Record(MakeRecord("fine", evaluation, E, last, Seconds(ts)),
+           result.history,
+           std::min(0.99, 0.5 + 0.02 * double(evaluation + 1)));
+    ++evaluation;
+    return last.value;
+  };
+  std::vector<double> bestModuli = moduli;
+  double              bestValue = innerAt(moduli);
+  std::vector<double> bestLoads = loads;
+  if (!moduli.empty())
+  {
+    // Outer: bounded L-BFGS over log E (vnl's L-BFGS-B through ITK).
+    auto metric = FunctionMetric::New();
+    metric->m_Function = [&](const std::vector<double> & logE, std::vector<double> * g) {
+      std::vector<double> E(logE.size());
+      for (std::size_t m = 0; m < E.size(); ++m)
+      {
+        E[m] = std::exp(logE[m]);
+      }
+      const double value = innerAt(E);
+      if (value < bestValue)
+      {
+        bestValue = value;
+        bestModuli = E;
+        bestLoads = loads;
+      }
+      if (g)
+      {
+        *g = last.logModulusGradient;
+      }
+      return value;
+    };
+    const unsigned int                         m = static_cast<unsigned int>(moduli.size());
+    FunctionMetric::ParametersType             p(m);
+    itk::LBFGSBOptimizerv4::BoundValueType     lo(m), hi(m);
+    itk::LBFGSBOptimizerv4::BoundSelectionType select(m);
+    for (unsigned int k = 0; k < m; ++k)
+    {
+      p[k] = std::log(moduli[k]);
+      lo[k] = std::log(Unknowns()[k].lowerBound);
+      hi[k] = std::log(Unknowns()[k].upperBound);
+      select[k] = 2; // both bounds
+    }
+    metric->SetParameters(p);
+    auto optimizer = itk::LBFGSBOptimizerv4::New();
+    optimizer->SetMetric(metric);
+    optimizer->SetLowerBound(lo);
+    optimizer->SetUpperBound(hi);
+    optimizer->SetBoundSelection(select);
+    optimizer->SetNumberOfIterations(settings.maximumOuterIterations);
+    optimizer->SetMaximumNumberOfFunctionEvaluations(settings.maximumOuterIterations);
+    optimizer->SetGradientConvergenceTolerance(settings.outerGradientTolerance * std::max(bestValue, 1e-12));
+    optimizer->SetCostFunctionConvergenceFactor(1e7);
+    // The accepted iterates of L-BFGS-B (its line searches' trial points are in the history only).
+    optimizer->AddObserver(itk::IterationEvent(), [&](const itk::EventObject &) {
+      IterationRecord r = result.history.back();
+      r.stage = "outer";
+      r.iteration = static_cast<unsigned int>(optimizer->GetCurrentIteration());
+      if (!result.outerIterations.empty() && result.outerIterations.back().iteration == r.iteration)
+      {
+        result.outerIterations.pop_back(); // the event comes more than once per iteration
+      }
+      r.value = optimizer->GetCurrentMetricValue();
+      const auto & position = optimizer->GetCurrentPosition();
+      for (unsigned int k = 0; k < position.GetSize(); ++k)
+      {
+        r.youngsModuli[k] = std::exp(position[k]);
+      }
+      result.outerIterations.push_back(r);
+    });
+    optimizer->StartOptimization();
+    result.outerStopCondition = optimizer->GetStopConditionDescription();
+  }
+  // The best point visited (L-BFGS-B may end on a trial point).
+  result.value = bestValue;
+  moduli = bestModuli;
+  loads = bestLoads;
+}
+
+void
+ElasticityEstimator::Stages::JudgeIdentifiability(const std::vector<double> & estimate)
+{
+  result.identifiable = true;
+  result.identifiabilityMessage.clear();
+  for (std::size_t k = 0; k < estimate.size(); ++k)
+  {
+    SweepAnalysis & s = status[k];
+    if (OnBound(estimate[k], Unknowns()[k]))
+    {
+      s.identifiable = false;
+      s.message += "; the estimate lies on a bound";
+    }
+    else if (s.onBound)
+    {
+      // The coarse mesh only starts the search; what counts is where the fine-mesh minimum lies.
+      std::ostringstream msg;
+      msg << "the coarse-mesh sweep's minimum lay on a bound, the fine-mesh minimum lies inside the bounds at "
+          << estimate[k] << " kPa (" << s.message << ")";
+      s.identifiable = true;
+      s.message = msg.str();
+    }
+    result.identifiable = result.identifiable && s.identifiable;
+    // One unknown: its message; several: each named, in order.
+    const std::string named = estimate.size() > 1 ? Unknowns()[k].name + ": " + s.message : s.message;
+    result.identifiabilityMessage += (k ? "; " : "") + named;
+  }
+}
+
+void
+ElasticityEstimator::Stages::Outputs(const std::vector<double> & estimate, const std::vector<double> & estimateLoads)
+{
+  EstimationObjective & fine = estimator.m_Fine;
+  result.youngsModuli = estimate;
+  result.loadParameters = estimateLoads;
+  fine.SetYoungsModuli(estimate);
+  result.displacement = fine.ComputeDisplacement(estimateLoads);
+  result.boundaryForces = fine.ComputeBoundaryForces(result.displacement);
+  result.invertedElements = CountInvertedElements(fine.GetForwardModel().GetMesh(), result.displacement);
+  result.residuals = fine.ComputeStatistics(result.displacement);
+  double variance = 0.0;
+  ResidualVarianceTimesWeight(result.residuals, variance);
+  result.residualStandardDeviation = std::sqrt(variance);
+}
+
+void
+ElasticityEstimator::Stages::Uncertainty(const std::vector<double> & estimate,
+                                         const std::vector<double> & estimateLoads)
+{
+  // Curvature of Phi* by central differences of the envelope gradient, each inner solve warm-started from
+  // the estimate's loads. Meaningless on a bound, where Phi* is not stationary.
+  const Eigen::Index m = static_cast<Eigen::Index>(estimate.size());
+  Eigen::MatrixXd    hessian(m, m);
+  const double       delta = settings.uncertaintyStep;
+  for (Eigen::Index k = 0; k < m; ++k)
+  {
+    std::vector<double> gradient[2];
+    for (int side = 0; side < 2; ++side)
+    {
+      const auto          ts = Clock::now();
+      std::vector<double> E = estimate;
+      E[k] *= std::exp(side == 0 ? delta : -delta);
+      const LoadSolution s = Solve(estimator.m_Fine, E, estimateLoads);
+      gradient[side] = s.logModulusGradient;
+      Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, Seconds(ts)), result.history, progress);
+    }
+    for (Eigen::Index i = 0; i < m; ++i)
+    {
+      hessian(i, k) = (gradient[0][i] - gradient[1][i]) / (2.0 * delta);
+    }
+  }
+  result.curvature.assign(hessian.data(), hessian.data() + hessian.size());
+  double       variance = 0.0;
+  const double scaled = ResidualVarianceTimesWeight(result.residuals, variance);
+  result.logModulusSigma = LogModulusStandardDeviations(hessian, scaled);
+}
+
+ElasticityEstimator::ElasticityEstimator(EstimationObjective &       fine,
+                                         EstimationObjective *       coarse,
+                                         std::vector<UnknownModulus> unknowns,
+                                         EstimatorSettings           settings)
+  : m_Fine(fine)
+  , m_Coarse(coarse)
+  , m_Unknowns(std::move(unknowns))
+  , m_Settings(settings)
+{
+  if (m_Unknowns.size() != fine.GetUnknownLabels().size() ||
+      (coarse && m_Unknowns.size() != coarse->GetUnknownLabels().size()))
+  {
+    Fail("ElasticityEstimator", "the unknown moduli differ from the objective's unknown labels");
+  }
+  for (const UnknownModulus & u : m_Unknowns)
+  {
+    if (!(u.lowerBound > 0.0 && u.upperBound > u.lowerBound && std::isfinite(u.upperBound)))
+    {
+      Fail("ElasticityEstimator", "the bounds of \"" + u.name + "\" must satisfy 0 < lower < upper < inf [kPa]");
+    }
+  }
+  if (m_Settings.numberOfSweepSamples < 3)
+  {
+    Fail("ElasticityEstimator",
+         "NumberOfSweepSamples must be at least 3, got " + std::to_string(m_Settings.numberOfSweepSamples));
+  }
+  if (!(m_Settings.innerGradientTolerance > 0.0) || !(m_Settings.outerGradientTolerance > 0.0))
+  {
+    Fail("ElasticityEstimator", "the gradient tolerances must be positive");
+  }
+}
+
+EstimationResult
+ElasticityEstimator::Run()
+{
+  Stages run(*this);
+  auto   t0 = Clock::now();
+  if (!m_Unknowns.empty())
+  {
+    run.Sweep();
+  }
+  run.result.timings["sweep"] = Seconds(t0);
+
+  t0 = Clock::now();
+  run.loads = m_Fine.EstimateInitialParameters();
+  run.result.timings["initial loads"] = Seconds(t0);
+
+  t0 = Clock::now();
+  run.Fine();
+  run.JudgeIdentifiability(run.moduli);
+  run.result.timings["fine"] = Seconds(t0);
+
+  const std::vector<double> estimate = run.moduli, estimateLoads = run.loads;
+  run.Outputs(estimate, estimateLoads);
+  bool onBound = false;
+  for (std::size_t k = 0; k < m_Unknowns.size(); ++k)
+  {
+    onBound = onBound || OnBound(estimate[k], m_Unknowns[k]);
+  }
+  if (m_Settings.estimateUncertainty && !m_Unknowns.empty() && !onBound)
+  {
+    t0 = Clock::now();
+    run.Uncertainty(estimate, estimateLoads);
+    run.result.timings["uncertainty"] = Seconds(t0);
+  }
+  return run.result;
+}
+
+} // namespace bmr

@@ -1,0 +1,364 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrSurfaceMatchingObjective.h"
+
+#include "bmrError.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+
+namespace bmr {
+
+EstimationObjective::EstimationObjective(ForwardModel &                model,
+                                         LoadParameterization &        loads,
+                                         std::vector<const DataTerm *> terms,
+                                         std::vector<std::int32_t>     unknownLabels)
+  : m_Model(model)
+  , m_Loads(loads)
+  , m_Terms(std::move(terms))
+  , m_UnknownLabels(std::move(unknownLabels))
+{
+  if (m_Terms.empty() || std::find(m_Terms.begin(), m_Terms.end(), nullptr) != m_Terms.end())
+  {
+    Fail("EstimationObjective", "no data term (or a null one): nothing to match");
+  }
+  if (m_Loads.GetNumberOfParameters() == 0 && m_UnknownLabels.empty())
+  {
+    Fail("EstimationObjective",
+         "the scene has neither an unknown modulus (role unknown_material) nor a force surface: nothing to estimate");
+  }
+  m_Model.SetConstrainedNodes(m_Loads.GetConstrainedNodes());
+}
+
+EstimationObjective::~EstimationObjective() = default;
+
+std::size_t
+EstimationObjective::GetNumberOfParameters() const
+{
+  return m_Loads.GetNumberOfParameters();
+}
+
+const std::vector<std::int32_t> &
+EstimationObjective::GetUnknownLabels() const
+{
+  return m_UnknownLabels;
+}
+
+void
+EstimationObjective::SetYoungsModuli(const std::vector<double> & moduli)
+{
+  if (moduli.size() != m_UnknownLabels.size())
+  {
+    Fail("EstimationObjective::SetYoungsModuli", "expected one modulus per unknown material");
+  }
+  for (std::size_t m = 0; m < moduli.size(); ++m)
+  {
+    m_Model.SetYoungsModulus(m_UnknownLabels[m], moduli[m]);
+  }
+}
+
+double
+EstimationObjective::Evaluate(const std::vector<double> & p,
+                              std::vector<double> *       gradientP,
+                              std::vector<double> *       gradientLogE)
+{
+  const BoundaryLoad        load = m_Loads.Apply(p);
+  const std::vector<double> u = m_Model.SolveState(load.forces, load.prescribed);
+  m_Inverted = CountInvertedElements(m_Model.GetMesh(), u);
+  const bool          wantGradient = gradientP != nullptr || gradientLogE != nullptr;
+  std::vector<double> g(wantGradient ? u.size() : 0, 0.0);
+  double              value = 0.0;
+  for (const DataTerm * term : m_Terms)
+  {
+    value += term->Evaluate(u, wantGradient ? &g : nullptr);
+  }
+  value += m_Loads.EvaluatePrior(p);
+  if (!wantGradient)
+  {
+    return value;
+  }
+  const std::vector<double> lambda = m_Model.SolveAdjoint(g);
+  if (gradientP != nullptr)
+  {
+    // dPhi/d(prescribed u) = g - K_T lambda on the constrained dofs.
+    const std::vector<double> Klambda = m_Model.ApplyTangent(lambda);
+    std::vector<double>       prescribedSensitivity(u.size(), 0.0);
+    for (std::int32_t n : m_Loads.GetConstrainedNodes())
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
+        prescribedSensitivity[dof] = g[dof] - Klambda[dof];
+      }
+    }
+    *gradientP = m_Loads.PullBackGradient(p, prescribedSensitivity, lambda);
+  }
+  if (gradientLogE != nullptr)
+  {
+    gradientLogE->assign(m_UnknownLabels.size(), 0.0);
+    for (std::size_t m = 0; m < m_UnknownLabels.size(); ++m)
+    {
+      const std::vector<double> dfdE = m_Model.ModulusDerivative(m_UnknownLabels[m], u);
+      double                    dot = 0.0;
+      for (std::size_t i = 0; i < u.size(); ++i)
+      {
+        dot += lambda[i] * dfdE[i];
+      }
+      (*gradientLogE)[m] = -m_Model.GetYoungsModulus(m_UnknownLabels[m]) * dot;
+    }
+  }
+  return value;
+}
+
+std::vector<double>
+EstimationObjective::ComputeDisplacement(const std::vector<double> & p)
+{
+  const BoundaryLoad load = m_Loads.Apply(p);
+  return m_Model.SolveState(load.forces, load.prescribed);
+}
+
+std::size_t
+EstimationObjective::GetNumberOfInvertedElements() const
+{
+  return m_Inverted;
+}
+
+std::vector<double>
+EstimationObjective::ComputeBoundaryForces(const std::vector<double> & u) const
+{
+  return m_Loads.BoundaryForces(m_Model.InternalForces(u));
+}
+
+std::vector<ResidualStatistics>
+EstimationObjective::ComputeStatistics(const std::vector<double> & u) const
+{
+  std::vector<ResidualStatistics> all;
+  for (const DataTerm * term : m_Terms)
+  {
+    const std::vector<ResidualStatistics> s = term->ComputeStatistics(u);
+    all.insert(all.end(), s.begin(), s.end());
+  }
+  return all;
+}
+
+std::vector<double>
+EstimationObjective::EstimateInitialParameters() const
+{
+  std::vector<char> held(m_Model.GetMesh().GetNumberOfPoints(), 0);
+  for (std::int32_t n : m_Loads.GetHeldNodes())
+  {
+    held[n] = 1;
+  }
+  // The terms' displacements, summed: each term moves only its own nodes.
+  std::vector<double> v(3 * held.size(), 0.0);
+  for (const DataTerm * term : m_Terms)
+  {
+    const std::vector<double> vt = term->MatchDisplacement(held);
+    for (std::size_t i = 0; i < v.size(); ++i)
+    {
+      v[i] += vt[i];
+    }
+  }
+  return m_Loads.FitDisplacement(v);
+}
+
+namespace {
+/** The residuals of every term, stacked, with their Jacobian rows. */
+void
+StackResiduals(const std::vector<const DataTerm *> & terms,
+               const std::vector<double> &           u,
+               std::vector<double> &                 r,
+               ResidualJacobian *                    jacobian)
+{
+  r.clear();
+  if (jacobian)
+  {
+    *jacobian = ResidualJacobian();
+    jacobian->rowStart.push_back(0);
+  }
+  for (const DataTerm * term : terms)
+  {
+    std::vector<double> rt;
+    ResidualJacobian    jt;
+    term->EvaluateResiduals(u, rt, jacobian ? &jt : nullptr);
+    r.insert(r.end(), rt.begin(), rt.end());
+    if (jacobian)
+    {
+      const std::size_t offset = jacobian->dofs.size();
+      jacobian->dofs.insert(jacobian->dofs.end(), jt.dofs.begin(), jt.dofs.end());
+      jacobian->values.insert(jacobian->values.end(), jt.values.begin(), jt.values.end());
+      for (std::size_t k = 1; k < jt.rowStart.size(); ++k)
+      {
+        jacobian->rowStart.push_back(offset + jt.rowStart[k]);
+      }
+    }
+  }
+}
+
+/** The affine map u = u0 + A p restricted to the dofs the residuals read (rowOfDof: dof -> row of A). */
+struct AffineState
+{
+  std::vector<double>       u0;
+  Eigen::MatrixXd           A;
+  std::vector<std::int32_t> rowOfDof;
+};
+
+AffineState
+LinearizeState(ForwardModel & model, const LoadParameterization & loads, const std::vector<std::int32_t> & dofs)
+{
+  AffineState s;
+  const BoundaryLoad zero = loads.Apply(std::vector<double>(loads.GetNumberOfParameters(), 0.0));
+  s.u0 = model.SolveState(zero.forces, zero.prescribed);
+  s.rowOfDof.assign(s.u0.size(), -1);
+  for (std::size_t i = 0; i < dofs.size(); ++i)
+  {
+    s.rowOfDof[dofs[i]] = static_cast<std::int32_t>(i);
+  }
+  const std::size_t np = loads.GetNumberOfParameters();
+  s.A.resize(static_cast<Eigen::Index>(dofs.size()), static_cast<Eigen::Index>(np));
+  for (std::size_t j = 0; j < np; ++j)
+  {
+    const BoundaryLoad        direction = loads.Direction(j);
+    const std::vector<double> uj = model.SolveState(direction.forces, direction.prescribed);
+    for (std::size_t i = 0; i < dofs.size(); ++i)
+    {
+      s.A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = uj[dofs[i]];
+    }
+  }
+  return s;
+}
+} // namespace
+
+LoadSolution
+EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
+                                           unsigned int                maximumIterations,
+                                           double                      tolerance)
+{
+  const std::size_t np = GetNumberOfParameters();
+  if (start.size() != np)
+  {
+    Fail("EstimationObjective::SolveLoadsGaussNewton",
+         "the start holds " + std::to_string(start.size()) + " values, expected " + std::to_string(np));
+  }
+  if (!m_Model.IsLinear() || !m_Loads.IsAffine())
+  {
+    Fail("EstimationObjective::SolveLoadsGaussNewton", "needs a linear model and an affine load parameterization");
+  }
+  // The dofs the residuals read, from their Jacobian's pattern at the unloaded state.
+  std::vector<double> r;
+  ResidualJacobian    pattern;
+  StackResiduals(m_Terms, std::vector<double>(3 * m_Model.GetMesh().GetNumberOfPoints(), 0.0), r, &pattern);
+  std::vector<std::int32_t> dofs = pattern.dofs;
+  std::sort(dofs.begin(), dofs.end());
+  dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
+  const AffineState state = LinearizeState(m_Model, m_Loads, dofs);
+  // The prior's weight alpha from R(e_0) = alpha / 2 (exact in binary floating point).
+  std::vector<double> unit(np, 0.0);
+  if (np > 0)
+  {
+    unit[0] = 1.0;
+  }
+  const double alpha = np > 0 ? 2.0 * m_Loads.EvaluatePrior(unit) : 0.0;
+
+  // Residuals r(p) and their Jacobian J = dr/du A; the prior alpha/2 |p|^2 is added to the value.
+  const auto residuals = [&](const Eigen::VectorXd & p, Eigen::VectorXd & rp, Eigen::MatrixXd * J) {
+    const Eigen::VectorXd Ap = state.A * p;
+    std::vector<double>   u = state.u0;
+    for (std::size_t i = 0; i < dofs.size(); ++i)
+    {
+      u[dofs[i]] += Ap[static_cast<Eigen::Index>(i)];
+    }
+    std::vector<double> rv;
+    ResidualJacobian    jac;
+    StackResiduals(m_Terms, u, rv, J ? &jac : nullptr);
+    rp = Eigen::Map<const Eigen::VectorXd>(rv.data(), static_cast<Eigen::Index>(rv.size()));
+    if (J)
+    {
+      J->setZero(static_cast<Eigen::Index>(rv.size()), static_cast<Eigen::Index>(np));
+      for (std::size_t k = 0; k < rv.size(); ++k)
+      {
+        for (std::size_t e = jac.rowStart[k]; e < jac.rowStart[k + 1]; ++e)
+        {
+          J->row(static_cast<Eigen::Index>(k)) += jac.values[e] * state.A.row(state.rowOfDof[jac.dofs[e]]);
+        }
+      }
+    }
+    return 0.5 * rp.squaredNorm() + 0.5 * alpha * p.squaredNorm();
+  };
+  // Levenberg-Marquardt: (J^T J + mu diag(J^T J)) delta = -J^T r; mu shrinks after a success, grows after a failure.
+  Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(start.data(), static_cast<Eigen::Index>(np));
+  Eigen::VectorXd rp, rTry;
+  Eigen::MatrixXd J;
+  double          value = residuals(p, rp, &J);
+  double          mu = 1e-3;
+  LoadSolution    result;
+  result.stop = "maximum number of iterations";
+  unsigned int it = 0;
+  bool         converged = false;
+  for (; it < maximumIterations && !converged; ++it)
+  {
+    const Eigen::VectorXd g = J.transpose() * rp + alpha * p;
+    if (g.norm() <= tolerance * std::max(1.0, p.norm()))
+    {
+      result.stop = "gradient below tolerance";
+      break;
+    }
+    Eigen::MatrixXd H = J.transpose() * J;
+    H.diagonal().array() += alpha;
+    bool accepted = false;
+    for (int attempt = 0; attempt < 30 && !accepted; ++attempt)
+    {
+      Eigen::MatrixXd M = H;
+      // Marquardt scaling plus a floor of 1e-3 of the mean curvature: directions the objective hardly sees
+      // (a wall sliding along itself) get short steps instead of huge rejected ones.
+      M.diagonal().array() += mu * (H.diagonal().array() + 1e-3 * H.diagonal().mean());
+      const Eigen::VectorXd pTry = p + M.ldlt().solve(-g);
+      const double          valueTry = residuals(pTry, rTry, nullptr);
+      if (valueTry < value)
+      {
+        const double decrease = value - valueTry;
+        p = pTry;
+        value = residuals(p, rp, &J);
+        mu = std::max(mu / 3.0, 1e-9);
+        accepted = true;
+        if (decrease <= 1e-10 * value)
+        {
+          converged = true;
+          result.stop = "no further decrease";
+        }
+      }
+      else
+      {
+        mu *= 4.0;
+      }
+    }
+    if (!accepted)
+    {
+      result.stop = "no descent";
+      break;
+    }
+  }
+  result.iterations = it;
+  result.parameters.assign(p.data(), p.data() + np);
+  result.value = Evaluate(result.parameters, &result.gradient, &result.logModulusGradient);
+  return result;
+}
+
+} // namespace bmr

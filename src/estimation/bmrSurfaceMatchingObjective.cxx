@@ -1,0 +1,143 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrSurfaceMatchingObjective.h"
+
+#include "bmrError.h"
+#include "bmrSimulation.h"
+
+namespace bmr {
+namespace {
+/** Nodes of the wall of an excluded label, or of the surface of a simulated one. Outside labels are
+ * mapped to 0 before meshing: their wall is the outer boundary. */
+std::vector<std::int32_t>
+SurfaceNodes(const TetrahedralMesh & mesh, const SceneLabel & label)
+{
+  const bool simulated = label.role == LabelRole::Material || label.role == LabelRole::UnknownMaterial;
+  if (simulated)
+  {
+    return NodesOnLabelSurface(mesh, label.value);
+  }
+  return NodesOnBoundary(mesh, label.role == LabelRole::Outside ? 0 : label.value);
+}
+
+std::vector<std::int32_t>
+UnknownLabelValues(const Scene & scene)
+{
+  std::vector<std::int32_t> values;
+  for (const SceneLabel * l : scene.UnknownLabels())
+  {
+    values.push_back(l->value);
+  }
+  return values;
+}
+
+std::vector<const DataTerm *>
+Terms(const std::unique_ptr<SurfaceDistanceTerm> & term)
+{
+  return { term.get() };
+}
+} // namespace
+
+std::vector<ObjectiveSurface>
+SceneObjectiveSurfaces(const Scene &                                                                scene,
+                       const TetrahedralMesh &                                                      mesh,
+                       const std::map<std::int32_t, std::shared_ptr<const SignedDistanceSampler>> & maps)
+{
+  std::vector<ObjectiveSurface> surfaces;
+  for (const ObjectiveTerm & term : scene.objective)
+  {
+    const SceneLabel * label = scene.FindLabel(term.label);
+    if (label == nullptr)
+    {
+      Fail("SceneObjectiveSurfaces", "objective label \"" + term.label + "\" is not defined in the scene");
+    }
+    const auto map = maps.find(label->value);
+    if (map == maps.end() || !map->second)
+    {
+      Fail("SceneObjectiveSurfaces", "no distance map was given for objective label \"" + term.label + "\"");
+    }
+    ObjectiveSurface s;
+    s.name = term.label;
+    s.label = label->value;
+    s.weight = term.weight;
+    s.nodes = SurfaceNodes(mesh, *label);
+    s.distance = map->second;
+    if (s.nodes.empty())
+    {
+      Fail("SceneObjectiveSurfaces", "objective label \"" + term.label + "\" has no surface node in the mesh");
+    }
+    surfaces.push_back(std::move(s));
+  }
+  return surfaces;
+}
+
+std::vector<LoadedWall>
+SceneLoadedWalls(const Scene & scene, const TetrahedralMesh & mesh)
+{
+  std::vector<LoadedWall> walls;
+  for (const std::string & name : scene.forceSurfaces)
+  {
+    const SceneLabel * label = scene.FindLabel(name);
+    if (label == nullptr)
+    {
+      Fail("SceneLoadedWalls", "force surface \"" + name + "\" is not defined in the scene");
+    }
+    walls.push_back({ name, SurfaceNodes(mesh, *label), label->role == LabelRole::Outside ? 0 : label->value });
+  }
+  return walls;
+}
+
+namespace detail {
+SceneObjectiveParts::SceneObjectiveParts(const TetrahedralMesh &       mesh,
+                                         const Scene &                 scene,
+                                         std::vector<ObjectiveSurface> surfaces)
+{
+  surfaceDistance.reset(new SurfaceDistanceTerm(mesh, std::move(surfaces)));
+  BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
+  loads.reset(
+    new WallLoads(mesh, bc.dirichletNodes, bc.dirichletValues, std::move(bc.forces), SceneLoadedWalls(scene, mesh)));
+  model.reset(new LinearForwardModel(mesh, SceneMaterials(scene)));
+}
+} // namespace detail
+
+SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &       mesh,
+                                                   const Scene &                 scene,
+                                                   std::vector<ObjectiveSurface> surfaces)
+  : detail::SceneObjectiveParts(mesh, scene, std::move(surfaces))
+  , EstimationObjective(*model, *loads, Terms(surfaceDistance), UnknownLabelValues(scene))
+{}
+
+void
+SurfaceMatchingObjective::SetWallControlSpacing(double spacing)
+{
+  loads->SetControlSpacing(spacing);
+}
+
+void
+SurfaceMatchingObjective::SetWallRegularization(double alpha)
+{
+  loads->SetRegularization(alpha);
+}
+
+void
+SurfaceMatchingObjective::SetWallMotionAlongNormals(bool normal)
+{
+  loads->SetMotion(normal ? WallMotionEnum::AlongNormals : WallMotionEnum::Free);
+}
+
+} // namespace bmr

@@ -1,0 +1,429 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrLoadParameterization.h"
+
+#include "bmrError.h"
+#include "bmrWallBasis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <ostream>
+#include <set>
+
+namespace bmr {
+namespace {
+/** Width [mm] of the Gaussian that averages wall face normals: several voxels (the staircase of a
+ * voxelised wall), below the walls' radii of curvature (13 mm for the rectum). */
+constexpr double NormalSmoothing = 4.0;
+
+using WallList = std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>>;
+
+/** Area-weighted normals of the boundary faces labelled \a faceLabels, summed at each control node. */
+std::vector<double>
+FaceNormalSums(const TetrahedralMesh &           mesh,
+               const std::set<std::int32_t> &    faceLabels,
+               const std::vector<std::int32_t> & controlIndex,
+               std::size_t                       numberOfControlNodes)
+{
+  std::vector<double> normals(3 * numberOfControlNodes, 0.0);
+  for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
+  {
+    if (faceLabels.count(mesh.boundaryFaceLabels[f]) == 0)
+    {
+      continue;
+    }
+    const std::int32_t * v = &mesh.boundaryFaces[3 * f];
+    const double *       x0 = &mesh.points[3 * static_cast<std::size_t>(v[0])];
+    const double *       x1 = &mesh.points[3 * static_cast<std::size_t>(v[1])];
+    const double *       x2 = &mesh.points[3 * static_cast<std::size_t>(v[2])];
+    const double         a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+    const double         b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+    const double areaNormal[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
+    for (int i = 0; i < 3; ++i)
+    {
+      if (controlIndex[v[i]] >= 0)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          normals[3 * static_cast<std::size_t>(controlIndex[v[i]]) + c] += areaNormal[c];
+        }
+      }
+    }
+  }
+  return normals;
+}
+
+/** The faces of a mesh of a voxelised wall tilt with the voxel staircase: Gaussian average of the face
+ * normals over NormalSmoothing mm of the same wall, so that "along the normal" means the organ's normal;
+ * then unit length (a node on no wall face gets the zero vector). */
+std::vector<double>
+SmoothedUnitNormals(const TetrahedralMesh & mesh, const WallList & walls, const std::vector<double> & sums)
+{
+  const double        sigma = NormalSmoothing;
+  std::vector<double> smoothed(sums.size(), 0.0);
+  for (const auto & wall : walls)
+  {
+    for (const auto & a : wall)
+    {
+      const double * xa = &mesh.points[3 * static_cast<std::size_t>(a.second)];
+      for (const auto & b : wall)
+      {
+        const double * xb = &mesh.points[3 * static_cast<std::size_t>(b.second)];
+        const double   r2 =
+          (xa[0] - xb[0]) * (xa[0] - xb[0]) + (xa[1] - xb[1]) * (xa[1] - xb[1]) + (xa[2] - xb[2]) * (xa[2] - xb[2]);
+        if (r2 < 9.0 * sigma * sigma)
+        {
+          const double w = std::exp(-0.5 * r2 / (sigma * sigma));
+          for (int c = 0; c < 3; ++c)
+          {
+            smoothed[3 * static_cast<std::size_t>(a.first) + c] += w * sums[3 * static_cast<std::size_t>(b.first) + c];
+          }
+        }
+      }
+    }
+  }
+  for (std::size_t k = 0; 3 * k < smoothed.size(); ++k)
+  {
+    double *     n = &smoothed[3 * k];
+    const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int c = 0; c < 3; ++c)
+    {
+      n[c] = norm > 0.0 ? n[c] / norm : 0.0;
+    }
+  }
+  return smoothed;
+}
+
+std::vector<double>
+FirstComponents(const std::vector<double> & q)
+{
+  std::vector<double> p(q.size() / 3);
+  for (std::size_t j = 0; j < p.size(); ++j)
+  {
+    p[j] = q[3 * j];
+  }
+  return p;
+}
+} // namespace
+
+std::ostream &
+operator<<(std::ostream & os, WallMotionEnum value)
+{
+  switch (value)
+  {
+    case WallMotionEnum::AlongNormals:
+      return os << "bmr::WallMotionEnum::AlongNormals";
+    case WallMotionEnum::Free:
+      return os << "bmr::WallMotionEnum::Free";
+  }
+  return os << "INVALID VALUE FOR bmr::WallMotionEnum";
+}
+
+struct WallLoads::Impl
+{
+  const TetrahedralMesh &    mesh;
+  std::vector<std::int32_t>  heldNodes;
+  std::vector<std::int32_t>  controlNodes;
+  std::vector<std::int32_t>  constrained;
+  std::vector<double>        basePrescribed; // 3N: the held nodes' values
+  std::vector<double>        forces;         // 3N or empty
+  WallList                   walls;          // per wall: (control index, mesh node)
+  std::vector<double>        normals;        // 3 per control node
+  std::unique_ptr<WallBasis> basis;
+  double                     regularization{ 0.0 };
+  WallMotionEnum             motion{ WallMotionEnum::AlongNormals };
+
+  explicit Impl(const TetrahedralMesh & m)
+    : mesh(m)
+  {}
+  bool
+  AlongNormals() const
+  {
+    return motion == WallMotionEnum::AlongNormals;
+  }
+  /** Wall displacement d (3 per control node): d = W p, or along the normals d_k = n_k (W s)_k, the
+   * scalar s blended by the same weights (component 0 of the 3-vector basis). */
+  std::vector<double>
+  Expand(const std::vector<double> & p) const
+  {
+    if (!AlongNormals())
+    {
+      return basis->Expand(p);
+    }
+    std::vector<double> q(3 * p.size(), 0.0);
+    for (std::size_t j = 0; j < p.size(); ++j)
+    {
+      q[3 * j] = p[j];
+    }
+    std::vector<double> d = basis->Expand(q);
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      const double amplitude = d[3 * k];
+      for (int c = 0; c < 3; ++c)
+      {
+        d[3 * k + c] = amplitude * normals[3 * k + c];
+      }
+    }
+    return d;
+  }
+  /** Per-control-node vectors projected on the normals into component 0. */
+  std::vector<double>
+  NormalComponents(const std::vector<double> & v) const
+  {
+    std::vector<double> n(v.size(), 0.0);
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        n[3 * k] += normals[3 * k + c] * v[3 * k + c];
+      }
+    }
+    return n;
+  }
+  /** The 3 values per control node of a nodal vector (3N). */
+  std::vector<double>
+  AtControlNodes(const std::vector<double> & v) const
+  {
+    std::vector<double> d(3 * controlNodes.size(), 0.0);
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        d[3 * k + c] = v[3 * static_cast<std::size_t>(controlNodes[k]) + c];
+      }
+    }
+    return d;
+  }
+  /** \a base with the wall displacement \a d written at the control nodes. */
+  std::vector<double>
+  WithWalls(std::vector<double> base, const std::vector<double> & d) const
+  {
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        base[3 * static_cast<std::size_t>(controlNodes[k]) + c] = d[3 * k + c];
+      }
+    }
+    return base;
+  }
+  std::size_t
+  ParametersPerControlPoint() const
+  {
+    return AlongNormals() ? 1 : 3;
+  }
+  void
+  CheckSize(const std::vector<double> & p, const char * where) const
+  {
+    const std::size_t expected = ParametersPerControlPoint() * basis->GetNumberOfControlPoints();
+    if (p.size() != expected)
+    {
+      Fail(where, "expected " + std::to_string(expected) + " load parameters, got " + std::to_string(p.size()));
+    }
+  }
+};
+
+WallLoads::WallLoads(const TetrahedralMesh &           mesh,
+                     const std::vector<std::int32_t> & heldNodes,
+                     const std::vector<double> &       heldValues,
+                     std::vector<double>               forces,
+                     const std::vector<LoadedWall> &   walls)
+  : m_Impl(new Impl(mesh))
+{
+  Impl &            d = *m_Impl;
+  const std::size_t N = mesh.GetNumberOfPoints();
+  if (heldValues.size() != 3 * heldNodes.size() || !(forces.empty() || forces.size() == 3 * N))
+  {
+    Fail("WallLoads", "expected 3 held values per held node and 3 forces per mesh node");
+  }
+  d.heldNodes = heldNodes;
+  d.forces = std::move(forces);
+  std::vector<char> held(N, 0);
+  d.basePrescribed.assign(3 * N, 0.0);
+  for (std::size_t k = 0; k < heldNodes.size(); ++k)
+  {
+    held[heldNodes[k]] = 1;
+    for (int c = 0; c < 3; ++c)
+    {
+      d.basePrescribed[3 * static_cast<std::size_t>(heldNodes[k]) + c] = heldValues[3 * k + c];
+    }
+  }
+  std::set<std::int32_t>              control, faceLabels;
+  std::vector<std::set<std::int32_t>> wallOf(N); // walls (by index) each node is on
+  for (std::size_t w = 0; w < walls.size(); ++w)
+  {
+    std::size_t added = 0;
+    for (std::int32_t n : walls[w].nodes)
+    {
+      if (!held[n])
+      {
+        control.insert(n);
+        wallOf[n].insert(static_cast<std::int32_t>(w));
+        ++added;
+      }
+    }
+    if (added == 0)
+    {
+      Fail("WallLoads", "force surface \"" + walls[w].name + "\" has no free wall node in the mesh");
+    }
+    faceLabels.insert(walls[w].faceLabel);
+  }
+  d.controlNodes.assign(control.begin(), control.end());
+  d.walls.assign(walls.size(), {});
+  std::vector<std::int32_t> controlIndex(N, -1);
+  for (std::size_t k = 0; k < d.controlNodes.size(); ++k)
+  {
+    controlIndex[d.controlNodes[k]] = static_cast<std::int32_t>(k);
+    for (std::int32_t w : wallOf[d.controlNodes[k]])
+    {
+      d.walls[w].emplace_back(static_cast<std::int32_t>(k), d.controlNodes[k]);
+    }
+  }
+  d.basis.reset(new WallBasis(mesh.points, d.walls, d.controlNodes.size(), 0.0));
+  d.normals =
+    SmoothedUnitNormals(mesh, d.walls, FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size()));
+  d.constrained = heldNodes;
+  d.constrained.insert(d.constrained.end(), d.controlNodes.begin(), d.controlNodes.end());
+  std::sort(d.constrained.begin(), d.constrained.end());
+}
+
+WallLoads::~WallLoads() = default;
+
+void
+WallLoads::SetControlSpacing(double spacing)
+{
+  if (!std::isfinite(spacing))
+  {
+    Fail("WallLoads::SetControlSpacing", "the control point spacing must be finite");
+  }
+  m_Impl->basis.reset(new WallBasis(m_Impl->mesh.points, m_Impl->walls, m_Impl->controlNodes.size(), spacing));
+}
+
+void
+WallLoads::SetRegularization(double alpha)
+{
+  if (!(std::isfinite(alpha) && alpha >= 0.0))
+  {
+    Fail("WallLoads::SetRegularization", "the regularization weight must be finite and >= 0");
+  }
+  m_Impl->regularization = alpha;
+}
+
+void
+WallLoads::SetMotion(WallMotionEnum motion)
+{
+  m_Impl->motion = motion;
+}
+
+WallMotionEnum
+WallLoads::GetMotion() const
+{
+  return m_Impl->motion;
+}
+
+const std::vector<std::int32_t> &
+WallLoads::GetControlNodes() const
+{
+  return m_Impl->controlNodes;
+}
+
+std::size_t
+WallLoads::GetNumberOfParameters() const
+{
+  return m_Impl->ParametersPerControlPoint() * m_Impl->basis->GetNumberOfControlPoints();
+}
+
+const std::vector<std::int32_t> &
+WallLoads::GetConstrainedNodes() const
+{
+  return m_Impl->constrained;
+}
+
+const std::vector<std::int32_t> &
+WallLoads::GetHeldNodes() const
+{
+  return m_Impl->heldNodes;
+}
+
+BoundaryLoad
+WallLoads::Apply(const std::vector<double> & p) const
+{
+  m_Impl->CheckSize(p, "WallLoads::Apply");
+  return { m_Impl->forces, m_Impl->WithWalls(m_Impl->basePrescribed, m_Impl->Expand(p)) };
+}
+
+BoundaryLoad
+WallLoads::Direction(std::size_t j) const
+{
+  std::vector<double> unit(GetNumberOfParameters(), 0.0);
+  unit.at(j) = 1.0;
+  return { {}, m_Impl->WithWalls(std::vector<double>(m_Impl->basePrescribed.size(), 0.0), m_Impl->Expand(unit)) };
+}
+
+std::vector<double>
+WallLoads::PullBackGradient(const std::vector<double> & p,
+                            const std::vector<double> & prescribedSensitivity,
+                            const std::vector<double> &) const
+{
+  const Impl &              d = *m_Impl;
+  const std::vector<double> atWalls = d.AtControlNodes(prescribedSensitivity);
+  std::vector<double>       gradient = d.AlongNormals()
+                                         ? FirstComponents(d.basis->ExpandTranspose(d.NormalComponents(atWalls)))
+                                         : d.basis->ExpandTranspose(atWalls);
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    gradient[i] += d.regularization * p[i];
+  }
+  return gradient;
+}
+
+double
+WallLoads::EvaluatePrior(const std::vector<double> & p) const
+{
+  double pp = 0.0;
+  for (double x : p)
+  {
+    pp += x * x;
+  }
+  return 0.5 * m_Impl->regularization * pp;
+}
+
+std::vector<double>
+WallLoads::FitDisplacement(const std::vector<double> & u) const
+{
+  const Impl &              d = *m_Impl;
+  const std::vector<double> atWalls = d.AtControlNodes(u);
+  return d.AlongNormals() ? FirstComponents(d.basis->Fit(d.NormalComponents(atWalls))) : d.basis->Fit(atWalls);
+}
+
+std::vector<double>
+WallLoads::BoundaryForces(const std::vector<double> & internal) const
+{
+  std::vector<double> F(internal.size(), 0.0);
+  for (std::int32_t n : m_Impl->controlNodes)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
+      F[dof] = internal[dof] - (m_Impl->forces.empty() ? 0.0 : m_Impl->forces[dof]);
+    }
+  }
+  return F;
+}
+
+} // namespace bmr

@@ -1,0 +1,254 @@
+#include "itkFEMElasticityOptimizer.h"
+
+#include "itkGridGeometryConversion.h"
+
+#include <algorithm>
+
+namespace itk {
+namespace {
+std::shared_ptr<const bmr::SignedDistanceSampler>
+ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string & name)
+{
+  const auto region = map->GetBufferedRegion();
+  if (region != map->GetLargestPossibleRegion() || region.GetNumberOfPixels() == 0)
+  {
+    itkGenericExceptionMacro(<< "FEMElasticityOptimizer: the distance map of \"" << name
+                             << "\" is empty or not fully buffered");
+  }
+  const float *      p = map->GetBufferPointer();
+  std::vector<float> values(p, p + region.GetNumberOfPixels());
+  const std::string  what = "distance map of \"" + name + "\"";
+  return std::make_shared<bmr::SignedDistanceSampler>(GridGeometryOf(map), std::move(values), what.c_str());
+}
+} // namespace
+
+FEMElasticityOptimizer::FEMElasticityOptimizer()
+{
+  this->SetNumberOfRequiredInputs(1);
+  this->SetNumberOfRequiredOutputs(1);
+  this->SetNthOutput(0, this->MakeOutput(0));
+  this->ProcessObject::SetNthOutput(0, MeshObjectType::New().GetPointer());
+}
+
+void
+FEMElasticityOptimizer::SetMesh(const MeshObjectType * mesh)
+{
+  this->SetNthInput(0, const_cast<MeshObjectType *>(mesh));
+}
+
+const FEMElasticityOptimizer::MeshObjectType *
+FEMElasticityOptimizer::GetMesh() const
+{
+  return itkDynamicCastInDebugMode<const MeshObjectType *>(this->GetInput(0));
+}
+
+void
+FEMElasticityOptimizer::SetCoarseMesh(const MeshObjectType * mesh)
+{
+  this->SetInput("CoarseMesh", const_cast<MeshObjectType *>(mesh));
+}
+
+const FEMElasticityOptimizer::MeshObjectType *
+FEMElasticityOptimizer::GetCoarseMesh() const
+{
+  return dynamic_cast<const MeshObjectType *>(this->GetInput("CoarseMesh"));
+}
+
+void
+FEMElasticityOptimizer::SetDistanceMap(const std::string & labelName, const DistanceMapType * map)
+{
+  if (std::find(m_DistanceMapNames.begin(), m_DistanceMapNames.end(), labelName) == m_DistanceMapNames.end())
+  {
+    m_DistanceMapNames.push_back(labelName);
+  }
+  this->SetInput("DistanceMap:" + labelName, const_cast<DistanceMapType *>(map));
+}
+
+const FEMElasticityOptimizer::DistanceMapType *
+FEMElasticityOptimizer::GetDistanceMap(const std::string & labelName) const
+{
+  return dynamic_cast<const DistanceMapType *>(this->GetInput("DistanceMap:" + labelName));
+}
+
+void
+FEMElasticityOptimizer::SetScene(const bmr::Scene & scene)
+{
+  scene.Validate();
+  m_Scene = scene;
+  this->Modified();
+}
+
+FEMElasticityOptimizer::MeshObjectType *
+FEMElasticityOptimizer::GetOutput()
+{
+  return itkDynamicCastInDebugMode<MeshObjectType *>(this->ProcessObject::GetOutput(0));
+}
+
+void
+FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
+{
+  Superclass::VerifyPreconditions();
+  if (m_Scene.labels.empty())
+  {
+    itkExceptionMacro(<< "no scene was set (SetScene)");
+  }
+  if (m_Scene.objective.empty())
+  {
+    itkExceptionMacro(<< "the scene has no objective surface");
+  }
+  for (const auto & term : m_Scene.objective)
+  {
+    if (this->GetDistanceMap(term.label) == nullptr)
+    {
+      itkExceptionMacro(<< "no distance map for objective label \"" << term.label << "\" (SetDistanceMap)");
+    }
+  }
+  if (m_NumberOfSweepSamples < 3)
+  {
+    itkExceptionMacro(<< "NumberOfSweepSamples must be at least 3, got " << m_NumberOfSweepSamples);
+  }
+  if (!(m_InnerGradientTolerance > 0.0) || !(m_OuterGradientTolerance > 0.0))
+  {
+    itkExceptionMacro(<< "the gradient tolerances must be positive");
+  }
+  if (m_LimitElementInversion && m_WallControlSpacing > 0.0)
+  {
+    itkExceptionMacro(<< "LimitElementInversion needs one parameter per wall node (WallControlSpacing 0, got "
+                      << m_WallControlSpacing << " mm): the reduced-basis solver sees only the objective nodes");
+  }
+}
+
+bmr::EstimatorSettings
+FEMElasticityOptimizer::Settings() const
+{
+  bmr::EstimatorSettings s;
+  s.numberOfSweepSamples = m_NumberOfSweepSamples;
+  s.maximumInnerIterations = m_MaximumNumberOfInnerIterations;
+  s.maximumOuterIterations = m_MaximumNumberOfOuterIterations;
+  s.innerGradientTolerance = m_InnerGradientTolerance;
+  s.outerGradientTolerance = m_OuterGradientTolerance;
+  s.flatnessThreshold = m_FlatnessThreshold;
+  s.estimateUncertainty = m_EstimateUncertainty;
+  s.uncertaintyStep = m_UncertaintyStep;
+  s.limitElementInversion = m_LimitElementInversion;
+  // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
+  s.gaussNewtonInner = m_WallControlSpacing > 0.0;
+  return s;
+}
+
+std::unique_ptr<bmr::SurfaceMatchingObjective>
+FEMElasticityOptimizer::MakeObjective(
+  const bmr::TetrahedralMesh &                                                                 mesh,
+  const std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> & samplers) const
+{
+  std::unique_ptr<bmr::SurfaceMatchingObjective> objective(
+    new bmr::SurfaceMatchingObjective(mesh, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, mesh, samplers)));
+  objective->SetWallControlSpacing(m_WallControlSpacing);
+  objective->SetWallRegularization(m_WallRegularization);
+  objective->SetWallMotionAlongNormals(m_WallMotionAlongNormals);
+  return objective;
+}
+
+void
+FEMElasticityOptimizer::TakeResult(const bmr::EstimationResult & result)
+{
+  const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
+  m_EstimatedYoungsModuli.clear();
+  m_ModulusUncertainty.clear();
+  for (std::size_t k = 0; k < unknowns.size(); ++k)
+  {
+    m_EstimatedYoungsModuli[unknowns[k].name] = result.youngsModuli[k];
+    if (!result.logModulusSigma.empty())
+    {
+      m_ModulusUncertainty[unknowns[k].name] = result.logModulusSigma[k];
+    }
+  }
+  m_Sweep = result.sweep;
+  m_History = result.history;
+  m_OuterIterations = result.outerIterations;
+  m_OuterStopCondition = result.outerStopCondition;
+  m_SurfaceDistances = result.residuals;
+  m_FinalValue = result.value;
+  m_Identifiable = result.identifiable;
+  m_IdentifiabilityMessage = result.identifiabilityMessage;
+  m_ResidualStandardDeviation = result.residualStandardDeviation;
+  m_ModulusCurvature = result.curvature.empty() ? 0.0 : result.curvature[0];
+  m_NumberOfRejectedSteps = result.rejectedSteps;
+  m_NumberOfInvertedElements = result.invertedElements;
+  m_Timings = result.timings;
+}
+
+void
+FEMElasticityOptimizer::GenerateData()
+{
+  // Distance maps are shared by the coarse and the fine objective.
+  std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> samplers;
+  for (const auto & term : m_Scene.objective)
+  {
+    samplers[m_Scene.FindLabel(term.label)->value] = ToSampler(this->GetDistanceMap(term.label), term.label);
+  }
+  const bmr::SceneLabel * gauge = m_Scene.GaugeLabel();
+  m_GaugeLabel = gauge ? gauge->name : std::string();
+  const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
+
+  const bmr::TetrahedralMesh & fine = this->GetMesh()->Get();
+  const auto                   fineObjective = this->MakeObjective(fine, samplers);
+  // The coarse mesh serves the sweep only: not built when there is no modulus to sweep.
+  std::unique_ptr<bmr::SurfaceMatchingObjective> coarseObjective;
+  if (this->GetCoarseMesh() && !unknowns.empty())
+  {
+    coarseObjective = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
+  }
+  bmr::ElasticityEstimator estimator(*fineObjective, coarseObjective.get(), unknowns, this->Settings());
+  estimator.SetObserver([this](const IterationRecord & record, double progress) {
+    m_CurrentRecord = record;
+    this->InvokeEvent(IterationEvent());
+    this->UpdateProgress(static_cast<float>(progress));
+  });
+  const bmr::EstimationResult result = estimator.Run();
+  this->TakeResult(result);
+
+  bmr::TetrahedralMesh out = fine;
+  out.displacement = result.displacement;
+  out.force = result.boundaryForces;
+  this->GetOutput()->Set(out);
+  this->UpdateProgress(1.0f);
+}
+
+void
+FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
+{
+  Superclass::PrintSelf(os, indent);
+  os << indent << "Scene: " << m_Scene.name << " (" << m_Scene.labels.size() << " labels)" << std::endl;
+  os << indent << "NumberOfSweepSamples: " << m_NumberOfSweepSamples << std::endl;
+  os << indent << "MaximumNumberOfInnerIterations: " << m_MaximumNumberOfInnerIterations << std::endl;
+  os << indent << "MaximumNumberOfOuterIterations: " << m_MaximumNumberOfOuterIterations << std::endl;
+  os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
+  os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
+  os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
+  os << indent << "EstimateUncertainty: " << (m_EstimateUncertainty ? "On" : "Off") << std::endl;
+  os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;
+  os << indent << "LimitElementInversion: " << (m_LimitElementInversion ? "On" : "Off") << std::endl;
+  os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
+  os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
+  os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
+  os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
+  os << indent << "WallMotionAlongNormals: " << (m_WallMotionAlongNormals ? "On" : "Off") << std::endl;
+  os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
+  for (const auto & kv : m_EstimatedYoungsModuli)
+  {
+    os << indent << "EstimatedYoungsModulus[" << kv.first << "]: " << kv.second << " kPa" << std::endl;
+  }
+  os << indent << "FinalValue: " << m_FinalValue << " mm^2" << std::endl;
+  for (const auto & kv : m_ModulusUncertainty)
+  {
+    os << indent << "ModulusUncertainty[" << kv.first << "]: " << kv.second << " (standard deviation of log E)"
+       << std::endl;
+  }
+  os << indent << "ResidualStandardDeviation: " << m_ResidualStandardDeviation << " mm" << std::endl;
+  os << indent << "ModulusCurvature: " << m_ModulusCurvature << " mm^2" << std::endl;
+  os << indent << "Identifiable: " << m_Identifiable << " (" << m_IdentifiabilityMessage << ")" << std::endl;
+  os << indent << "Sweep samples: " << m_Sweep.size() << ", fine iterations: " << m_History.size() << std::endl;
+}
+
+} // namespace itk
