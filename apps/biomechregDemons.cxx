@@ -150,13 +150,13 @@ DemonsCommand(const Arguments & args)
   const auto field = RunDemons(fixedCT, movingCT, fixedLabels, movingLabels, flatten, settings);
   timer.End(detail.str());
   timer.Begin("warp CT (linear)");
-  auto warped = Warp<CTImageType>(movingCT, field, false, -1000.0f);
+  auto warped = itk::WarpImage(movingCT.GetPointer(), field.GetPointer(), false, -1000.0f);
   timer.End();
   timer.Begin("write outputs");
   WriteImage<FieldType>(field, out + "/field.nrrd");
   WriteImage<CTImageType>(warped, out + "/warped_ct.nrrd");
   timer.End();
-  PrintTimings(timer);
+  PrintTimings(timer.stages);
   return EXIT_SUCCESS;
 }
 

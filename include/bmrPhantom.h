@@ -19,6 +19,7 @@
 #define bmrPhantom_h
 
 #include "bmrGridGeometry.h"
+#include "bmrScene.h"
 
 #include <cstdint>
 #include <vector>
@@ -114,9 +115,47 @@ MakePelvisPhantom(const PelvisPhantomParameters & parameters);
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<double> & points);
 
+/** Labels of the concentric spheres at physical points [mm] (3 per point), as MakeSpherePhantom() labels
+ * voxel centres: a deformed anatomy voxelised once, as PelvisLabelsAt(). */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+SphereLabelsAt(const SpherePhantomParameters & parameters, const std::vector<double> & points);
+
 /** Builds the concentric-spheres phantom (core 60 HU, shell 20 HU, air -1000 HU). */
 BiomechanicalRegistration_EXPORT PhantomVolume
 MakeSpherePhantom(const SpherePhantomParameters & parameters);
+
+/** The pelvis phantom's scene: soft tissue 10 kPa (nu 0.35, the gauge), prostate \a prostateE [kPa] with
+ * Poisson's ratio \a prostateNu, unknown within [20, 600] kPa when \a unknown (wide enough for the
+ * dissertation's 50-350 kPa with room on both sides); bladder and rectum hollow and loaded, bone fixed, air
+ * outside; the prostate, bladder and rectum surfaces matched with weight 1; a 25 mm region of interest and
+ * the mesh sizes the estimation benchmark uses (cells 7 mm, prostate 4.5 mm, facets 6 mm, facet distance
+ * 0.5 mm = half a 1 mm voxel). */
+BiomechanicalRegistration_EXPORT Scene
+PelvisPhantomScene(double prostateE, bool unknown, double prostateNu = 0.40);
+
+/** The concentric spheres' scene: shell 10 kPa (nu 0.35, the gauge), core \a innerE [kPa] (nu 0.40),
+ * unknown within [30, 300] kPa when \a unknown; the outer boundary loaded, both surfaces matched. */
+BiomechanicalRegistration_EXPORT Scene
+SpherePhantomScene(double innerE, bool unknown);
+
+/** How the walls of the pelvis phantom move when the lumens fill (PelvisFillingLoads()). */
+enum class WallFillingEnum : std::uint8_t
+{
+  /** Each wall along its own normals: the bladder along those of its ellipsoid, the rectum radially from its
+   * axis and from the centre of its dome. */
+  AlongNormals,
+  /** Radially from one point per organ: also slides the walls along themselves (the rectal wall next to the
+   * prostate by up to 0.8 |d| along its axis), motion that no segmentation shows. */
+  FromPoint
+};
+
+/** The truth's loads for a filling of the bladder by \a bladderMM and the rectum by \a rectumMM [mm]
+ * (radial displacements about the phantom's own organ centres for \a parameters' grid). */
+BiomechanicalRegistration_EXPORT std::vector<SceneLoad>
+                                 PelvisFillingLoads(const PelvisPhantomParameters & parameters,
+                                                    double                          bladderMM,
+                                                    double                          rectumMM,
+                                                    WallFillingEnum                 filling);
 
 /** Physical centre of the grid (centre of the voxel box). */
 BiomechanicalRegistration_EXPORT std::array<double, 3>

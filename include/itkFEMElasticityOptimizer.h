@@ -264,6 +264,13 @@ public:
   {
     return m_Timings;
   }
+  /** Everything the last Update() found (bmr::ElasticityEstimator's result; vectors in scene order of the
+   * unknown labels). */
+  const bmr::EstimationResult &
+  GetResult() const
+  {
+    return m_Result;
+  }
   /** Last inner solve, for observers of IterationEvent. */
   const IterationRecord &
   GetCurrentRecord() const
@@ -325,6 +332,7 @@ private:
   std::string                   m_IdentifiabilityMessage;
   std::map<std::string, double> m_Timings;
   IterationRecord               m_CurrentRecord;
+  bmr::EstimationResult         m_Result;
 };
 
 } // namespace itk

@@ -91,6 +91,24 @@ private:
   PixelType         m_DefaultPixelValue{};
 };
 
+/** \a image warped through the fixed -> moving \a field with one call: nearest neighbour for a label map
+ * (\a labels true), linear otherwise; points mapped outside take \a outside.
+ * \ingroup BiomechanicalRegistration */
+template <typename TImage, typename TDisplacementField>
+typename TImage::Pointer
+WarpImage(const TImage * image, const TDisplacementField * field, bool labels, typename TImage::PixelType outside)
+{
+  using WarperType = ImageWarper<TImage, TDisplacementField>;
+  auto warper = WarperType::New();
+  warper->SetInput(image);
+  warper->SetDisplacementField(field);
+  warper->SetInterpolation(labels ? WarperType::InterpolationEnum::NearestNeighbor
+                                  : WarperType::InterpolationEnum::Linear);
+  warper->SetDefaultPixelValue(outside);
+  warper->Update();
+  return warper->GetOutput();
+}
+
 } // namespace itk
 
 #ifndef ITK_MANUAL_INSTANTIATION

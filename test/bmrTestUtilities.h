@@ -25,7 +25,9 @@
 
 #include <cmath>
 #include <functional>
+#include <iomanip>
 #include <iostream>
+#include <sstream>
 #include <string>
 
 namespace bmr {
@@ -107,6 +109,31 @@ CavityInclusionScene(bool unknown)
   s.objective = { { "inclusion", 1.0 }, { "cavity", 1.0 } };
   s.roiBoundaryFixed = true;
   return s;
+}
+
+/** One check of a test: prints "FAIL: <what>" to std::cerr when \a condition is false and returns \a condition,
+ * so that a test accumulates `ok &= Expect(condition, "...")` and every failed condition is named on its own.
+ * \a what states what is asserted, with its tolerance and, where at hand, the measured value. */
+inline bool
+Expect(bool condition, const std::string & what)
+{
+  if (!condition)
+  {
+    std::cerr << "FAIL: " << what << std::endl;
+  }
+  return condition;
+}
+
+/** \a value as text for the message of a check: operator<< with 15 significant digits, so that 1e-13 stays
+ * readable (std::to_string prints 0.000000) and a value just outside a tight tolerance around a non-zero
+ * target (1.3 + 1e-12) does not print as the target itself. */
+template<typename T>
+std::string
+ToString(const T & value)
+{
+  std::ostringstream text;
+  text << std::setprecision(15) << value;
+  return text.str();
 }
 
 /** Runs \a f and checks that it throws an itk::ExceptionObject whose description contains \a expected. */

@@ -25,6 +25,134 @@
 
 namespace bmr {
 
+namespace {
+using WallNodes = std::vector<std::pair<std::int32_t, std::int32_t>>; // (parameter-node index, mesh node id)
+
+const double *
+NodePoint(const std::vector<double> & points, std::int32_t node)
+{
+  return &points[3 * static_cast<std::size_t>(node)];
+}
+
+double
+Distance2(const double * a, const double * b)
+{
+  return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+// Appends the control points of one (non-empty) wall to controls; returns the index of the first one.
+std::size_t
+SampleWallControlPoints(const std::vector<double> &          points,
+                        const WallNodes &                    wall,
+                        double                               spacing,
+                        std::vector<std::array<double, 3>> & controls)
+{
+  double centroid[3] = { 0, 0, 0 };
+  for (const auto & n : wall)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      centroid[c] += NodePoint(points, n.second)[c] / static_cast<double>(wall.size());
+    }
+  }
+  // Farthest-point sampling; ties go to the first node in wall order.
+  std::vector<double> nearest(wall.size(), std::numeric_limits<double>::max());
+  std::size_t         next = 0;
+  double              best = -1.0;
+  for (std::size_t i = 0; i < wall.size(); ++i)
+  {
+    const double d = Distance2(NodePoint(points, wall[i].second), centroid);
+    if (d > best)
+    {
+      best = d;
+      next = i;
+    }
+  }
+  const std::size_t first = controls.size();
+  while (true)
+  {
+    const double * p = NodePoint(points, wall[next].second);
+    controls.push_back({ { p[0], p[1], p[2] } });
+    best = -1.0;
+    for (std::size_t i = 0; i < wall.size(); ++i)
+    {
+      nearest[i] = std::min(nearest[i], Distance2(NodePoint(points, wall[i].second), p));
+      if (nearest[i] > best)
+      {
+        best = nearest[i];
+        next = i;
+      }
+    }
+    if (best <= spacing * spacing)
+    {
+      break;
+    }
+  }
+  return first;
+}
+
+// Unnormalised Gaussian weights of the wall's nodes for the wall's control points controls[first..].
+void
+AddWallGaussianWeights(const std::vector<double> &                points,
+                       const WallNodes &                          wall,
+                       double                                     spacing,
+                       const std::vector<std::array<double, 3>> & controls,
+                       std::size_t                                first,
+                       std::vector<std::vector<double>> &         raw,
+                       std::vector<std::vector<std::int32_t>> &   rawControl)
+{
+  const double s2 = 2.0 * spacing * spacing;
+  for (const auto & n : wall)
+  {
+    const double * x = NodePoint(points, n.second);
+    for (std::size_t j = first; j < controls.size(); ++j)
+    {
+      raw[n.first].push_back(std::exp(-Distance2(x, controls[j].data()) / s2));
+      rawControl[n.first].push_back(static_cast<std::int32_t>(j));
+    }
+  }
+}
+
+// Adds the ridge 1e-8 trace / m to the diagonal of the m x m row-major Gram matrix A and overwrites A
+// with its lower Cholesky factor.
+void
+AddRidgeAndFactorizeGram(std::vector<double> & A, std::size_t m)
+{
+  double trace = 0.0;
+  for (std::size_t i = 0; i < m; ++i)
+  {
+    trace += A[i * m + i];
+  }
+  for (std::size_t i = 0; i < m; ++i)
+  {
+    A[i * m + i] += 1e-8 * trace / static_cast<double>(m);
+  }
+  for (std::size_t j = 0; j < m; ++j)
+  {
+    double s = A[j * m + j];
+    for (std::size_t k = 0; k < j; ++k)
+    {
+      s -= A[j * m + k] * A[j * m + k];
+    }
+    if (!(s > 0.0))
+    {
+      Fail("WallBasis", "the Gram matrix of the wall basis is singular");
+    }
+    A[j * m + j] = std::sqrt(s);
+    for (std::size_t i = j + 1; i < m; ++i)
+    {
+      double t = A[i * m + j];
+      for (std::size_t k = 0; k < j; ++k)
+      {
+        t -= A[i * m + k] * A[j * m + k];
+      }
+      A[i * m + j] = t / A[j * m + j];
+      A[j * m + i] = 0.0;
+    }
+  }
+}
+} // namespace
+
 WallBasis::WallBasis(const std::vector<double> &                                             points,
                      const std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> & walls,
                      std::size_t                                                             numberOfNodes,
@@ -38,10 +166,6 @@ WallBasis::WallBasis(const std::vector<double> &                                
     m_NumberOfControlPoints = numberOfNodes;
     return;
   }
-  const auto at = [&points](std::int32_t node) { return &points[3 * static_cast<std::size_t>(node)]; };
-  const auto distance2 = [](const double * a, const double * b) {
-    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
-  };
   std::vector<std::array<double, 3>>     controls;
   std::vector<std::vector<double>>       raw(numberOfNodes);
   std::vector<std::vector<std::int32_t>> rawControl(numberOfNodes);
@@ -51,57 +175,8 @@ WallBasis::WallBasis(const std::vector<double> &                                
     {
       continue;
     }
-    double centroid[3] = { 0, 0, 0 };
-    for (const auto & n : wall)
-    {
-      for (int c = 0; c < 3; ++c)
-      {
-        centroid[c] += at(n.second)[c] / static_cast<double>(wall.size());
-      }
-    }
-    // Farthest-point sampling; ties go to the first node in wall order.
-    std::vector<double> nearest(wall.size(), std::numeric_limits<double>::max());
-    std::size_t         next = 0;
-    double              best = -1.0;
-    for (std::size_t i = 0; i < wall.size(); ++i)
-    {
-      const double d = distance2(at(wall[i].second), centroid);
-      if (d > best)
-      {
-        best = d;
-        next = i;
-      }
-    }
-    const std::size_t first = controls.size();
-    while (true)
-    {
-      const double * p = at(wall[next].second);
-      controls.push_back({ { p[0], p[1], p[2] } });
-      best = -1.0;
-      for (std::size_t i = 0; i < wall.size(); ++i)
-      {
-        nearest[i] = std::min(nearest[i], distance2(at(wall[i].second), p));
-        if (nearest[i] > best)
-        {
-          best = nearest[i];
-          next = i;
-        }
-      }
-      if (best <= spacing * spacing)
-      {
-        break;
-      }
-    }
-    const double s2 = 2.0 * spacing * spacing;
-    for (const auto & n : wall)
-    {
-      const double * x = at(n.second);
-      for (std::size_t j = first; j < controls.size(); ++j)
-      {
-        raw[n.first].push_back(std::exp(-distance2(x, controls[j].data()) / s2));
-        rawControl[n.first].push_back(static_cast<std::int32_t>(j));
-      }
-    }
+    const std::size_t first = SampleWallControlPoints(points, wall, spacing, controls);
+    AddWallGaussianWeights(points, wall, spacing, controls, first, raw, rawControl);
   }
   m_NumberOfControlPoints = controls.size();
   for (std::size_t k = 0; k < numberOfNodes; ++k)
@@ -140,38 +215,7 @@ WallBasis::WallBasis(const std::vector<double> &                                
       }
     }
   }
-  double trace = 0.0;
-  for (std::size_t i = 0; i < m; ++i)
-  {
-    trace += A[i * m + i];
-  }
-  for (std::size_t i = 0; i < m; ++i)
-  {
-    A[i * m + i] += 1e-8 * trace / static_cast<double>(m);
-  }
-  for (std::size_t j = 0; j < m; ++j)
-  {
-    double s = A[j * m + j];
-    for (std::size_t k = 0; k < j; ++k)
-    {
-      s -= A[j * m + k] * A[j * m + k];
-    }
-    if (!(s > 0.0))
-    {
-      Fail("WallBasis", "the Gram matrix of the wall basis is singular");
-    }
-    A[j * m + j] = std::sqrt(s);
-    for (std::size_t i = j + 1; i < m; ++i)
-    {
-      double t = A[i * m + j];
-      for (std::size_t k = 0; k < j; ++k)
-      {
-        t -= A[i * m + k] * A[j * m + k];
-      }
-      A[i * m + j] = t / A[j * m + j];
-      A[j * m + i] = 0.0;
-    }
-  }
+  AddRidgeAndFactorizeGram(A, m);
 }
 
 void

@@ -176,6 +176,7 @@ FEMElasticityOptimizer::TakeResult(const bmr::EstimationResult & result)
   m_NumberOfRejectedSteps = result.rejectedSteps;
   m_NumberOfInvertedElements = result.invertedElements;
   m_Timings = result.timings;
+  m_Result = result;
 }
 
 void

@@ -152,6 +152,20 @@ struct LinearElasticModel::Impl
   }
   void
   BuildPattern();
+  // Pieces of BuildPattern, in the order it calls them.
+  using NodeAdjacency = std::vector<std::vector<std::int32_t>>;
+  NodeAdjacency
+  ElementNodeAdjacency() const;
+  static void
+  AddPatchNodeCouplings(const std::vector<AveragingPatch> & patches, NodeAdjacency & upper);
+  void
+  SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper) const;
+  void
+  BuildColumnPattern(const NodeAdjacency & upper);
+  void
+  AccumulateUnitElementStiffnesses();
+  void
+  AccumulateAveragedBulkStiffnesses(const std::vector<AveragingPatch> & patches);
   void
   CheckElements() const;
   void
@@ -230,14 +244,13 @@ LinearElasticModel::Impl::BuildAveragingPatches() const -> std::vector<Averaging
   return patches;
 }
 
-void
-LinearElasticModel::Impl::BuildPattern()
+// Node adjacency (each node with itself and its element neighbours of higher or equal index).
+auto
+LinearElasticModel::Impl::ElementNodeAdjacency() const -> NodeAdjacency
 {
   const std::size_t N = mesh.GetNumberOfPoints();
   const std::size_t M = mesh.GetNumberOfTetrahedra();
-  ndof = 3 * N;
-  // Node adjacency (each node with itself and its element neighbours of higher or equal index).
-  std::vector<std::vector<std::int32_t>> upper(N);
+  NodeAdjacency     upper(N);
   for (std::size_t e = 0; e < M; ++e)
   {
     const std::int32_t * t = &mesh.tetrahedra[4 * e];
@@ -252,9 +265,14 @@ LinearElasticModel::Impl::BuildPattern()
       }
     }
   }
-  // Nodal-averaged pressure: the volumetric strain of a (node, material) pair averages the elements of that
-  // material around the node, which couples every pair of nodes of that patch.
-  const std::vector<AveragingPatch> patches = BuildAveragingPatches();
+  return upper;
+}
+
+// Nodal-averaged pressure: the volumetric strain of a (node, material) pair averages the elements of that
+// material around the node, which couples every pair of nodes of that patch.
+void
+LinearElasticModel::Impl::AddPatchNodeCouplings(const std::vector<AveragingPatch> & patches, NodeAdjacency & upper)
+{
   for (const AveragingPatch & patch : patches)
   {
     for (std::int32_t a : patch.nodes)
@@ -268,6 +286,12 @@ LinearElasticModel::Impl::BuildPattern()
       }
     }
   }
+}
+
+void
+LinearElasticModel::Impl::SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper) const
+{
+  const std::size_t N = mesh.GetNumberOfPoints();
   std::vector<char> used(N, 0);
   for (std::size_t n = 0; n < N; ++n)
   {
@@ -285,7 +309,13 @@ LinearElasticModel::Impl::BuildPattern()
       Fail("LinearElasticModel", msg.str());
     }
   }
-  // Column 3n+c holds rows 3m+r >= 3n+c for every neighbour m >= n.
+}
+
+// Column 3n+c holds rows 3m+r >= 3n+c for every neighbour m >= n.
+void
+LinearElasticModel::Impl::BuildColumnPattern(const NodeAdjacency & upper)
+{
+  const std::size_t N = mesh.GetNumberOfPoints();
   colStart.assign(ndof + 1, 0);
   for (std::size_t n = 0; n < N; ++n)
   {
@@ -313,7 +343,13 @@ LinearElasticModel::Impl::BuildPattern()
       }
     }
   }
-  // Unit-modulus element stiffnesses accumulated per label on the shared pattern.
+}
+
+// Unit-modulus element stiffnesses accumulated per label on the shared pattern.
+void
+LinearElasticModel::Impl::AccumulateUnitElementStiffnesses()
+{
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
   for (const auto & kv : materials)
   {
     unitValues[kv.first].assign(rowIndex.size(), 0.0);
@@ -354,8 +390,13 @@ LinearElasticModel::Impl::BuildPattern()
       }
     }
   }
-  // Bulk part of the averaged materials: kappa V_p gbar gbar^T per patch p, with the averaged divergence
-  // operator gbar = sum_e (V_e / 4) g_e / V_p and V_p = sum_e V_e / 4 over the patch's elements.
+}
+
+// Bulk part of the averaged materials: kappa V_p gbar gbar^T per patch p, with the averaged divergence
+// operator gbar = sum_e (V_e / 4) g_e / V_p and V_p = sum_e V_e / 4 over the patch's elements.
+void
+LinearElasticModel::Impl::AccumulateAveragedBulkStiffnesses(const std::vector<AveragingPatch> & patches)
+{
   for (const AveragingPatch & patch : patches)
   {
     const double        kappa = 1.0 / (3.0 * (1.0 - 2.0 * materials.at(patch.label).poissonRatio)); // unit E
@@ -400,6 +441,20 @@ LinearElasticModel::Impl::BuildPattern()
       }
     }
   }
+}
+
+void
+LinearElasticModel::Impl::BuildPattern()
+{
+  const std::size_t N = mesh.GetNumberOfPoints();
+  ndof = 3 * N;
+  NodeAdjacency                     upper = ElementNodeAdjacency();
+  const std::vector<AveragingPatch> patches = BuildAveragingPatches();
+  AddPatchNodeCouplings(patches, upper);
+  SortAdjacencyAndCheckNodesUsed(upper);
+  BuildColumnPattern(upper);
+  AccumulateUnitElementStiffnesses();
+  AccumulateAveragedBulkStiffnesses(patches);
   values.assign(rowIndex.size(), 0.0);
   valuesCurrent = false;
 }

@@ -198,22 +198,21 @@ DisplacementFieldRasterizer::RasterizeRegion(const std::array<std::size_t, 3> & 
   }
 }
 
-void
-FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned char * inside, unsigned int coarsening)
+namespace {
+// Dirichlet data of FillOutsideHarmonic: the mean of the covered fine voxels around each coarse node,
+// 0 on the border; returns whether any coarse node is covered.
+bool
+ComputeCoarseDirichletData(const GridGeometry &  grid,
+                           const double *        field,
+                           const unsigned char * inside,
+                           std::size_t           c,
+                           const std::size_t (&m)[3],
+                           std::vector<char> &   fixed,
+                           std::vector<double> & value)
 {
-  const std::size_t c = std::max(1u, coarsening);
-  const auto &      n = grid.size;
-  std::size_t       m[3];
-  for (int i = 0; i < 3; ++i)
-  {
-    m[i] = (n[i] - 1 + c - 1) / c + 1;
-  }
-  const std::size_t M = m[0] * m[1] * m[2];
-  // Dirichlet data: mean of the covered fine voxels around each coarse node, 0 on the border.
-  std::vector<char>   fixed(M, 0);
-  std::vector<double> value(3 * M, 0.0);
-  const std::int64_t  half = static_cast<std::int64_t>(c / 2);
-  bool                any = false;
+  const auto &       n = grid.size;
+  const std::int64_t half = static_cast<std::int64_t>(c / 2);
+  bool               any = false;
   for (std::size_t K = 0; K < m[2]; ++K)
   {
     for (std::size_t J = 0; J < m[1]; ++J)
@@ -265,106 +264,130 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
       }
     }
   }
-  if (!any)
+  return any;
+}
+
+/** The coarse lattice of FillOutsideHarmonic (m[0] x m[1] x m[2] = M nodes) and the weights of its Laplacian. */
+struct CoarseLaplacian
+{
+  std::size_t               m[3];
+  std::size_t               M;
+  const std::vector<char> & fixed;
+  double                    w[3];
+  std::int64_t              stride[3];
+  std::size_t               coord[3];
+};
+
+// y = A x on free nodes; A is the negative Laplacian, with fixed neighbours taken from bc (or 0).
+void
+ApplyCoarseLaplacian(const CoarseLaplacian &     A,
+                     const std::vector<double> & x,
+                     std::vector<double> &       y,
+                     const std::vector<double> * bc)
+{
+  for (std::size_t node = 0; node < A.M; ++node)
   {
-    for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
+    if (A.fixed[node])
     {
-      field[3 * v] = field[3 * v + 1] = field[3 * v + 2] = 0.0;
+      y[node] = 0.0;
+      continue;
     }
-    return;
-  }
-  // Matrix-free conjugate gradients on the free coarse nodes, one component at a time.
-  const double       w[3] = { 1.0 / std::pow(c * grid.spacing[0], 2),
-                              1.0 / std::pow(c * grid.spacing[1], 2),
-                              1.0 / std::pow(c * grid.spacing[2], 2) };
-  const std::int64_t stride[3] = { 1, static_cast<std::int64_t>(m[0]), static_cast<std::int64_t>(m[0] * m[1]) };
-  const std::size_t  coord[3] = { 1, m[0], m[0] * m[1] };
-  auto applyA = [&](const std::vector<double> & x, std::vector<double> & y, const std::vector<double> * bc) {
-    // y = A x on free nodes; A is the negative Laplacian, with fixed neighbours taken from bc (or 0).
-    for (std::size_t node = 0; node < M; ++node)
+    double acc = 0.0;
+    for (int d = 0; d < 3; ++d)
     {
-      if (fixed[node])
+      const std::size_t pos = (node / A.coord[d]) % A.m[d];
+      for (int s = -1; s <= 1; s += 2)
       {
-        y[node] = 0.0;
-        continue;
-      }
-      double acc = 0.0;
-      for (int d = 0; d < 3; ++d)
-      {
-        const std::size_t pos = (node / coord[d]) % m[d];
-        for (int s = -1; s <= 1; s += 2)
+        if ((s < 0 && pos == 0) || (s > 0 && pos + 1 == A.m[d]))
         {
-          if ((s < 0 && pos == 0) || (s > 0 && pos + 1 == m[d]))
-          {
-            continue;
-          }
-          const std::size_t nb = static_cast<std::size_t>(static_cast<std::int64_t>(node) + s * stride[d]);
-          const double      xn = fixed[nb] ? (bc ? (*bc)[nb] : 0.0) : x[nb];
-          acc += w[d] * (x[node] - xn);
+          continue;
         }
+        const std::size_t nb = static_cast<std::size_t>(static_cast<std::int64_t>(node) + s * A.stride[d]);
+        const double      xn = A.fixed[nb] ? (bc ? (*bc)[nb] : 0.0) : x[nb];
+        acc += A.w[d] * (x[node] - xn);
       }
-      y[node] = acc;
     }
-  };
-  std::vector<double> coarse(3 * M, 0.0);
-  std::vector<double> x(M), r(M), p(M), Ap(M), bc(M);
-  for (int comp = 0; comp < 3; ++comp)
+    y[node] = acc;
+  }
+}
+
+// Conjugate gradients for component comp of the coarse harmonic field; the solution is left in x
+// (r, p, Ap and bc are work vectors, kept by the caller across the components).
+void
+SolveCoarseComponent(const CoarseLaplacian &     A,
+                     const std::vector<double> & value,
+                     int                         comp,
+                     std::vector<double> &       x,
+                     std::vector<double> &       r,
+                     std::vector<double> &       p,
+                     std::vector<double> &       Ap,
+                     std::vector<double> &       bc)
+{
+  const std::size_t         M = A.M;
+  const std::vector<char> & fixed = A.fixed;
+  for (std::size_t node = 0; node < M; ++node)
   {
+    bc[node] = value[3 * node + comp];
+    x[node] = fixed[node] ? bc[node] : 0.0;
+  }
+  // r = b - A x, with b carrying the fixed neighbours' values.
+  std::vector<double> zero(M, 0.0);
+  ApplyCoarseLaplacian(A, zero, r, &bc); // A(0) with boundary data = -b
+  for (std::size_t node = 0; node < M; ++node)
+  {
+    r[node] = fixed[node] ? 0.0 : -r[node];
+  }
+  p = r;
+  double rr = 0.0;
+  for (double v : r)
+  {
+    rr += v * v;
+  }
+  const double stop = 1e-20 * std::max(rr, 1e-300);
+  for (int it = 0; it < 5000 && rr > stop; ++it)
+  {
+    ApplyCoarseLaplacian(A, p, Ap, nullptr);
+    double pAp = 0.0;
     for (std::size_t node = 0; node < M; ++node)
     {
-      bc[node] = value[3 * node + comp];
-      x[node] = fixed[node] ? bc[node] : 0.0;
+      pAp += p[node] * Ap[node];
     }
-    // r = b - A x, with b carrying the fixed neighbours' values.
-    std::vector<double> zero(M, 0.0);
-    applyA(zero, r, &bc); // A(0) with boundary data = -b
+    if (!(pAp > 0.0))
+    {
+      break;
+    }
+    const double alpha = rr / pAp;
+    double       rrNew = 0.0;
     for (std::size_t node = 0; node < M; ++node)
     {
-      r[node] = fixed[node] ? 0.0 : -r[node];
-    }
-    p = r;
-    double rr = 0.0;
-    for (double v : r)
-    {
-      rr += v * v;
-    }
-    const double stop = 1e-20 * std::max(rr, 1e-300);
-    for (int it = 0; it < 5000 && rr > stop; ++it)
-    {
-      applyA(p, Ap, nullptr);
-      double pAp = 0.0;
-      for (std::size_t node = 0; node < M; ++node)
+      if (!fixed[node])
       {
-        pAp += p[node] * Ap[node];
-      }
-      if (!(pAp > 0.0))
-      {
-        break;
-      }
-      const double alpha = rr / pAp;
-      double       rrNew = 0.0;
-      for (std::size_t node = 0; node < M; ++node)
-      {
-        if (!fixed[node])
-        {
-          x[node] += alpha * p[node];
-          r[node] -= alpha * Ap[node];
-          rrNew += r[node] * r[node];
-        }
-      }
-      const double beta = rrNew / rr;
-      rr = rrNew;
-      for (std::size_t node = 0; node < M; ++node)
-      {
-        p[node] = fixed[node] ? 0.0 : r[node] + beta * p[node];
+        x[node] += alpha * p[node];
+        r[node] -= alpha * Ap[node];
+        rrNew += r[node] * r[node];
       }
     }
+    const double beta = rrNew / rr;
+    rr = rrNew;
     for (std::size_t node = 0; node < M; ++node)
     {
-      coarse[3 * node + comp] = x[node];
+      p[node] = fixed[node] ? 0.0 : r[node] + beta * p[node];
     }
   }
-  // Trilinear interpolation of the coarse solution into the uncovered voxels.
+}
+
+// Trilinear interpolation of the coarse solution into the uncovered voxels.
+void
+InterpolateCoarseSolution(const GridGeometry &        grid,
+                          const unsigned char *       inside,
+                          std::size_t                 c,
+                          const CoarseLaplacian &     A,
+                          const std::vector<double> & coarse,
+                          double *                    field)
+{
+  const auto & n = grid.size;
+  const auto & m = A.m;
+  const auto & coord = A.coord;
   for (std::size_t k = 0; k < n[2]; ++k)
   {
     for (std::size_t j = 0; j < n[1]; ++j)
@@ -415,16 +438,17 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
       }
     }
   }
-  // The coarse interpolation leaves a mismatch at the mesh boundary, within a few coarse cells of
-  // it. Gauss-Seidel sweeps of the fine-grid Laplacian on the uncovered voxels of that band (in a
-  // fixed order, so deterministic) remove it; the band is found by dilating the covered mask.
-  const double               fw[3] = { 1.0 / (grid.spacing[0] * grid.spacing[0]),
-                                       1.0 / (grid.spacing[1] * grid.spacing[1]),
-                                       1.0 / (grid.spacing[2] * grid.spacing[2]) };
+}
+
+// The uncovered voxels, off the grid's border, within width voxels of the covered ones (found by
+// dilating the covered mask), in increasing offset order.
+std::vector<std::size_t>
+FindBoundaryBand(const GridGeometry & grid, const unsigned char * inside, unsigned int width)
+{
+  const auto &               n = grid.size;
   const std::size_t          fstride[3] = { 1, n[0], n[0] * n[1] };
   const std::size_t          nvox = grid.GetNumberOfVoxels();
   std::vector<unsigned char> band(inside, inside + nvox);
-  const unsigned int         width = 2 * static_cast<unsigned int>(c) + 2;
   for (unsigned int pass = 1; pass <= width; ++pass)
   {
     std::vector<unsigned char> grown(band);
@@ -455,12 +479,27 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
       bandVoxels.push_back(off);
     }
   }
-  double weight = 0.0;
+  return bandVoxels;
+}
+
+// Gauss-Seidel sweeps of the fine-grid Laplacian over bandVoxels, in their (fixed) order.
+void
+RelaxBoundaryBand(const GridGeometry &             grid,
+                  const std::vector<std::size_t> & bandVoxels,
+                  unsigned int                     sweeps,
+                  double *                         field)
+{
+  const auto &      n = grid.size;
+  const double      fw[3] = { 1.0 / (grid.spacing[0] * grid.spacing[0]),
+                              1.0 / (grid.spacing[1] * grid.spacing[1]),
+                              1.0 / (grid.spacing[2] * grid.spacing[2]) };
+  const std::size_t fstride[3] = { 1, n[0], n[0] * n[1] };
+  double            weight = 0.0;
   for (int d = 0; d < 3; ++d)
   {
     weight += 2.0 * fw[d];
   }
-  for (unsigned int sweep = 0; sweep < 6 * width; ++sweep)
+  for (unsigned int sweep = 0; sweep < sweeps; ++sweep)
   {
     for (std::size_t off : bandVoxels)
     {
@@ -475,6 +514,57 @@ FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned ch
       }
     }
   }
+}
+} // namespace
+
+void
+FillOutsideHarmonic(const GridGeometry & grid, double * field, const unsigned char * inside, unsigned int coarsening)
+{
+  const std::size_t c = std::max(1u, coarsening);
+  const auto &      n = grid.size;
+  std::size_t       m[3];
+  for (int i = 0; i < 3; ++i)
+  {
+    m[i] = (n[i] - 1 + c - 1) / c + 1;
+  }
+  const std::size_t M = m[0] * m[1] * m[2];
+  // Dirichlet data: mean of the covered fine voxels around each coarse node, 0 on the border.
+  std::vector<char>   fixed(M, 0);
+  std::vector<double> value(3 * M, 0.0);
+  const bool          any = ComputeCoarseDirichletData(grid, field, inside, c, m, fixed, value);
+  if (!any)
+  {
+    for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
+    {
+      field[3 * v] = field[3 * v + 1] = field[3 * v + 2] = 0.0;
+    }
+    return;
+  }
+  // Matrix-free conjugate gradients on the free coarse nodes, one component at a time.
+  const CoarseLaplacian A{ { m[0], m[1], m[2] },
+                           M,
+                           fixed,
+                           { 1.0 / std::pow(c * grid.spacing[0], 2),
+                             1.0 / std::pow(c * grid.spacing[1], 2),
+                             1.0 / std::pow(c * grid.spacing[2], 2) },
+                           { 1, static_cast<std::int64_t>(m[0]), static_cast<std::int64_t>(m[0] * m[1]) },
+                           { 1, m[0], m[0] * m[1] } };
+  std::vector<double>   coarse(3 * M, 0.0);
+  std::vector<double>   x(M), r(M), p(M), Ap(M), bc(M);
+  for (int comp = 0; comp < 3; ++comp)
+  {
+    SolveCoarseComponent(A, value, comp, x, r, p, Ap, bc);
+    for (std::size_t node = 0; node < M; ++node)
+    {
+      coarse[3 * node + comp] = x[node];
+    }
+  }
+  InterpolateCoarseSolution(grid, inside, c, A, coarse, field);
+  // The coarse interpolation leaves a mismatch at the mesh boundary, within a few coarse cells of
+  // it. Gauss-Seidel sweeps of the fine-grid Laplacian on the uncovered voxels of that band (in a
+  // fixed order, so deterministic) remove it; the band is found by dilating the covered mask.
+  const unsigned int width = 2 * static_cast<unsigned int>(c) + 2;
+  RelaxBoundaryBand(grid, FindBoundaryBand(grid, inside, width), 6 * width, field);
 }
 
 PointLocator::PointLocator(const std::vector<double> & points, const std::vector<std::int32_t> & tetrahedra)

@@ -285,10 +285,12 @@ Scene::EstimationWarnings(double finestVoxel, double coarsestVoxel) const
   return warnings;
 }
 
-void
-Scene::Validate() const
+namespace {
+// Checks each label on its own and that something is simulated; returns whether a label has the role fixed
+// (which holds the model against rigid-body motion).
+bool
+CheckSceneLabels(const std::vector<SceneLabel> & labels, const std::string & src)
 {
-  const std::string      src = name.empty() ? std::string("scene") : name;
   bool                   simulated = false, fixedLabel = false;
   std::set<std::string>  names;
   std::set<std::int32_t> values;
@@ -337,60 +339,63 @@ Scene::Validate() const
   {
     SceneError(src, "labels", "no label has the role material or unknown_material: there is nothing to simulate");
   }
-  if (!gauge.empty())
+  return fixedLabel;
+}
+
+void
+CheckLoadSurface(const Scene & scene, const std::string & src, const std::string & surface, const std::string & entry)
+{
+  const SceneLabel * l = scene.FindLabel(surface);
+  if (!l)
   {
-    const SceneLabel * g = FindLabel(gauge);
-    if (!g || g->role != LabelRole::Material)
-    {
-      SceneError(src, "gauge", "\"" + gauge + "\" must name a label with the role material (known modulus)");
-    }
+    SceneError(src, entry, "\"" + surface + "\" is not a label of the scene");
   }
-  auto checkSurface = [&](const std::string & surface, const std::string & entry) {
-    const SceneLabel * l = FindLabel(surface);
-    if (!l)
-    {
-      SceneError(src, entry, "\"" + surface + "\" is not a label of the scene");
-    }
-    if (l->role != LabelRole::Hollow && l->role != LabelRole::Outside && l->role != LabelRole::Fixed)
-    {
-      SceneError(
-        src, entry, "\"" + surface + "\" must be a hollow, fixed or outside label (its wall is a mesh boundary)");
-    }
-  };
-  for (std::size_t i = 0; i < forceSurfaces.size(); ++i)
+  if (l->role != LabelRole::Hollow && l->role != LabelRole::Outside && l->role != LabelRole::Fixed)
   {
-    checkSurface(forceSurfaces[i], "force_surfaces[" + std::to_string(i) + "]");
+    SceneError(
+      src, entry, "\"" + surface + "\" must be a hollow, fixed or outside label (its wall is a mesh boundary)");
+  }
+}
+
+// Checks the surfaces of force_surfaces and loads; returns whether a load prescribes a displacement
+// (which holds the model against rigid-body motion).
+bool
+CheckForceSurfacesAndLoads(const Scene & scene, const std::string & src)
+{
+  for (std::size_t i = 0; i < scene.forceSurfaces.size(); ++i)
+  {
+    CheckLoadSurface(scene, src, scene.forceSurfaces[i], "force_surfaces[" + std::to_string(i) + "]");
   }
   bool displacementLoad = false;
-  for (std::size_t i = 0; i < loads.size(); ++i)
+  for (std::size_t i = 0; i < scene.loads.size(); ++i)
   {
     const std::string entry = "loads[" + std::to_string(i) + "]";
-    checkSurface(loads[i].surface, entry + ".surface");
-    displacementLoad = displacementLoad || loads[i].type == SceneLoad::Type::RadialDisplacement;
+    CheckLoadSurface(scene, src, scene.loads[i].surface, entry + ".surface");
+    displacementLoad = displacementLoad || scene.loads[i].type == SceneLoad::Type::RadialDisplacement;
   }
-  for (std::size_t i = 0; i < objective.size(); ++i)
+  return displacementLoad;
+}
+
+void
+CheckObjective(const Scene & scene, const std::string & src)
+{
+  for (std::size_t i = 0; i < scene.objective.size(); ++i)
   {
     const std::string entry = "objective[" + std::to_string(i) + "]";
-    if (!FindLabel(objective[i].label))
+    if (!scene.FindLabel(scene.objective[i].label))
     {
-      SceneError(src, entry + ".label", "\"" + objective[i].label + "\" is not a label of the scene");
+      SceneError(src, entry + ".label", "\"" + scene.objective[i].label + "\" is not a label of the scene");
     }
-    if (!(objective[i].weight > 0.0))
+    if (!(scene.objective[i].weight > 0.0))
     {
       SceneError(src, entry + ".weight", "must be > 0");
     }
   }
-  // In an estimation (FEMElasticityOptimizer) the walls of the force surfaces are displacement-controlled,
-  // which holds the model too.
-  const bool estimatedWalls = !forceSurfaces.empty() && !objective.empty();
-  if (!fixedLabel && !roiBoundaryFixed && !displacementLoad && !estimatedWalls)
-  {
-    SceneError(src,
-               "labels",
-               "nothing prevents rigid-body motion: give a label the role fixed, set region_of_interest.boundary to "
-               "\"fixed\", prescribe a displacement load, or estimate the loads of force_surfaces");
-  }
-  const MeshingParameters &             m = mesh;
+}
+
+void
+CheckMeshingParameters(const MeshingParameters & m, const std::string & src)
+{
   const std::pair<const char *, double> sizes[] = { { "cell_size_mm", m.cellSize },
                                                     { "facet_size_mm", m.facetSize },
                                                     { "facet_distance_mm", m.facetDistance } };
@@ -412,6 +417,35 @@ Scene::Validate() const
   {
     SceneError(src, "mesh.minimum_dihedral_angle_deg", "must lie in [0, 70) degrees");
   }
+}
+} // namespace
+
+void
+Scene::Validate() const
+{
+  const std::string src = name.empty() ? std::string("scene") : name;
+  const bool        fixedLabel = CheckSceneLabels(labels, src);
+  if (!gauge.empty())
+  {
+    const SceneLabel * g = FindLabel(gauge);
+    if (!g || g->role != LabelRole::Material)
+    {
+      SceneError(src, "gauge", "\"" + gauge + "\" must name a label with the role material (known modulus)");
+    }
+  }
+  const bool displacementLoad = CheckForceSurfacesAndLoads(*this, src);
+  CheckObjective(*this, src);
+  // In an estimation (FEMElasticityOptimizer) the walls of the force surfaces are displacement-controlled,
+  // which holds the model too.
+  const bool estimatedWalls = !forceSurfaces.empty() && !objective.empty();
+  if (!fixedLabel && !roiBoundaryFixed && !displacementLoad && !estimatedWalls)
+  {
+    SceneError(src,
+               "labels",
+               "nothing prevents rigid-body motion: give a label the role fixed, set region_of_interest.boundary to "
+               "\"fixed\", prescribe a displacement load, or estimate the loads of force_surfaces");
+  }
+  CheckMeshingParameters(mesh, src);
 }
 
 void
@@ -457,6 +491,327 @@ Scene::ValidateAgainstLabels(const std::set<std::int32_t> & present, const std::
   }
 }
 
+namespace {
+void
+CheckUnits(const Json & u, const std::string & source)
+{
+  CheckKeys(u, { "length", "modulus", "force" }, source, "units");
+  const std::pair<const char *, const char *> expected[] = { { "length", "mm" },
+                                                             { "modulus", "kPa" },
+                                                             { "force", "mN" } };
+  for (const auto & e : expected)
+  {
+    if (u.contains(e.first) && GetString(u, e.first, source, "units") != e.second)
+    {
+      SceneError(source, std::string("units.") + e.first, std::string("only \"") + e.second + "\" is supported");
+    }
+  }
+}
+
+SceneLabel
+ParseLabel(const Json & j, const std::string & source, const std::string & entry)
+{
+  CheckKeys(j, { "name", "value", "role", "youngs_modulus_kPa", "poisson_ratio", "bounds_kPa" }, source, entry);
+  SceneLabel l;
+  if (!j.contains("name") || !j.contains("value") || !j.contains("role"))
+  {
+    SceneError(source, entry, "needs name, value and role");
+  }
+  l.name = GetString(j, "name", source, entry);
+  if (!j["value"].is_number_integer())
+  {
+    SceneError(source, entry + ".value", "must be an integer label value");
+  }
+  l.value = j["value"].get<std::int32_t>();
+  l.role = ParseRole(GetString(j, "role", source, entry), source, entry);
+  const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
+  if (simulated)
+  {
+    if (!j.contains("youngs_modulus_kPa") || !j.contains("poisson_ratio"))
+    {
+      SceneError(source, "labels[" + l.name + "]", "a material needs youngs_modulus_kPa and poisson_ratio");
+    }
+    l.youngsModulus = GetNumber(j, "youngs_modulus_kPa", source, "labels[" + l.name + "]");
+    l.poissonRatio = GetNumber(j, "poisson_ratio", source, "labels[" + l.name + "]");
+  }
+  else if (j.contains("youngs_modulus_kPa") || j.contains("poisson_ratio"))
+  {
+    SceneError(source, "labels[" + l.name + "]", "only material labels take youngs_modulus_kPa / poisson_ratio");
+  }
+  if (j.contains("bounds_kPa"))
+  {
+    if (l.role != LabelRole::UnknownMaterial)
+    {
+      SceneError(source, "labels[" + l.name + "].bounds_kPa", "only an unknown_material takes bounds");
+    }
+    const Json & b = j["bounds_kPa"];
+    if (!b.is_array() || b.size() != 2 || !b[0].is_number() || !b[1].is_number())
+    {
+      SceneError(source, "labels[" + l.name + "].bounds_kPa", "must be [lower, upper] in kPa");
+    }
+    l.lowerBound = b[0].get<double>();
+    l.upperBound = b[1].get<double>();
+  }
+  else if (l.role == LabelRole::UnknownMaterial)
+  {
+    SceneError(source, "labels[" + l.name + "]", "an unknown_material needs bounds_kPa");
+  }
+  return l;
+}
+
+void
+ParseGaugeAndFormulation(const Json & root, const std::string & source, Scene & scene)
+{
+  if (root.contains("gauge"))
+  {
+    scene.gauge = GetString(root, "gauge", source, "scene");
+  }
+  if (root.contains("formulation"))
+  {
+    const std::string f = GetString(root, "formulation", source, "scene");
+    if (f != "standard" && f != "nodal_averaged_pressure")
+    {
+      SceneError(source, "formulation", "\"" + f + "\" is not standard or nodal_averaged_pressure");
+    }
+    scene.nodalAveragedPressure = f == "nodal_averaged_pressure";
+  }
+}
+
+// Appends the label names of the optional array root[key] to out.
+void
+ParseLabelNameList(const Json & root, const char * key, const std::string & source, std::vector<std::string> & out)
+{
+  if (!root.contains(key))
+  {
+    return;
+  }
+  if (!root[key].is_array())
+  {
+    SceneError(source, key, "must be an array of label names");
+  }
+  for (const auto & v : root[key])
+  {
+    if (!v.is_string())
+    {
+      SceneError(source, key, "must be an array of label names");
+    }
+    out.push_back(v.get<std::string>());
+  }
+}
+
+void
+ParseObjective(const Json & objective, const std::string & source, std::vector<ObjectiveTerm> & out)
+{
+  if (!objective.is_array())
+  {
+    SceneError(source, "objective", "must be an array of {label, weight}");
+  }
+  for (std::size_t i = 0; i < objective.size(); ++i)
+  {
+    const Json &      j = objective[i];
+    const std::string entry = "objective[" + std::to_string(i) + "]";
+    CheckKeys(j, { "label", "weight" }, source, entry);
+    ObjectiveTerm t;
+    if (!j.contains("label"))
+    {
+      SceneError(source, entry, "needs a label");
+    }
+    t.label = GetString(j, "label", source, entry);
+    if (j.contains("weight"))
+    {
+      t.weight = GetNumber(j, "weight", source, entry);
+    }
+    out.push_back(t);
+  }
+}
+
+// The keys of a radial_displacement load: centre, magnitude and the optional axis or semi-axes.
+void
+ParseRadialDisplacement(const Json & j, const std::string & source, const std::string & entry, SceneLoad & load)
+{
+  if (!j.contains("center_mm") || !j.contains("magnitude_mm"))
+  {
+    SceneError(source, entry, "a radial_displacement needs center_mm and magnitude_mm");
+  }
+  load.center = GetPoint(j, "center_mm", source, entry);
+  load.magnitude = GetNumber(j, "magnitude_mm", source, entry);
+  if (j.contains("axis"))
+  {
+    load.axis = GetPoint(j, "axis", source, entry);
+    const double norm =
+      std::sqrt(load.axis[0] * load.axis[0] + load.axis[1] * load.axis[1] + load.axis[2] * load.axis[2]);
+    if (!(norm > 0.0) || !std::isfinite(norm))
+    {
+      SceneError(source, entry + ".axis", "must be a non-zero direction [x, y, z]");
+    }
+    for (double & a : load.axis)
+    {
+      a /= norm;
+    }
+  }
+  if (j.contains("semi_axes_mm"))
+  {
+    if (j.contains("axis"))
+    {
+      SceneError(source, entry, "give either axis or semi_axes_mm, not both");
+    }
+    load.semiAxes = GetPoint(j, "semi_axes_mm", source, entry);
+    for (double a : load.semiAxes)
+    {
+      if (!(a > 0.0) || !std::isfinite(a))
+      {
+        SceneError(source, entry + ".semi_axes_mm", "must be three positive lengths [mm]");
+      }
+    }
+  }
+}
+
+SceneLoad
+ParseLoad(const Json & j, const std::string & source, const std::string & entry)
+{
+  CheckKeys(
+    j, { "surface", "type", "center_mm", "axis", "semi_axes_mm", "magnitude_mm", "pressure_kPa" }, source, entry);
+  SceneLoad load;
+  if (!j.contains("surface") || !j.contains("type"))
+  {
+    SceneError(source, entry, "needs surface and type");
+  }
+  load.surface = GetString(j, "surface", source, entry);
+  const std::string type = GetString(j, "type", source, entry);
+  if (type == "radial_displacement")
+  {
+    load.type = SceneLoad::Type::RadialDisplacement;
+    ParseRadialDisplacement(j, source, entry, load);
+  }
+  else if (type == "pressure")
+  {
+    load.type = SceneLoad::Type::Pressure;
+    if (!j.contains("pressure_kPa"))
+    {
+      SceneError(source, entry, "a pressure load needs pressure_kPa");
+    }
+    load.magnitude = GetNumber(j, "pressure_kPa", source, entry);
+  }
+  else
+  {
+    SceneError(source, entry + ".type", "\"" + type + "\" is not radial_displacement or pressure");
+  }
+  return load;
+}
+
+void
+ParseLoads(const Json & loads, const std::string & source, std::vector<SceneLoad> & out)
+{
+  if (!loads.is_array())
+  {
+    SceneError(source, "loads", "must be an array of load objects");
+  }
+  for (std::size_t i = 0; i < loads.size(); ++i)
+  {
+    out.push_back(ParseLoad(loads[i], source, "loads[" + std::to_string(i) + "]"));
+  }
+}
+
+void
+ParseLandmarks(const Json & j, const std::string & source, Scene & scene)
+{
+  CheckKeys(j, { "moving", "fixed" }, source, "landmarks");
+  if (j.contains("moving"))
+    scene.movingLandmarks = GetString(j, "moving", source, "landmarks");
+  if (j.contains("fixed"))
+    scene.fixedLandmarks = GetString(j, "fixed", source, "landmarks");
+}
+
+void
+ParseRegionOfInterest(const Json & j, const std::string & source, Scene & scene)
+{
+  CheckKeys(j, { "margin_mm", "boundary" }, source, "region_of_interest");
+  if (j.contains("margin_mm"))
+  {
+    scene.roiMargin = GetNumber(j, "margin_mm", source, "region_of_interest");
+    if (scene.roiMargin < 0.0)
+    {
+      SceneError(source, "region_of_interest.margin_mm", "must be >= 0");
+    }
+  }
+  if (j.contains("boundary"))
+  {
+    const std::string b = GetString(j, "boundary", source, "region_of_interest");
+    if (b != "free" && b != "fixed")
+    {
+      SceneError(source, "region_of_interest.boundary", "must be \"free\" or \"fixed\"");
+    }
+    scene.roiBoundaryFixed = b == "fixed";
+  }
+}
+
+// All mesh keys but the values of cell_size_per_label_mm, which need the labels (ParseCellSizePerLabel).
+void
+ParseMeshingParameters(const Json & j, const std::string & source, MeshingParameters & m)
+{
+  CheckKeys(j,
+            { "cell_size_mm",
+              "facet_size_mm",
+              "facet_distance_mm",
+              "facet_angle_deg",
+              "cell_radius_edge_ratio",
+              "cell_size_per_label_mm",
+              "optimize",
+              "exude",
+              "random_seed",
+              "minimum_dihedral_angle_deg" },
+            source,
+            "mesh");
+  if (j.contains("cell_size_mm"))
+    m.cellSize = GetNumber(j, "cell_size_mm", source, "mesh");
+  if (j.contains("facet_size_mm"))
+    m.facetSize = GetNumber(j, "facet_size_mm", source, "mesh");
+  if (j.contains("facet_distance_mm"))
+    m.facetDistance = GetNumber(j, "facet_distance_mm", source, "mesh");
+  if (j.contains("facet_angle_deg"))
+    m.facetAngle = GetNumber(j, "facet_angle_deg", source, "mesh");
+  if (j.contains("cell_radius_edge_ratio"))
+    m.cellRadiusEdgeRatio = GetNumber(j, "cell_radius_edge_ratio", source, "mesh");
+  if (j.contains("optimize"))
+    m.optimize = GetBool(j, "optimize", source, "mesh");
+  if (j.contains("exude"))
+    m.exude = GetBool(j, "exude", source, "mesh");
+  if (j.contains("minimum_dihedral_angle_deg"))
+    m.minimumDihedralAngle = GetNumber(j, "minimum_dihedral_angle_deg", source, "mesh");
+  if (j.contains("random_seed"))
+  {
+    if (!j["random_seed"].is_number_unsigned())
+    {
+      SceneError(source, "mesh.random_seed", "must be a non-negative integer");
+    }
+    m.randomSeed = j["random_seed"].get<unsigned int>();
+  }
+  if (j.contains("cell_size_per_label_mm") && !j["cell_size_per_label_mm"].is_object())
+  {
+    SceneError(source, "mesh.cell_size_per_label_mm", "must be an object {label name: size in mm}");
+  }
+}
+
+// Per-label sizes refer to label names, resolved once the labels are known.
+void
+ParseCellSizePerLabel(const Json & perLabel, const std::string & source, Scene & scene)
+{
+  for (auto it = perLabel.begin(); it != perLabel.end(); ++it)
+  {
+    const SceneLabel * l = scene.FindLabel(it.key());
+    if (!l)
+    {
+      SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "is not a label of the scene");
+    }
+    if (!it.value().is_number())
+    {
+      SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "must be a number [mm]");
+    }
+    scene.mesh.cellSizePerLabel[l->value] = it.value().get<double>();
+  }
+}
+} // namespace
+
 Scene
 ParseScene(const std::string & text, const std::string & source)
 {
@@ -491,18 +846,7 @@ ParseScene(const std::string & text, const std::string & source)
   }
   if (root.contains("units"))
   {
-    const Json & u = root["units"];
-    CheckKeys(u, { "length", "modulus", "force" }, source, "units");
-    const std::pair<const char *, const char *> expected[] = { { "length", "mm" },
-                                                               { "modulus", "kPa" },
-                                                               { "force", "mN" } };
-    for (const auto & e : expected)
-    {
-      if (u.contains(e.first) && GetString(u, e.first, source, "units") != e.second)
-      {
-        SceneError(source, std::string("units.") + e.first, std::string("only \"") + e.second + "\" is supported");
-      }
-    }
+    CheckUnits(root["units"], source);
   }
   if (!root.contains("labels") || !root["labels"].is_array() || root["labels"].empty())
   {
@@ -510,279 +854,33 @@ ParseScene(const std::string & text, const std::string & source)
   }
   for (std::size_t i = 0; i < root["labels"].size(); ++i)
   {
-    const Json &      j = root["labels"][i];
-    const std::string entry = "labels[" + std::to_string(i) + "]";
-    CheckKeys(j, { "name", "value", "role", "youngs_modulus_kPa", "poisson_ratio", "bounds_kPa" }, source, entry);
-    SceneLabel l;
-    if (!j.contains("name") || !j.contains("value") || !j.contains("role"))
-    {
-      SceneError(source, entry, "needs name, value and role");
-    }
-    l.name = GetString(j, "name", source, entry);
-    if (!j["value"].is_number_integer())
-    {
-      SceneError(source, entry + ".value", "must be an integer label value");
-    }
-    l.value = j["value"].get<std::int32_t>();
-    l.role = ParseRole(GetString(j, "role", source, entry), source, entry);
-    const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
-    if (simulated)
-    {
-      if (!j.contains("youngs_modulus_kPa") || !j.contains("poisson_ratio"))
-      {
-        SceneError(source, "labels[" + l.name + "]", "a material needs youngs_modulus_kPa and poisson_ratio");
-      }
-      l.youngsModulus = GetNumber(j, "youngs_modulus_kPa", source, "labels[" + l.name + "]");
-      l.poissonRatio = GetNumber(j, "poisson_ratio", source, "labels[" + l.name + "]");
-    }
-    else if (j.contains("youngs_modulus_kPa") || j.contains("poisson_ratio"))
-    {
-      SceneError(source, "labels[" + l.name + "]", "only material labels take youngs_modulus_kPa / poisson_ratio");
-    }
-    if (j.contains("bounds_kPa"))
-    {
-      if (l.role != LabelRole::UnknownMaterial)
-      {
-        SceneError(source, "labels[" + l.name + "].bounds_kPa", "only an unknown_material takes bounds");
-      }
-      const Json & b = j["bounds_kPa"];
-      if (!b.is_array() || b.size() != 2 || !b[0].is_number() || !b[1].is_number())
-      {
-        SceneError(source, "labels[" + l.name + "].bounds_kPa", "must be [lower, upper] in kPa");
-      }
-      l.lowerBound = b[0].get<double>();
-      l.upperBound = b[1].get<double>();
-    }
-    else if (l.role == LabelRole::UnknownMaterial)
-    {
-      SceneError(source, "labels[" + l.name + "]", "an unknown_material needs bounds_kPa");
-    }
-    scene.labels.push_back(l);
+    scene.labels.push_back(ParseLabel(root["labels"][i], source, "labels[" + std::to_string(i) + "]"));
   }
-  if (root.contains("gauge"))
-  {
-    scene.gauge = GetString(root, "gauge", source, "scene");
-  }
-  if (root.contains("formulation"))
-  {
-    const std::string f = GetString(root, "formulation", source, "scene");
-    if (f != "standard" && f != "nodal_averaged_pressure")
-    {
-      SceneError(source, "formulation", "\"" + f + "\" is not standard or nodal_averaged_pressure");
-    }
-    scene.nodalAveragedPressure = f == "nodal_averaged_pressure";
-  }
-  auto stringList = [&](const char * key, std::vector<std::string> & out) {
-    if (!root.contains(key))
-    {
-      return;
-    }
-    if (!root[key].is_array())
-    {
-      SceneError(source, key, "must be an array of label names");
-    }
-    for (const auto & v : root[key])
-    {
-      if (!v.is_string())
-      {
-        SceneError(source, key, "must be an array of label names");
-      }
-      out.push_back(v.get<std::string>());
-    }
-  };
-  stringList("force_surfaces", scene.forceSurfaces);
+  ParseGaugeAndFormulation(root, source, scene);
+  ParseLabelNameList(root, "force_surfaces", source, scene.forceSurfaces);
   if (root.contains("objective"))
   {
-    if (!root["objective"].is_array())
-    {
-      SceneError(source, "objective", "must be an array of {label, weight}");
-    }
-    for (std::size_t i = 0; i < root["objective"].size(); ++i)
-    {
-      const Json &      j = root["objective"][i];
-      const std::string entry = "objective[" + std::to_string(i) + "]";
-      CheckKeys(j, { "label", "weight" }, source, entry);
-      ObjectiveTerm t;
-      if (!j.contains("label"))
-      {
-        SceneError(source, entry, "needs a label");
-      }
-      t.label = GetString(j, "label", source, entry);
-      if (j.contains("weight"))
-      {
-        t.weight = GetNumber(j, "weight", source, entry);
-      }
-      scene.objective.push_back(t);
-    }
+    ParseObjective(root["objective"], source, scene.objective);
   }
   if (root.contains("loads"))
   {
-    if (!root["loads"].is_array())
-    {
-      SceneError(source, "loads", "must be an array of load objects");
-    }
-    for (std::size_t i = 0; i < root["loads"].size(); ++i)
-    {
-      const Json &      j = root["loads"][i];
-      const std::string entry = "loads[" + std::to_string(i) + "]";
-      CheckKeys(
-        j, { "surface", "type", "center_mm", "axis", "semi_axes_mm", "magnitude_mm", "pressure_kPa" }, source, entry);
-      SceneLoad load;
-      if (!j.contains("surface") || !j.contains("type"))
-      {
-        SceneError(source, entry, "needs surface and type");
-      }
-      load.surface = GetString(j, "surface", source, entry);
-      const std::string type = GetString(j, "type", source, entry);
-      if (type == "radial_displacement")
-      {
-        load.type = SceneLoad::Type::RadialDisplacement;
-        if (!j.contains("center_mm") || !j.contains("magnitude_mm"))
-        {
-          SceneError(source, entry, "a radial_displacement needs center_mm and magnitude_mm");
-        }
-        load.center = GetPoint(j, "center_mm", source, entry);
-        load.magnitude = GetNumber(j, "magnitude_mm", source, entry);
-        if (j.contains("axis"))
-        {
-          load.axis = GetPoint(j, "axis", source, entry);
-          const double norm =
-            std::sqrt(load.axis[0] * load.axis[0] + load.axis[1] * load.axis[1] + load.axis[2] * load.axis[2]);
-          if (!(norm > 0.0) || !std::isfinite(norm))
-          {
-            SceneError(source, entry + ".axis", "must be a non-zero direction [x, y, z]");
-          }
-          for (double & a : load.axis)
-          {
-            a /= norm;
-          }
-        }
-        if (j.contains("semi_axes_mm"))
-        {
-          if (j.contains("axis"))
-          {
-            SceneError(source, entry, "give either axis or semi_axes_mm, not both");
-          }
-          load.semiAxes = GetPoint(j, "semi_axes_mm", source, entry);
-          for (double a : load.semiAxes)
-          {
-            if (!(a > 0.0) || !std::isfinite(a))
-            {
-              SceneError(source, entry + ".semi_axes_mm", "must be three positive lengths [mm]");
-            }
-          }
-        }
-      }
-      else if (type == "pressure")
-      {
-        load.type = SceneLoad::Type::Pressure;
-        if (!j.contains("pressure_kPa"))
-        {
-          SceneError(source, entry, "a pressure load needs pressure_kPa");
-        }
-        load.magnitude = GetNumber(j, "pressure_kPa", source, entry);
-      }
-      else
-      {
-        SceneError(source, entry + ".type", "\"" + type + "\" is not radial_displacement or pressure");
-      }
-      scene.loads.push_back(load);
-    }
+    ParseLoads(root["loads"], source, scene.loads);
   }
   if (root.contains("landmarks"))
   {
-    const Json & j = root["landmarks"];
-    CheckKeys(j, { "moving", "fixed" }, source, "landmarks");
-    if (j.contains("moving"))
-      scene.movingLandmarks = GetString(j, "moving", source, "landmarks");
-    if (j.contains("fixed"))
-      scene.fixedLandmarks = GetString(j, "fixed", source, "landmarks");
+    ParseLandmarks(root["landmarks"], source, scene);
   }
   if (root.contains("region_of_interest"))
   {
-    const Json & j = root["region_of_interest"];
-    CheckKeys(j, { "margin_mm", "boundary" }, source, "region_of_interest");
-    if (j.contains("margin_mm"))
-    {
-      scene.roiMargin = GetNumber(j, "margin_mm", source, "region_of_interest");
-      if (scene.roiMargin < 0.0)
-      {
-        SceneError(source, "region_of_interest.margin_mm", "must be >= 0");
-      }
-    }
-    if (j.contains("boundary"))
-    {
-      const std::string b = GetString(j, "boundary", source, "region_of_interest");
-      if (b != "free" && b != "fixed")
-      {
-        SceneError(source, "region_of_interest.boundary", "must be \"free\" or \"fixed\"");
-      }
-      scene.roiBoundaryFixed = b == "fixed";
-    }
+    ParseRegionOfInterest(root["region_of_interest"], source, scene);
   }
   if (root.contains("mesh"))
   {
-    const Json & j = root["mesh"];
-    CheckKeys(j,
-              { "cell_size_mm",
-                "facet_size_mm",
-                "facet_distance_mm",
-                "facet_angle_deg",
-                "cell_radius_edge_ratio",
-                "cell_size_per_label_mm",
-                "optimize",
-                "exude",
-                "random_seed",
-                "minimum_dihedral_angle_deg" },
-              source,
-              "mesh");
-    MeshingParameters & m = scene.mesh;
-    if (j.contains("cell_size_mm"))
-      m.cellSize = GetNumber(j, "cell_size_mm", source, "mesh");
-    if (j.contains("facet_size_mm"))
-      m.facetSize = GetNumber(j, "facet_size_mm", source, "mesh");
-    if (j.contains("facet_distance_mm"))
-      m.facetDistance = GetNumber(j, "facet_distance_mm", source, "mesh");
-    if (j.contains("facet_angle_deg"))
-      m.facetAngle = GetNumber(j, "facet_angle_deg", source, "mesh");
-    if (j.contains("cell_radius_edge_ratio"))
-      m.cellRadiusEdgeRatio = GetNumber(j, "cell_radius_edge_ratio", source, "mesh");
-    if (j.contains("optimize"))
-      m.optimize = GetBool(j, "optimize", source, "mesh");
-    if (j.contains("exude"))
-      m.exude = GetBool(j, "exude", source, "mesh");
-    if (j.contains("minimum_dihedral_angle_deg"))
-      m.minimumDihedralAngle = GetNumber(j, "minimum_dihedral_angle_deg", source, "mesh");
-    if (j.contains("random_seed"))
-    {
-      if (!j["random_seed"].is_number_unsigned())
-      {
-        SceneError(source, "mesh.random_seed", "must be a non-negative integer");
-      }
-      m.randomSeed = j["random_seed"].get<unsigned int>();
-    }
-    if (j.contains("cell_size_per_label_mm") && !j["cell_size_per_label_mm"].is_object())
-    {
-      SceneError(source, "mesh.cell_size_per_label_mm", "must be an object {label name: size in mm}");
-    }
+    ParseMeshingParameters(root["mesh"], source, scene.mesh);
   }
-  // Per-label sizes refer to label names, resolved once the labels are known.
   if (root.contains("mesh") && root["mesh"].contains("cell_size_per_label_mm"))
   {
-    for (auto it = root["mesh"]["cell_size_per_label_mm"].begin(); it != root["mesh"]["cell_size_per_label_mm"].end();
-         ++it)
-    {
-      const SceneLabel * l = scene.FindLabel(it.key());
-      if (!l)
-      {
-        SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "is not a label of the scene");
-      }
-      if (!it.value().is_number())
-      {
-        SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "must be a number [mm]");
-      }
-      scene.mesh.cellSizePerLabel[l->value] = it.value().get<double>();
-    }
+    ParseCellSizePerLabel(root["mesh"]["cell_size_per_label_mm"], source, scene);
   }
   scene.Validate();
   return scene;

@@ -64,13 +64,11 @@ SceneMaterials(const Scene & scene)
   return materials;
 }
 
-TetrahedralMesh
-MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
+namespace {
+// The label values present in the image; labels come in long runs: only a change of value needs a set look-up.
+std::set<std::int32_t>
+PresentLabels(const std::int32_t * labels, std::size_t n)
 {
-  grid.Validate("moving label image");
-  const std::size_t               n = grid.GetNumberOfVoxels();
-  const std::vector<std::int32_t> outside = scene.OutsideLabels();
-  // Labels come in long runs: only a change of value needs a set look-up.
   std::set<std::int32_t> present;
   for (std::size_t v = 0; v < n; ++v)
   {
@@ -79,7 +77,13 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
       present.insert(labels[v]);
     }
   }
-  // Labels that define the region of interest (neither plain known material nor outside).
+  return present;
+}
+
+// Labels that define the region of interest (neither plain known material nor outside).
+std::set<std::int32_t>
+RegionOfInterestLabels(const Scene & scene)
+{
   std::set<std::int32_t> roiLabels;
   for (const auto & l : scene.labels)
   {
@@ -88,10 +92,21 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
       roiLabels.insert(l.value);
     }
   }
-  scene.ValidateAgainstLabels(present, "the moving label image");
+  return roiLabels;
+}
 
-  // Region of interest: box around the labels that are not plain known material.
-  std::array<std::size_t, 3> lo{ { 0, 0, 0 } }, hi{ { grid.size[0] - 1, grid.size[1] - 1, grid.size[2] - 1 } };
+// Region of interest: box [lo, hi] (voxel indices) around the labels that are not plain known material,
+// widened by scene.roiMargin; the whole grid when the scene sets no margin or no such label is present.
+void
+RegionOfInterestBox(const std::int32_t *           labels,
+                    const GridGeometry &           grid,
+                    const Scene &                  scene,
+                    const std::set<std::int32_t> & roiLabels,
+                    std::array<std::size_t, 3> &   lo,
+                    std::array<std::size_t, 3> &   hi)
+{
+  lo = { { 0, 0, 0 } };
+  hi = { { grid.size[0] - 1, grid.size[1] - 1, grid.size[2] - 1 } };
   if (scene.roiMargin >= 0.0)
   {
     std::array<std::int64_t, 3> blo{ { std::numeric_limits<std::int64_t>::max(),
@@ -125,7 +140,18 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
       }
     }
   }
-  GridGeometry roi = grid;
+}
+
+// The labels in the box [lo, hi], with the outside labels set to 0; roi receives the box's grid.
+std::vector<std::int32_t>
+CropLabels(const std::int32_t *               labels,
+           const GridGeometry &               grid,
+           const std::array<std::size_t, 3> & lo,
+           const std::array<std::size_t, 3> & hi,
+           const std::vector<std::int32_t> &  outside,
+           GridGeometry &                     roi)
+{
+  roi = grid;
   for (int d = 0; d < 3; ++d)
   {
     roi.size[d] = hi[d] - lo[d] + 1;
@@ -144,20 +170,12 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
         }
         cropped[i + roi.size[0] * (j + roi.size[1] * k)] = v;
       }
+  return cropped;
+}
 
-  // Excluded regions only contribute their surface: mesh their interior coarsely.
-  MeshingParameters               parameters = scene.mesh;
-  const std::vector<std::int32_t> excluded = scene.ExcludedLabels();
-  for (std::int32_t v : excluded)
-  {
-    if (parameters.cellSizePerLabel.count(v) == 0)
-    {
-      parameters.cellSizePerLabel[v] = 4.0 * parameters.cellSize;
-    }
-  }
-  const TetrahedralMesh full = MeshLabelVolume(cropped.data(), roi, parameters);
-  TetrahedralMesh       mesh = ExtractSubmesh(full, excluded);
-
+void
+CheckMinimumDihedralAngle(const Scene & scene, const TetrahedralMesh & mesh)
+{
   const MeshQuality quality = ComputeMeshQuality(mesh);
   if (quality.sharpestElement >= 0 && quality.minimumDihedralAngleDegrees < scene.mesh.minimumDihedralAngle)
   {
@@ -179,6 +197,12 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
         << ": enable mesh.optimize (sliver perturbation) or mesh.exude";
     Fail("MeshSceneLabels", msg.str());
   }
+}
+
+// Every present simulated label has elements and every present fixed or hollow label has its wall.
+void
+CheckPresentLabelsMeshed(const Scene & scene, const std::set<std::int32_t> & present, const TetrahedralMesh & mesh)
+{
   std::set<std::int32_t> meshed(mesh.labels.begin(), mesh.labels.end());
   std::set<std::int32_t> walls(mesh.boundaryFaceLabels.begin(), mesh.boundaryFaceLabels.end());
   for (const auto & l : scene.labels)
@@ -203,6 +227,39 @@ MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Sc
              "simulated tissue?)");
     }
   }
+}
+} // namespace
+
+TetrahedralMesh
+MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
+{
+  grid.Validate("moving label image");
+  const std::size_t               n = grid.GetNumberOfVoxels();
+  const std::vector<std::int32_t> outside = scene.OutsideLabels();
+  const std::set<std::int32_t>    present = PresentLabels(labels, n);
+  const std::set<std::int32_t>    roiLabels = RegionOfInterestLabels(scene);
+  scene.ValidateAgainstLabels(present, "the moving label image");
+
+  std::array<std::size_t, 3> lo, hi;
+  RegionOfInterestBox(labels, grid, scene, roiLabels, lo, hi);
+  GridGeometry                    roi;
+  const std::vector<std::int32_t> cropped = CropLabels(labels, grid, lo, hi, outside, roi);
+
+  // Excluded regions only contribute their surface: mesh their interior coarsely.
+  MeshingParameters               parameters = scene.mesh;
+  const std::vector<std::int32_t> excluded = scene.ExcludedLabels();
+  for (std::int32_t v : excluded)
+  {
+    if (parameters.cellSizePerLabel.count(v) == 0)
+    {
+      parameters.cellSizePerLabel[v] = 4.0 * parameters.cellSize;
+    }
+  }
+  const TetrahedralMesh full = MeshLabelVolume(cropped.data(), roi, parameters);
+  TetrahedralMesh       mesh = ExtractSubmesh(full, excluded);
+
+  CheckMinimumDihedralAngle(scene, mesh);
+  CheckPresentLabelsMeshed(scene, present, mesh);
   return mesh;
 }
 

@@ -809,6 +809,24 @@ PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<dou
   return labels;
 }
 
+std::vector<std::int32_t>
+SphereLabelsAt(const SpherePhantomParameters & parameters, const std::vector<double> & points)
+{
+  const char * where = "SphereLabelsAt";
+  if (points.size() % 3 != 0)
+  {
+    Fail(where, "expected 3 coordinates per point");
+  }
+  const Vec3                center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
+  const SphereModel         model(center, parameters.innerRadius, parameters.outerRadius);
+  std::vector<std::int32_t> labels(points.size() / 3);
+  for (std::size_t n = 0; n < labels.size(); ++n)
+  {
+    labels[n] = SphereModel::Label(model.Classify({ { points[3 * n], points[3 * n + 1], points[3 * n + 2] } }));
+  }
+  return labels;
+}
+
 PhantomVolume
 MakeSpherePhantom(const SpherePhantomParameters & parameters)
 {
@@ -859,6 +877,26 @@ AddGaussianNoise(std::vector<float> & values, double sigma, std::uint64_t seed)
       values[i + 1] = static_cast<float>(values[i + 1] + radius * std::sin(angle));
     }
   }
+}
+
+std::vector<SceneLoad>
+PelvisFillingLoads(const PelvisPhantomParameters & parameters, double bladderMM, double rectumMM, WallFillingEnum filling)
+{
+  const Vec3 c = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, "PelvisFillingLoads");
+  const auto at = [&c](const Vec3 & offset) {
+    return Vec3{ { c[0] + offset[0], c[1] + offset[1], c[2] + offset[2] } };
+  };
+  std::vector<SceneLoad> loads = {
+    { "bladder", SceneLoad::Type::RadialDisplacement, at(BladderCenter), bladderMM },
+    { "rectum", SceneLoad::Type::RadialDisplacement, at({ { 0.0, RectumAxisY, 0.0 } }), rectumMM }
+  };
+  if (filling == WallFillingEnum::AlongNormals)
+  {
+    loads[0].semiAxes = BladderSemiAxes;
+    loads[1].center = at({ { 0.0, RectumAxisY, RectumTopZ } });
+    loads[1].axis = { { 0, 0, 1 } };
+  }
+  return loads;
 }
 
 } // namespace bmr

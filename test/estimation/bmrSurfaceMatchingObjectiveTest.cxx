@@ -216,11 +216,13 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     }
     std::cout << "wall normals: smallest cos to the radial direction " << worstCos << ", largest | |d| - 1 | "
               << worstLength << " mm" << std::endl;
-    if (!(worstCos > 0.98 && worstLength < 1e-12))
-    {
-      std::cerr << "FAIL: the wall displacement is not 1 mm along the wall normal" << std::endl;
-      ok = false;
-    }
+    ok &= bmr::test::Expect(worstCos > 0.98,
+                            "unit wall parameters move the cavity wall along its normal: cos to the radial direction "
+                            "above 0.98 (got " +
+                              bmr::test::ToString(worstCos) + ")");
+    ok &= bmr::test::Expect(worstLength < 1e-12,
+                            "unit wall parameters move each cavity wall node by 1 mm to 1e-12 mm (got | |d| - 1 | = " +
+                              bmr::test::ToString(worstLength) + " mm)");
   }
   // 4. Inverted elements are counted: none at the start, many when the walls are pushed through the
   // cavity (3 radii along the normal).
@@ -230,11 +232,9 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
   const std::size_t invertedCollapsed = objective.GetNumberOfInvertedElements();
   std::cout << "inverted elements: " << invertedAtStart << " at the start, " << invertedCollapsed
             << " with the walls pushed through the cavity" << std::endl;
-  if (invertedAtStart != 0 || invertedCollapsed == 0)
-  {
-    std::cerr << "FAIL: inverted elements miscounted" << std::endl;
-    ok = false;
-  }
+  ok &= bmr::test::Expect(invertedAtStart == 0,
+                          "no inverted element at the start (got " + bmr::test::ToString(invertedAtStart) + ")");
+  ok &= bmr::test::Expect(invertedCollapsed != 0, "inverted elements counted with the walls pushed through the cavity");
 
   // 5. Bad set-ups are named.
   ok &= bmr::test::ExpectException(

@@ -34,6 +34,8 @@
 #include <vector>
 
 namespace {
+using bmr::test::Expect;
+using bmr::test::ToString;
 using MapType = itk::FEMElasticityOptimizer::DistanceMapType;
 
 /** Signed distance [mm] to the sphere (c, r), sampled on a 1 mm grid around the origin. */
@@ -67,13 +69,20 @@ CheckUncertainty(itk::FEMElasticityOptimizer & optimizer)
 {
   bool ok = true;
   ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
-  const double E = optimizer.GetEstimatedYoungsModuli().at("inclusion");
-  const auto   found = optimizer.GetModulusUncertainty().find("inclusion");
-  if (!optimizer.GetIdentifiable() || found == optimizer.GetModulusUncertainty().end() ||
-      !std::isfinite(found->second) || !(found->second > 0.0))
+  const double      E = optimizer.GetEstimatedYoungsModuli().at("inclusion");
+  const auto        found = optimizer.GetModulusUncertainty().find("inclusion");
+  const std::string got = " (got " + ToString(E) + " kPa: " + optimizer.GetIdentifiabilityMessage() + ")";
+  const bool        identifiable = Expect(optimizer.GetIdentifiable(), "an identifiable interior estimate" + got);
+  bool              finiteUncertainty =
+    Expect(found != optimizer.GetModulusUncertainty().end(), "an uncertainty of the inclusion's modulus" + got);
+  if (finiteUncertainty)
   {
-    std::cerr << "FAIL: expected an interior estimate with a finite uncertainty, got " << E << " kPa ("
-              << optimizer.GetIdentifiabilityMessage() << ")" << std::endl;
+    finiteUncertainty &=
+      Expect(std::isfinite(found->second), "a finite sigma(log E) (got " + ToString(found->second) + ")");
+    finiteUncertainty &= Expect(found->second > 0.0, "a positive sigma(log E) (got " + ToString(found->second) + ")");
+  }
+  if (!identifiable || !finiteUncertainty)
+  {
     return false;
   }
   const double        sigma = found->second;
@@ -94,12 +103,11 @@ CheckUncertainty(itk::FEMElasticityOptimizer & optimizer)
             << " mm^2, from values " << fromValues << " mm^2" << std::endl;
   // 5 %: both are central differences, O(delta^2) = 0.25 % times the ratio of the fourth to the second
   // derivative of Phi*, plus the inner solves' error; an envelope gradient off by a factor would fail.
-  if (!(fromGradients > 0.0) || !(std::abs(fromValues - fromGradients) <= 0.05 * fromGradients))
-  {
-    std::cerr << "FAIL: curvature of Phi* from gradients " << fromGradients << " and from values " << fromValues
-              << " disagree" << std::endl;
-    ok = false;
-  }
+  ok &= Expect(fromGradients > 0.0,
+               "a positive curvature of Phi* from gradients (got " + ToString(fromGradients) + " mm^2)");
+  ok &= Expect(std::abs(fromValues - fromGradients) <= 0.05 * fromGradients,
+               "curvature of Phi* from gradients and from values agree to 5 % (got " + ToString(fromGradients) +
+                 " and " + ToString(fromValues) + " mm^2)");
 
   bmr::Scene scaled = optimizer.GetScene();
   for (auto & term : scaled.objective)
@@ -115,12 +123,12 @@ CheckUncertainty(itk::FEMElasticityOptimizer & optimizer)
   // 1 % and 5 %: the inner stopping rule is absolute in the gradient, which the weights scale, so the inner
   // solves stop at slightly different points (measured: 0.2 % in E, 1.2 % in sigma); dropping w_eff would
   // halve sigma.
-  if (!(std::abs(scaledE - E) <= 0.01 * E) || !(std::abs(scaledSigma - sigma) <= 0.05 * sigma))
-  {
-    std::cerr << "FAIL: scaling every weight by 4 changed the estimate (" << E << " -> " << scaledE
-              << " kPa) or its uncertainty (" << sigma << " -> " << scaledSigma << ")" << std::endl;
-    ok = false;
-  }
+  ok &= Expect(std::abs(scaledE - E) <= 0.01 * E,
+               "scaling every weight by 4 keeps the estimate to 1 % (got " + ToString(E) + " -> " + ToString(scaledE) +
+                 " kPa)");
+  ok &= Expect(std::abs(scaledSigma - sigma) <= 0.05 * sigma,
+               "scaling every weight by 4 keeps sigma(log E) to 5 % (got " + ToString(sigma) + " -> " +
+                 ToString(scaledSigma) + ")");
   optimizer.SetScene(original);
   return ok;
 }
@@ -167,22 +175,28 @@ itkFEMElasticityOptimizerTest(int, char *[])
   }
   // 0.1 mm: a fifteenth of the initial distance; the smooth wall basis (6 mm) spans a uniform expansion
   // up to the blend error of the Gaussians on a 6 mm sphere.
-  if (!(cavityRms >= 0.0 && cavityRms < 0.1))
+  if (Expect(cavityRms >= 0.0, "a surface distance is reported for the cavity"))
   {
-    std::cerr << "FAIL: cavity surface RMS " << cavityRms << " mm after forces-only estimation" << std::endl;
+    ok &= Expect(cavityRms < 0.1,
+                 "cavity surface RMS below 0.1 mm after forces-only estimation (got " + ToString(cavityRms) + " mm)");
+  }
+  else
+  {
     ok = false;
   }
   const bmr::TetrahedralMesh & out = optimizer->GetOutput()->Get();
-  if (out.displacement.size() != out.points.size() || out.force.size() != out.points.size())
-  {
-    std::cerr << "FAIL: the output mesh lacks displacement or force" << std::endl;
-    ok = false;
-  }
-  if (!optimizer->GetSweep().empty() || !optimizer->GetEstimatedYoungsModuli().empty())
-  {
-    std::cerr << "FAIL: a scene without unknown modulus must not sweep E" << std::endl;
-    ok = false;
-  }
+  ok &= Expect(out.displacement.size() == out.points.size(),
+               "the output mesh carries a displacement per node (got " + ToString(out.displacement.size()) +
+                 " values for " + ToString(out.points.size()) + " coordinates)");
+  ok &= Expect(out.force.size() == out.points.size(),
+               "the output mesh carries a force per node (got " + ToString(out.force.size()) + " values for " +
+                 ToString(out.points.size()) + " coordinates)");
+  ok &= Expect(optimizer->GetSweep().empty(),
+               "a scene without unknown modulus must not sweep E (got " + ToString(optimizer->GetSweep().size()) +
+                 " samples)");
+  ok &= Expect(optimizer->GetEstimatedYoungsModuli().empty(),
+               "a scene without unknown modulus estimates no modulus (got " +
+                 ToString(optimizer->GetEstimatedYoungsModuli().size()) + ")");
 
   // The same with one free displacement per wall node, solved by L-BFGS (itk::LBFGS2Optimizerv4).
   optimizer->SetWallControlSpacing(0.0);
@@ -211,12 +225,14 @@ itkFEMElasticityOptimizerTest(int, char *[])
   std::cout << "cavity +7 mm: " << freeInverted << " inverted elements, Phi " << freeValue
             << " mm^2 without the limit; " << limitedInverted << " inverted, Phi " << limitedValue << " mm^2, "
             << optimizer->GetNumberOfRejectedSteps() << " trial points rejected with it" << std::endl;
-  if (freeInverted == 0 || limitedInverted != 0 || optimizer->GetNumberOfRejectedSteps() == 0 ||
-      !(limitedValue >= freeValue) || !std::isfinite(limitedValue))
-  {
-    std::cerr << "FAIL: the step limit should prevent the inversions the free fit makes" << std::endl;
-    ok = false;
-  }
+  ok &= Expect(freeInverted != 0, "without the step limit the fit to the cavity grown by 7 mm inverts elements");
+  ok &= Expect(limitedInverted == 0,
+               "with the step limit no element inverts (got " + ToString(limitedInverted) + " inverted)");
+  ok &= Expect(optimizer->GetNumberOfRejectedSteps() != 0, "the step limit rejects trial points");
+  ok &= Expect(limitedValue >= freeValue,
+               "the step limit gives a fit no better than the free one (Phi " + ToString(limitedValue) + " vs " +
+                 ToString(freeValue) + " mm^2)");
+  ok &= Expect(std::isfinite(limitedValue), "a finite Phi with the step limit (got " + ToString(limitedValue) + ")");
   optimizer->SetWallControlSpacing(6.0);
   ok &= bmr::test::ExpectException(
     "step limit with a reduced basis", [&] { optimizer->Update(); }, "LimitElementInversion");
@@ -237,19 +253,16 @@ itkFEMElasticityOptimizerTest(int, char *[])
   ITK_TRY_EXPECT_NO_EXCEPTION(optimizer->Update());
   const double E = optimizer->GetEstimatedYoungsModuli().at("inclusion");
   std::cout << "estimated E " << E << " kPa; " << optimizer->GetIdentifiabilityMessage() << std::endl;
-  if (std::abs(E - 10.0) > 1e-3 * 10.0 || optimizer->GetIdentifiable() ||
-      optimizer->GetIdentifiabilityMessage().find("bound") == std::string::npos)
-  {
-    std::cerr << "FAIL: expected the lower bound 10 kPa flagged as not identifiable, got " << E << " kPa, "
-              << optimizer->GetIdentifiabilityMessage() << std::endl;
-    ok = false;
-  }
-  if (optimizer->GetGaugeLabel() != "tissue" || optimizer->GetSweep().size() != 5)
-  {
-    std::cerr << "FAIL: gauge " << optimizer->GetGaugeLabel() << ", " << optimizer->GetSweep().size()
-              << " sweep samples" << std::endl;
-    ok = false;
-  }
+  ok &= Expect(!(std::abs(E - 10.0) > 1e-3 * 10.0),
+               "the joint estimate ends on the lower bound 10 kPa to 0.1 % (got " + ToString(E) + " kPa)");
+  ok &= Expect(!optimizer->GetIdentifiable(), "an estimate on a bound is flagged as not identifiable");
+  ok &=
+    Expect(optimizer->GetIdentifiabilityMessage().find("bound") != std::string::npos,
+           "the identifiability message mentions the bound (got \"" + optimizer->GetIdentifiabilityMessage() + "\")");
+  ok &= Expect(optimizer->GetGaugeLabel() == "tissue",
+               "the gauge label is \"tissue\" (got \"" + optimizer->GetGaugeLabel() + "\")");
+  ok &=
+    Expect(optimizer->GetSweep().size() == 5, "5 sweep samples (got " + ToString(optimizer->GetSweep().size()) + ")");
   for (std::size_t k = 1; k < optimizer->GetSweep().size(); ++k)
   {
     if (!(optimizer->GetSweep()[k].value > optimizer->GetSweep()[k - 1].value))

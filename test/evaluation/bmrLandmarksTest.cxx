@@ -20,6 +20,7 @@
 // permutation, and the paired t-test matches a hand computation.
 #include "bmrLandmarks.h"
 #include "bmrStatistics.h"
+#include "bmrTestUtilities.h"
 #include "itkMacro.h"
 #include "itkTestingMacros.h"
 
@@ -33,7 +34,7 @@ Near(double a, double b, double tolerance, const char * what)
 {
   if (!(std::abs(a - b) <= tolerance))
   {
-    std::cerr << what << ": " << a << " != " << b << " (tolerance " << tolerance << ")" << std::endl;
+    std::cerr << "FAIL: " << what << ": " << a << " != " << b << " (tolerance " << tolerance << ")" << std::endl;
     return false;
   }
   return true;
@@ -54,6 +55,8 @@ bmrLandmarksTest(int argc, char * argv[])
     std::cerr << "usage: bmrLandmarksTest OUTPUT_DIRECTORY" << std::endl;
     return EXIT_FAILURE;
   }
+  using bmr::test::Expect;
+  using bmr::test::ToString;
   const std::string dir = argv[1];
   bool              ok = true;
 
@@ -65,10 +68,13 @@ bmrLandmarksTest(int argc, char * argv[])
     const std::string path = dir + "/landmarks" + extension;
     bmr::WriteLandmarks(path, seeds);
     const auto back = bmr::ReadLandmarks(path);
-    ok &= back.size() == seeds.size();
+    ok &= Expect(back.size() == seeds.size(),
+                 "round trip " + extension + " keeps " + ToString(seeds.size()) + " landmarks (got " +
+                   ToString(back.size()) + ")");
     for (std::size_t i = 0; i < std::min(back.size(), seeds.size()); ++i)
     {
-      ok &= back[i].id == seeds[i].id;
+      ok &= Expect(back[i].id == seeds[i].id,
+                   "round trip " + extension + " keeps id \"" + seeds[i].id + "\" (got \"" + back[i].id + "\")");
       for (int a = 0; a < 3; ++a)
       {
         ok &= Near(back[i].point[a], seeds[i].point[a], 1e-12, ("round trip " + extension).c_str());
@@ -87,9 +93,17 @@ bmrLandmarksTest(int argc, char * argv[])
   for (const std::string name : { "ras.fcsv", "ras.json" })
   {
     const auto l = bmr::ReadLandmarks(dir + "/" + name);
-    ok &= l.size() == 1 && l[0].id == "F-1";
-    ok &= Near(l[0].point[0], -10, 0, name.c_str()) && Near(l[0].point[1], 20, 0, name.c_str()) &&
-          Near(l[0].point[2], 30, 0, name.c_str());
+    if (Expect(l.size() == 1, name + " holds one landmark (got " + ToString(l.size()) + ")"))
+    {
+      ok &= Expect(l[0].id == "F-1", name + " landmark id is \"F-1\" (got \"" + l[0].id + "\")");
+      ok &= Near(l[0].point[0], -10, 0, (name + " x, RAS -> LPS").c_str());
+      ok &= Near(l[0].point[1], 20, 0, (name + " y, RAS -> LPS").c_str());
+      ok &= Near(l[0].point[2], 30, 0, (name + " z").c_str());
+    }
+    else
+    {
+      ok = false;
+    }
   }
 
   // Malformed files are refused.
@@ -128,7 +142,9 @@ bmrLandmarksTest(int argc, char * argv[])
     const auto match = bmr::MatchLandmarks(a, b);
     for (std::size_t i = 0; i < 4; ++i)
     {
-      ok &= match[i] == permutation[i];
+      ok &= Expect(match[i] == permutation[i],
+                   "landmark a" + ToString(i) + " paired with b" + ToString(permutation[i]) + " (got b" +
+                     ToString(match[i]) + ")");
     }
     ITK_TRY_EXPECT_EXCEPTION(bmr::MatchLandmarks(a, std::vector<bmr::Landmark>(b.begin(), b.begin() + 3)));
   }
@@ -149,16 +165,20 @@ bmrLandmarksTest(int argc, char * argv[])
     ok &= Near(r.pValue, 0.044908790350366545, 1e-9, "p");
     std::cout << "paired t-test: t = " << r.t << ", p = " << r.pValue << std::endl;
     // Equal differences: sd = 0; p is 0 for a non-zero shift and 1 for none.
-    ok &= bmr::PairedTTest({ 1, 2, 3 }, { 0, 1, 2 }).pValue == 0.0;
-    ok &= bmr::PairedTTest({ 1, 2, 3 }, { 1, 2, 3 }).pValue == 1.0;
+    const double pShift = bmr::PairedTTest({ 1, 2, 3 }, { 0, 1, 2 }).pValue;
+    const double pNone = bmr::PairedTTest({ 1, 2, 3 }, { 1, 2, 3 }).pValue;
+    ok &= Expect(pShift == 0.0, "equal non-zero differences give p = 0 exactly (got " + ToString(pShift) + ")");
+    ok &= Expect(pNone == 1.0, "zero differences give p = 1 exactly (got " + ToString(pNone) + ")");
     ITK_TRY_EXPECT_EXCEPTION(bmr::PairedTTest({ 1.0 }, { 2.0 }));
     ITK_TRY_EXPECT_EXCEPTION(bmr::PairedTTest({ 1.0, 2.0 }, { 2.0 }));
   }
   // Summary statistics and the linear-interpolation percentile.
   {
     const auto s = bmr::Summarize({ 4, 1, 3, 2 });
-    ok &= Near(s.mean, 2.5, 0, "mean") && Near(s.median, 2.5, 0, "median") && Near(s.maximum, 4, 0, "max") &&
-          Near(s.standardDeviation, std::sqrt(5.0 / 3.0), 1e-15, "sd");
+    ok &= Near(s.mean, 2.5, 0, "mean");
+    ok &= Near(s.median, 2.5, 0, "median");
+    ok &= Near(s.maximum, 4, 0, "max");
+    ok &= Near(s.standardDeviation, std::sqrt(5.0 / 3.0), 1e-15, "sd");
     ok &= Near(bmr::Percentile({ 0, 10, 20, 30, 40 }, 95.0), 38.0, 1e-12, "95th percentile");
   }
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;

@@ -23,6 +23,7 @@
 //   translation;
 // - Dice, surface distances (mean, HD95, maximum) and the Jacobian determinant statistics on cases with known answers.
 #include "bmrPhantom.h"
+#include "bmrTestUtilities.h"
 #include "itkGridGeometryConversion.h"
 #include "itkImageRegionIteratorWithIndex.h"
 #include "itkImplantedSeedDetection.h"
@@ -53,6 +54,8 @@ ConstantField(const itk::Size<3> & size, double spacing, const itk::Vector<doubl
 int
 itkRegistrationEvaluationTest(int, char *[])
 {
+  using bmr::test::Expect;
+  using bmr::test::ToString;
   bool ok = true;
 
   // --- TRE of a translation: fixed point x maps to x + t; the moving landmark is x + t + e, so TRE = |e|.
@@ -73,8 +76,17 @@ itkRegistrationEvaluationTest(int, char *[])
                              fixed[i].point[2] + t[2] + e[i][2] } } });
     }
     const auto tre = itk::ComputeTargetRegistrationErrors(field.GetPointer(), fixed, moving);
-    std::cout << "TRE of the translation: " << tre[0] << ", " << tre[1] << " mm (exact: 0, 1.3)" << std::endl;
-    ok &= tre.size() == 2 && std::abs(tre[0]) <= 1e-12 && std::abs(tre[1] - 1.3) <= 1e-12;
+    if (Expect(tre.size() == 2, "TRE of two landmark pairs (got " + ToString(tre.size()) + " values)"))
+    {
+      std::cout << "TRE of the translation: " << tre[0] << ", " << tre[1] << " mm (exact: 0, 1.3)" << std::endl;
+      ok &= Expect(std::abs(tre[0]) <= 1e-12, "TRE of the exact pair is 0 to 1e-12 mm (got " + ToString(tre[0]) + ")");
+      ok &= Expect(std::abs(tre[1] - 1.3) <= 1e-12,
+                   "TRE of the offset pair is 1.3 to 1e-12 mm (got " + ToString(tre[1]) + ")");
+    }
+    else
+    {
+      ok = false;
+    }
     const std::vector<bmr::Landmark> outside = { { "a", { { 10.5, 0, 0 } } } };
     ITK_TRY_EXPECT_EXCEPTION(itk::ComputeTargetRegistrationErrors(field.GetPointer(), outside, moving));
     const std::vector<bmr::Landmark> unpaired = { { "c", { { 0, 0, 0 } } } };
@@ -127,7 +139,9 @@ itkRegistrationEvaluationTest(int, char *[])
       worst = std::max(worst, std::hypot(x[0] - y[0], x[1] - y[1], x[2] - y[2]));
     }
     std::cout << numberOfSeeds << " seeds: largest centroid error " << worst << " mm (limit 0.5 mm)" << std::endl;
-    ok &= worst <= 0.5;
+    ok &=
+      Expect(worst <= 0.5,
+             ToString(numberOfSeeds) + " seeds found within 0.5 mm of their centres (got " + ToString(worst) + " mm)");
     // The organ must exist.
     ITK_TRY_EXPECT_EXCEPTION(itk::DetectImplantedSeeds(ct.GetPointer(), labels.GetPointer(), 42));
   }
@@ -159,8 +173,18 @@ itkRegistrationEvaluationTest(int, char *[])
               << " / " << hd << " mm (about 3)" << std::endl;
     std::cout << "mean surface distance " << distances.mean << " mm, maximum " << distances.maximum << " mm"
               << std::endl;
-    ok &= self.dice == 1.0 && hdSelf == 0.0 && std::abs(hd - 3.0) <= 1.0 && std::abs(distances.mean - 3.0) <= 1.0 &&
-          distances.maximum >= hd && distances.mean <= hd && std::abs(overlap.dice - expectedDice) < 0.03;
+    ok &= Expect(self.dice == 1.0, "Dice of a ball with itself is exactly 1 (got " + ToString(self.dice) + ")");
+    ok &= Expect(hdSelf == 0.0, "surface distance of a ball to itself is exactly 0 (got " + ToString(hdSelf) + ")");
+    ok &= Expect(std::abs(hd - 3.0) <= 1.0, "HD95 of balls of radius 8 and 11 is 3 +- 1 (got " + ToString(hd) + ")");
+    ok &= Expect(std::abs(distances.mean - 3.0) <= 1.0,
+                 "mean surface distance of balls of radius 8 and 11 is 3 +- 1 (got " + ToString(distances.mean) + ")");
+    ok &= Expect(distances.maximum >= hd,
+                 "maximum surface distance >= HD95 (got " + ToString(distances.maximum) + " < " + ToString(hd) + ")");
+    ok &= Expect(distances.mean <= hd,
+                 "mean surface distance <= HD95 (got " + ToString(distances.mean) + " > " + ToString(hd) + ")");
+    ok &= Expect(std::abs(overlap.dice - expectedDice) < 0.03,
+                 "Dice of balls of radius 8 and 11 within 0.03 of " + ToString(expectedDice) + " (got " +
+                   ToString(overlap.dice) + ")");
     ITK_TRY_EXPECT_EXCEPTION(itk::ComputeSurfaceDistances<LabelImageType>(small, large, 7));
   }
 
@@ -180,8 +204,14 @@ itkRegistrationEvaluationTest(int, char *[])
     std::cout << "J for a = " << a << ": minimum " << s.minimum << ", fraction <= 0 " << s.fractionNonPositive
               << ", sd log J " << s.standardDeviationOfLog << std::endl;
     // Central (and one-sided) differences are exact for a linear field; float output: 1e-6.
-    ok &= std::abs(s.minimum - (1.0 + a)) <= 1e-6 && s.fractionNonPositive == (1.0 + a <= 0.0 ? 1.0 : 0.0) &&
-          s.standardDeviationOfLog <= 1e-6;
+    ok &= Expect(std::abs(s.minimum - (1.0 + a)) <= 1e-6,
+                 "minimum J for a = " + ToString(a) + " is 1 + a to 1e-6 (got " + ToString(s.minimum) + ")");
+    ok &= Expect(s.fractionNonPositive == (1.0 + a <= 0.0 ? 1.0 : 0.0),
+                 "fraction of J <= 0 for a = " + ToString(a) + " is exactly " + (1.0 + a <= 0.0 ? "1" : "0") +
+                   " (got " + ToString(s.fractionNonPositive) + ")");
+    ok &=
+      Expect(s.standardDeviationOfLog <= 1e-6,
+             "SD of log J for a = " + ToString(a) + " at most 1e-6 (got " + ToString(s.standardDeviationOfLog) + ")");
   }
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -40,7 +40,9 @@ RelativeDifference(const std::vector<double> & a, const std::vector<double> & b)
 int
 bmrLinearElasticModelTest(int, char *[])
 {
+  using bmr::test::Expect;
   using bmr::test::ExpectException;
+  using bmr::test::ToString;
   bool ok = true;
 
   // 1. Patch test: u = A x + b on the boundary reproduces it exactly inside (P1 elements contain linear fields).
@@ -70,7 +72,7 @@ bmrLinearElasticModelTest(int, char *[])
     const double              err = RelativeDifference(u, exact);
     std::cout << "patch test relative error " << err << std::endl;
     // 1e-10: the linear field is in the element space, so only rounding remains.
-    ok = ok && err <= 1e-10;
+    ok &= Expect(err <= 1e-10, "patch test exact to a relative 1e-10 (got " + ToString(err) + ")");
   }
 
   // 2. Scale invariance: u(10^k E, 10^k F) = u(E, F).
@@ -120,7 +122,8 @@ bmrLinearElasticModelTest(int, char *[])
         }
         const double imbalance = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]) / applied;
         std::cout << "force imbalance " << imbalance << std::endl;
-        ok = ok && imbalance < 1e-10; // rounding only
+        ok &= Expect(imbalance < 1e-10, // rounding only
+                     "reactions balance the applied load to a relative 1e-10 (got " + ToString(imbalance) + ")");
         // The cached factorisation: a second right-hand side reuses it and doubles u.
         std::vector<double> f2(f);
         for (double & v : f2)
@@ -133,12 +136,18 @@ bmrLinearElasticModelTest(int, char *[])
         {
           v *= 0.5;
         }
-        ok = ok && RelativeDifference(u2, u) < 1e-12 && model.GetTimings().factorise == factoriseBefore;
+        const double doubled = RelativeDifference(u2, u);
+        ok &=
+          Expect(doubled < 1e-12, "twice the load gives twice u to a relative 1e-12 (got " + ToString(doubled) + ")");
+        ok &= Expect(model.GetTimings().factorise == factoriseBefore,
+                     "a second right-hand side reuses the factorisation (factorise time " + ToString(factoriseBefore) +
+                       " s -> " + ToString(model.GetTimings().factorise) + " s)");
       }
     }
     std::cout << "scale invariance: worst relative difference over k = -6..6: " << worst << std::endl;
     // 1e-10: exact in exact arithmetic; the factorisation's rounding is scale-free.
-    ok = ok && worst <= 1e-10;
+    ok &= Expect(worst <= 1e-10,
+                 "u invariant under (E, F) -> 10^k (E, F) to a relative 1e-10 (got " + ToString(worst) + ")");
   }
 
   // 3. Error paths, each with a message naming the cause.

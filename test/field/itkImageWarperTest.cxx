@@ -17,6 +17,7 @@
  *=========================================================================*/
 // ImageWarper: a known translation field on a linear ramp is exact; labels stay labels.
 #include "itkImageWarper.h"
+#include "bmrTestUtilities.h"
 #include "itkImageRegionIteratorWithIndex.h"
 #include "itkTestingMacros.h"
 
@@ -28,6 +29,8 @@ itkImageWarperTest(int, char *[])
   using ImageType = itk::Image<float, 3>;
   using LabelType = itk::Image<unsigned char, 3>;
   using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
+  using bmr::test::Expect;
+  using bmr::test::ToString;
   bool ok = true;
 
   auto         image = ImageType::New();
@@ -66,7 +69,9 @@ itkImageWarperTest(int, char *[])
   warper->SetDisplacementField(field);
   warper->SetDefaultPixelValue(-1000.0f);
   // Float images default to linear interpolation, integer (label) images to nearest neighbour.
-  ok = ok && warper->GetInterpolation() == WarperType::InterpolationEnum::Linear;
+  ok &= Expect(warper->GetInterpolation() == WarperType::InterpolationEnum::Linear,
+               "a float image defaults to linear interpolation (got mode " +
+                 ToString(static_cast<int>(warper->GetInterpolation())) + ")");
   warper->Update();
   double      worst = 0.0;
   std::size_t inside = 0;
@@ -85,7 +90,8 @@ itkImageWarperTest(int, char *[])
   }
   std::cout << "linear ramp through a translation: max error " << worst << " over " << inside << " voxels" << std::endl;
   // 1e-3: linear interpolation of a linear function is exact; float pixels round at ~1e-5 relative.
-  ok = ok && inside > 1000 && worst < 1e-3;
+  ok &= Expect(inside > 1000, "more than 1000 voxels map inside the image (got " + ToString(inside) + ")");
+  ok &= Expect(worst < 1e-3, "linear ramp through a translation exact to 1e-3 (got max error " + ToString(worst) + ")");
 
   // Labels: nearest neighbour and label-Gaussian both return only input labels.
   for (auto mode : { itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::NearestNeighbor,
@@ -105,7 +111,9 @@ itkImageWarperTest(int, char *[])
     }
     const bool preserved = seen == std::set<int>({ 0, 1, 2, 7 });
     std::cout << "label interpolation " << static_cast<int>(mode) << " preserves labels: " << preserved << std::endl;
-    ok = ok && preserved;
+    ok &= Expect(preserved,
+                 "label interpolation " + ToString(static_cast<int>(mode)) +
+                   " returns exactly the labels {0, 1, 2, 7} (got " + ToString(seen.size()) + " distinct values)");
   }
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

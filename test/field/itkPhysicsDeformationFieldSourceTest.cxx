@@ -52,6 +52,8 @@ Run(const itk::TetrahedralMeshObject * mesh,
 int
 itkPhysicsDeformationFieldSourceTest(int, char *[])
 {
+  using bmr::test::Expect;
+  using bmr::test::ToString;
   bool ok = true;
   // Cube [0, 20]^3 mm, with a grid that extends beyond it (so the fill is exercised).
   bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(10, 2.0);
@@ -111,7 +113,10 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   std::cout << "affine map: pull-back error " << pullError << " mm over " << covered << " voxels, push error "
             << pushError << " mm" << std::endl;
   // 1e-9 mm: the affine map is represented exactly by P1 elements; only rounding remains.
-  ok = ok && covered > 5000 && pullError < 1e-9 && pushError < 1e-9;
+  ok &=
+    Expect(covered > 5000, "affine map: more than 5000 voxels in the deformed mesh (got " + ToString(covered) + ")");
+  ok &= Expect(pullError < 1e-9, "pull-back of an affine map exact to 1e-9 mm (got " + ToString(pullError) + ")");
+  ok &= Expect(pushError < 1e-9, "push of an affine map exact to 1e-9 mm (got " + ToString(pushError) + ")");
 
   // 2. A non-affine displacement: push o pull-back = identity inside the deformed mesh.
   for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
@@ -156,7 +161,11 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   std::cout << "push o pull-back: max |x - phi(phi^-1(x))| = " << roundTrip << " mm over " << checked
             << " voxels; voxels differing between 1 and 2 threads: " << differing << std::endl;
   // 1e-6 mm: exact inverse of the piecewise-linear map up to rounding.
-  ok = ok && checked > 5000 && roundTrip < 1e-6 && differing == 0 && finite;
+  ok &= Expect(checked > 5000, "push o pull-back checked on more than 5000 voxels (got " + ToString(checked) + ")");
+  ok &= Expect(roundTrip < 1e-6, "push o pull-back is the identity to 1e-6 mm (got " + ToString(roundTrip) + ")");
+  ok &= Expect(differing == 0,
+               "pull-back identical with 1 and 2 threads (got " + ToString(differing) + " differing voxels)");
+  ok &= Expect(finite, "pull-back field finite everywhere");
 
   // 3. The fill: zero on the grid border and continuous at the mesh boundary. The largest jump between
   // x-neighbours is compared with the same field without fill, whose step at the mesh boundary is the
@@ -184,7 +193,13 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   const double jumpUnfilled = maxJump(Run(meshObject, reference, true, 2, false), unusedBorder);
   std::cout << "fill: max |d| on the border " << border << " mm; largest jump between x-neighbours " << jumpFilled
             << " mm with the fill, " << jumpUnfilled << " mm without" << std::endl;
-  ok = ok && border < 1e-12 && jumpUnfilled > 1.5 && jumpFilled < 0.35 * jumpUnfilled;
+  ok &= Expect(border < 1e-12, "fill is zero on the grid border to 1e-12 mm (got " + ToString(border) + ")");
+  ok &= Expect(jumpUnfilled > 1.5,
+               "without the fill the field jumps by more than 1.5 mm at the mesh boundary (got " +
+                 ToString(jumpUnfilled) + ")");
+  ok &= Expect(jumpFilled < 0.35 * jumpUnfilled,
+               "the fill's largest jump below 0.35 x the unfilled one (got " + ToString(jumpFilled) + " vs " +
+                 ToString(jumpUnfilled) + " mm)");
 
   // 4. Errors: a mesh without displacement.
   bmr::TetrahedralMesh bare = bmr::test::StructuredCube(2, 1.0);

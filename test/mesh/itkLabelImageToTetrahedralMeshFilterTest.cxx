@@ -109,6 +109,8 @@ int
 itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
 {
   using FilterType = itk::LabelImageToTetrahedralMeshFilter<LabelImageType>;
+  using bmr::test::Expect;
+  using bmr::test::ToString;
   bool                        ok = true;
   const std::array<double, 3> C{ { 40.0, -25.0, 110.0 } };
   auto                        image = MakeImage(C);
@@ -131,15 +133,24 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
   // Labels: 1 and 2 kept, 3 excluded but present as a wall.
   std::set<std::int32_t> labels(mesh.labels.begin(), mesh.labels.end());
   std::set<std::int32_t> walls(mesh.boundaryFaceLabels.begin(), mesh.boundaryFaceLabels.end());
-  ok = ok && labels == std::set<std::int32_t>({ 1, 2 }) && walls == std::set<std::int32_t>({ 0, 3 });
+  ok &= Expect(labels == std::set<std::int32_t>({ 1, 2 }),
+               "element labels are exactly {1, 2} (got " + ToString(labels.size()) + " labels)");
+  ok &= Expect(walls == std::set<std::int32_t>({ 0, 3 }),
+               "boundary face labels are exactly {0, 3}, label 3 kept as a wall (got " + ToString(walls.size()) +
+                 " labels)");
   std::cout << "labels and walls: " << (ok ? "ok" : "FAIL") << std::endl;
 
   // Physical placement: volume and centroid of label 2 (the 1x1x3 mm voxels and the rotation must be honoured).
-  double vol2 = 0.0, c2[3] = { 0, 0, 0 };
+  double      vol2 = 0.0, c2[3] = { 0, 0, 0 }, smallestVolume = 0.0;
+  std::size_t nonPositive = 0;
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
     const double V = bmr::TetrahedronVolume(mesh, e);
-    ok = ok && V > 0.0;
+    if (!(V > 0.0))
+    {
+      smallestVolume = std::min(smallestVolume, V);
+      ++nonPositive;
+    }
     if (mesh.labels[e] == 2)
     {
       vol2 += V;
@@ -152,10 +163,16 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
   const double centroidError = std::hypot(c2[0] / vol2 - (C[0] + 8), c2[1] / vol2 - C[1], c2[2] / vol2 - C[2]);
   std::cout << "label 2 volume " << vol2 << " mm^3 (analytic " << analytic << "), centroid error " << centroidError
             << " mm" << std::endl;
+  ok &= Expect(nonPositive == 0,
+               "every tetrahedron has a positive volume (got " + ToString(nonPositive) + " of " +
+                 ToString(mesh.GetNumberOfTetrahedra()) + " not, smallest " + ToString(smallestVolume) + " mm^3)");
   // 6 %: a 12 mm ball sampled with 3 mm slices loses or gains up to about half a slice on its caps.
-  ok = ok && std::abs(vol2 / analytic - 1.0) < 0.06;
+  ok &= Expect(std::abs(vol2 / analytic - 1.0) < 0.06,
+               "label 2 volume within 6 % of the analytic ball (got " + ToString(vol2) + " mm^3, analytic " +
+                 ToString(analytic) + ")");
   // 1 mm: a third of the slice thickness; a wrong direction or spacing would misplace it by tens of mm.
-  ok = ok && centroidError < 1.0;
+  ok &= Expect(centroidError < 1.0,
+               "label 2 centroid within 1 mm of C + (8, 0, 0) (got " + ToString(centroidError) + " mm)");
 
   // Shared interfaces: every face of label 2's surface is also a face of label 1's surface
   // (label 2 lies inside label 1 and touches nothing else), i.e. the two regions share nodes.
@@ -163,7 +180,8 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
   const auto s2 = SortedFaces(bmr::LabelSurfaceFaces(mesh, 2));
   const bool shared = std::includes(s1.begin(), s1.end(), s2.begin(), s2.end());
   std::cout << "interface faces shared: " << shared << " (" << s2.size() << " faces)" << std::endl;
-  ok = ok && shared && !s2.empty();
+  ok &= Expect(shared, "every face of label 2's surface is a face of label 1's surface");
+  ok &= Expect(!s2.empty(), "label 2 has a surface (got no faces)");
 
   // Determinism: a new filter on the same input gives the same arrays.
   auto again = FilterType::New();
@@ -172,12 +190,19 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
   again->SetInput(image);
   again->Update();
   const bmr::TetrahedralMesh & mesh2 = again->GetOutput()->Get();
-  const bool same = mesh2.points == mesh.points && mesh2.tetrahedra == mesh.tetrahedra && mesh2.labels == mesh.labels;
-  std::cout << "deterministic: " << same << std::endl;
-  ok = ok && same;
+  const bool                   samePoints = mesh2.points == mesh.points;
+  const bool                   sameTetrahedra = mesh2.tetrahedra == mesh.tetrahedra;
+  const bool                   sameLabels = mesh2.labels == mesh.labels;
+  std::cout << "deterministic: " << (samePoints && sameTetrahedra && sameLabels) << std::endl;
+  ok &= Expect(samePoints, "a second filter gives identical points");
+  ok &= Expect(sameTetrahedra, "a second filter gives identical tetrahedra");
+  ok &= Expect(sameLabels, "a second filter gives identical element labels");
 
   // Quality is reported and sensible with sliver exudation on.
-  ok = ok && q.minimumDihedralAngleDegrees > 1.0 && q.minimumRadiusRatio > 0.01;
+  ok &= Expect(q.minimumDihedralAngleDegrees > 1.0,
+               "minimum dihedral angle above 1 degree (got " + ToString(q.minimumDihedralAngleDegrees) + ")");
+  ok &=
+    Expect(q.minimumRadiusRatio > 0.01, "minimum radius ratio above 0.01 (got " + ToString(q.minimumRadiusRatio) + ")");
 
   // Errors: an image with no label.
   auto empty = LabelImageType::New();

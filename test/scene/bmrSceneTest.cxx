@@ -58,26 +58,51 @@ Replace(std::string text, const std::string & from, const std::string & to)
 int
 bmrSceneTest(int, char *[])
 {
+  using bmr::test::Expect;
   using bmr::test::ExpectException;
+  using bmr::test::ToString;
   bool             ok = true;
   const bmr::Scene s = bmr::ParseScene(ValidScene, "valid.json");
-  ok = ok && s.labels.size() == 5 && s.FindLabel("prostate")->role == bmr::LabelRole::UnknownMaterial &&
-       s.FindLabel("prostate")->upperBound == 300 && s.objective[0].weight == 2 && s.objective[1].weight == 1 &&
-       s.mesh.cellSizePerLabel.at(2) == 3 && s.roiMargin == 20 && s.loads[0].magnitude == 6;
+  ok &= Expect(s.labels.size() == 5, "valid scene: 5 labels (got " + ToString(s.labels.size()) + ")");
+  const bmr::SceneLabel * prostate = s.FindLabel("prostate");
+  if (Expect(prostate != nullptr, "valid scene: a label named \"prostate\""))
+  {
+    ok &= Expect(prostate->role == bmr::LabelRole::UnknownMaterial, "valid scene: prostate is an unknown material");
+    ok &= Expect(prostate->upperBound == 300,
+                 "valid scene: prostate upper bound 300 kPa (got " + ToString(prostate->upperBound) + ")");
+  }
+  else
+  {
+    ok = false;
+  }
+  ok &= Expect(s.objective[0].weight == 2,
+               "valid scene: objective[0] weight 2 (got " + ToString(s.objective[0].weight) + ")");
+  ok &= Expect(s.objective[1].weight == 1,
+               "valid scene: objective[1] weight defaults to 1 (got " + ToString(s.objective[1].weight) + ")");
+  ok &= Expect(s.mesh.cellSizePerLabel.at(2) == 3,
+               "valid scene: cell size 3 mm in the prostate (got " + ToString(s.mesh.cellSizePerLabel.at(2)) + ")");
+  ok &= Expect(s.roiMargin == 20, "valid scene: region of interest margin 20 mm (got " + ToString(s.roiMargin) + ")");
+  ok &= Expect(s.loads[0].magnitude == 6,
+               "valid scene: loads[0] magnitude 6 mm (got " + ToString(s.loads[0].magnitude) + ")");
   const std::vector<std::int32_t> excluded = s.ExcludedLabels();
-  ok = ok && excluded == std::vector<std::int32_t>({ 0, 3, 5 });
+  ok &= Expect(excluded == std::vector<std::int32_t>({ 0, 3, 5 }),
+               "excluded labels are exactly {0, 3, 5} (got " + ToString(excluded.size()) + " labels)");
   // Round trip through SceneToJson.
   const bmr::Scene again = bmr::ParseScene(bmr::SceneToJson(s), "roundtrip");
-  ok = ok && bmr::SceneToJson(again) == bmr::SceneToJson(s);
+  ok &= Expect(bmr::SceneToJson(again) == bmr::SceneToJson(s), "SceneToJson o ParseScene o SceneToJson round trip");
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
   // A tube load: the axis is normalised on reading and survives the round trip.
   const std::string tube = Replace(ValidScene, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 2], \"magnitude_mm\": 6");
   const bmr::Scene  withAxis = bmr::ParseScene(tube, "tube.json");
-  const bool        axisOk = withAxis.loads[0].axis == std::array<double, 3>{ { 0, 0, 1 } } &&
-                      withAxis.loads[0].magnitude == 6 &&
-                      bmr::ParseScene(bmr::SceneToJson(withAxis), "roundtrip").loads[0].axis == withAxis.loads[0].axis;
+  bool              axisOk = true;
+  axisOk &= Expect(withAxis.loads[0].axis == std::array<double, 3>{ { 0, 0, 1 } },
+                   "load axis [0, 0, 2] normalised to exactly (0, 0, 1)");
+  axisOk &= Expect(withAxis.loads[0].magnitude == 6,
+                   "tube load magnitude 6 mm (got " + ToString(withAxis.loads[0].magnitude) + ")");
+  axisOk &= Expect(bmr::ParseScene(bmr::SceneToJson(withAxis), "roundtrip").loads[0].axis == withAxis.loads[0].axis,
+                   "load axis survives the round trip exactly");
   std::cout << "load axis: " << (axisOk ? "ok" : "FAIL") << std::endl;
-  ok = ok && axisOk;
+  ok &= axisOk;
   // The tube load moves wall nodes behind the centre radially from the axis, those beyond it from the centre:
   // one tetrahedron whose face {1, 2, 3} is bladder wall; centre (0, 0, 15), axis +z, 6 mm.
   {
@@ -92,14 +117,17 @@ bmrSceneTest(int, char *[])
     const bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(capsule, mesh);
     // Expected: node 1 -> (6, 0, 0), node 2 -> (0, 6, 0) (tube), node 3 -> (0, 0, 6) (cap).
     const std::vector<double> expected = { 6, 0, 0, 0, 6, 0, 0, 0, 6 };
-    double                    worst = bc.dirichletNodes == std::vector<std::int32_t>({ 1, 2, 3 }) ? 0.0 : 1e9;
+    ok &= Expect(bc.dirichletNodes == std::vector<std::int32_t>({ 1, 2, 3 }),
+                 "tube load: the Dirichlet nodes are exactly {1, 2, 3} (got " + ToString(bc.dirichletNodes.size()) +
+                   " nodes)");
+    double worst = 0.0;
     for (std::size_t i = 0; i < expected.size() && i < bc.dirichletValues.size(); ++i)
     {
       worst = std::max(worst, std::abs(bc.dirichletValues[i] - expected[i]));
     }
     // Exact up to rounding: the directions are unit vectors of axis-aligned differences.
     std::cout << "tube load directions: largest error " << worst << " mm" << std::endl;
-    ok = ok && worst < 1e-12;
+    ok &= Expect(worst < 1e-12, "tube load directions exact to 1e-12 mm (got " + ToString(worst) + ")");
     // An ellipsoid load (semi-axes 26, 13, 13 about the centre): the direction of node 1, (13, 0, -25)
     // from the centre, is the ellipsoid's normal there, proportional to (13 / 26^2, 0, -25 / 13^2).
     bmr::Scene ellipsoid = capsule;
@@ -114,7 +142,8 @@ bmrSceneTest(int, char *[])
       worstEllipsoid = std::max(worstEllipsoid, std::abs(be.dirichletValues[c] - 6.0 * n[c] / norm));
     }
     std::cout << "ellipsoid load direction: largest error " << worstEllipsoid << " mm" << std::endl;
-    ok = ok && worstEllipsoid < 1e-12;
+    ok &= Expect(worstEllipsoid < 1e-12,
+                 "ellipsoid load along the normal exact to 1e-12 mm (got " + ToString(worstEllipsoid) + ")");
   }
 
   // Warnings about estimating a modulus from coarse labels (none without an unknown modulus). The valid
@@ -132,13 +161,25 @@ bmrSceneTest(int, char *[])
     known.labels[2].role = bmr::LabelRole::Material;
     bmr::Scene half = s; // both limits reached, neither exceeded
     half.mesh.facetDistance = 0.5;
-    const bool warningsOk =
-      fine.size() == 1 && count(fine, "voxels of up to 2 mm") == 1 && facet.size() == 1 &&
-      count(facet, "mesh.facet_distance_mm = 1 exceeds half the finest label voxel (0.75 mm)") == 1 &&
-      slices.size() == 2 && count(slices, "voxels of up to 3 mm") == 1 && known.EstimationWarnings(1.0, 3.0).empty() &&
-      half.EstimationWarnings(1.0, 1.5).empty();
+    const auto known13 = known.EstimationWarnings(1.0, 3.0);
+    const auto half115 = half.EstimationWarnings(1.0, 1.5);
+    bool       warningsOk = true;
+    warningsOk &= Expect(fine.size() == 1, "2 mm voxels: one warning (got " + ToString(fine.size()) + ")");
+    warningsOk &=
+      Expect(count(fine, "voxels of up to 2 mm") == 1, "2 mm voxels: one warning mentions \"voxels of up to 2 mm\"");
+    warningsOk &= Expect(facet.size() == 1, "1.5 mm voxels: one warning (got " + ToString(facet.size()) + ")");
+    warningsOk &= Expect(count(facet, "mesh.facet_distance_mm = 1 exceeds half the finest label voxel (0.75 mm)") == 1,
+                         "1.5 mm voxels: one warning that the facet distance exceeds half the finest voxel");
+    warningsOk &= Expect(slices.size() == 2, "1 x 3 mm voxels: two warnings (got " + ToString(slices.size()) + ")");
+    warningsOk &= Expect(count(slices, "voxels of up to 3 mm") == 1,
+                         "1 x 3 mm voxels: one warning mentions \"voxels of up to 3 mm\"");
+    warningsOk &=
+      Expect(known13.empty(), "no warning without an unknown modulus (got " + ToString(known13.size()) + ")");
+    warningsOk &=
+      Expect(half115.empty(),
+             "no warning when both limits are reached but not exceeded (got " + ToString(half115.size()) + ")");
     std::cout << "estimation warnings: " << (warningsOk ? "ok" : "FAIL") << std::endl;
-    ok = ok && warningsOk;
+    ok &= warningsOk;
   }
 
   // Mesh resolution of a label: the unit cube cut into the six tetrahedra of the Kuhn triangulation
@@ -164,13 +205,36 @@ bmrSceneTest(int, char *[])
     bmr::Scene hollow = material;
     hollow.labels[1].role = bmr::LabelRole::Hollow;
     const auto warnings = bmr::MeshResolutionWarnings(material, cube);
-    const bool resolutionOk = resolution.size() == 1 && std::abs(resolution[0].volume - 1.0) < 1e-12 &&
-                              std::abs(resolution[0].surfaceArea - 6.0) < 1e-12 &&
-                              std::abs(resolution[0].elementsAcross - expected) < 1e-12 && warnings.size() == 1 &&
-                              warnings[0].find("label \"soft_tissue\" is only 0.26 elements across") == 0 &&
-                              bmr::MeshResolutionWarnings(hollow, cube).empty();
+    bool       resolutionOk = true;
+    if (Expect(resolution.size() == 1, "resolution of one label (got " + ToString(resolution.size()) + ")"))
+    {
+      resolutionOk &= Expect(std::abs(resolution[0].volume - 1.0) < 1e-12,
+                             "unit cube volume 1 to 1e-12 (got " + ToString(resolution[0].volume) + ")");
+      resolutionOk &= Expect(std::abs(resolution[0].surfaceArea - 6.0) < 1e-12,
+                             "unit cube surface area 6 to 1e-12 (got " + ToString(resolution[0].surfaceArea) + ")");
+      resolutionOk &= Expect(std::abs(resolution[0].elementsAcross - expected) < 1e-12,
+                             "elements across " + ToString(expected) + " to 1e-12 (got " +
+                               ToString(resolution[0].elementsAcross) + ")");
+    }
+    else
+    {
+      resolutionOk = false;
+    }
+    if (Expect(warnings.size() == 1, "one mesh resolution warning (got " + ToString(warnings.size()) + ")"))
+    {
+      resolutionOk &= Expect(warnings[0].find("label \"soft_tissue\" is only 0.26 elements across") == 0,
+                             "the warning starts with: label \"soft_tissue\" is only 0.26 elements across (got \"" +
+                               warnings[0] + "\")");
+    }
+    else
+    {
+      resolutionOk = false;
+    }
+    const auto hollowWarnings = bmr::MeshResolutionWarnings(hollow, cube);
+    resolutionOk &= Expect(hollowWarnings.empty(),
+                           "no resolution warning for a hollow label (got " + ToString(hollowWarnings.size()) + ")");
     std::cout << "label resolution: " << (resolutionOk ? "ok" : "FAIL") << std::endl;
-    ok = ok && resolutionOk;
+    ok &= resolutionOk;
   }
 
   auto              parse = [](const std::string & text) { return [text] { bmr::ParseScene(text, "bad.json"); }; };

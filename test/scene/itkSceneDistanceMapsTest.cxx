@@ -18,6 +18,7 @@
 // ComputeSceneDistanceMaps on a voxelised ball: the sampled map's zero level lies on the ball's own surface to
 // well below the voxel staircase, only the objective labels are computed, and a missing label is refused.
 #include "bmrSignedDistanceSampler.h"
+#include "bmrTestUtilities.h"
 #include "itkGridGeometryConversion.h"
 #include "itkImageRegionIteratorWithIndex.h"
 #include "itkSceneDistanceMaps.h"
@@ -81,7 +82,11 @@ itkSceneDistanceMapsTest(int, char *[])
 
   const auto maps = itk::ComputeSceneDistanceMaps(labels.GetPointer(), scene);
   // Nothing the scene does not use: one map, of the one objective label.
-  bool   ok = maps.size() == 1 && maps.count("ball") == 1;
+  using bmr::test::Expect;
+  using bmr::test::ToString;
+  bool ok = true;
+  ok &= Expect(maps.size() == 1, "one distance map, for the one objective label (got " + ToString(maps.size()) + ")");
+  ok &= Expect(maps.count("ball") == 1, "a distance map of the objective label \"ball\"");
   double rms = 0.0, mean = 0.0;
   SurfaceError(maps.at("ball"), rms, mean);
   std::cout << "phi on the analytic sphere: RMS " << rms << " mm, mean " << mean << " mm" << std::endl;
@@ -89,7 +94,8 @@ itkSceneDistanceMapsTest(int, char *[])
   // would show its quantisation, 1/sqrt(12) = 0.29 mm RMS for a uniform offset. The averaged organ and
   // complement maps, sampled as a cubic B-spline, must do much better: below half of it. The mean (the
   // voxelised ball's volume error, about 0.03 mm here) must stay below a tenth of a voxel.
-  ok = ok && rms < 0.145 && std::abs(mean) < 0.1;
+  ok &= Expect(rms < 0.145, "RMS of phi on the analytic sphere below 0.145 mm (got " + ToString(rms) + ")");
+  ok &= Expect(std::abs(mean) < 0.1, "|mean| of phi on the analytic sphere below 0.1 mm (got " + ToString(mean) + ")");
 
   bmr::Scene missing = scene;
   missing.labels.push_back({ "absent", 7, bmr::LabelRole::Material, 10.0, 0.35 });

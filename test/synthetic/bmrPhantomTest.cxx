@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "bmrPhantom.h"
+#include "bmrTestUtilities.h"
 
 #include <algorithm>
 #include <cmath>
@@ -28,14 +29,16 @@
 
 namespace {
 
+using bmr::test::ToString;
+
 constexpr double Pi = 3.14159265358979323846;
 
 /** Counts failures instead of stopping at the first one, so that one run shows
- * every broken property. */
+ * every broken property. Check() returns \a condition, to guard checks that need it. */
 class Checker
 {
 public:
-  void
+  bool
   Check(bool condition, const std::string & message)
   {
     if (!condition)
@@ -43,6 +46,7 @@ public:
       std::cerr << "FAILED: " << message << std::endl;
       ++m_Failures;
     }
+    return condition;
   }
 
   int
@@ -102,12 +106,27 @@ TestDefaultPelvis(Checker & checker)
   const bmr::PhantomVolume           volume = bmr::MakePelvisPhantom(parameters);
   const bmr::GridGeometry &          grid = volume.grid;
 
-  checker.Check(volume.labels.size() == grid.GetNumberOfVoxels() && volume.ct.size() == grid.GetNumberOfVoxels(),
-                "buffer sizes match the default grid");
-  checker.Check(grid.size[0] == 160 && grid.size[1] == 128 && grid.size[2] == 64, "default grid size 160x128x64");
+  checker.Check(volume.labels.size() == grid.GetNumberOfVoxels(),
+                "label buffer size matches the default grid (" + ToString(volume.labels.size()) + " vs " +
+                  ToString(grid.GetNumberOfVoxels()) + " voxels)");
+  checker.Check(volume.ct.size() == grid.GetNumberOfVoxels(),
+                "CT buffer size matches the default grid (" + ToString(volume.ct.size()) + " vs " +
+                  ToString(grid.GetNumberOfVoxels()) + " voxels)");
+  const char * const axes[3] = { "x", "y", "z" };
+  const std::size_t  defaultSize[3] = { 160, 128, 64 };
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    checker.Check(grid.size[a] == defaultSize[a],
+                  std::string("default grid size 160x128x64: ") + axes[a] + " size " + ToString(defaultSize[a]) +
+                    " (got " + ToString(grid.size[a]) + ")");
+  }
   const std::array<double, 3> center = bmr::GridCenter(grid);
-  checker.Check(std::abs(center[0]) < 1e-9 && std::abs(center[1]) < 1e-9 && std::abs(center[2]) < 1e-9,
-                "default grid is centred on the origin");
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    checker.Check(std::abs(center[a]) < 1e-9,
+                  std::string("default grid is centred on the origin: ") + axes[a] + " within 1e-9 mm (got " +
+                    ToString(center[a]) + ")");
+  }
 
   for (std::int32_t label = 0; label <= 5; ++label)
   {
@@ -168,7 +187,10 @@ TestDefaultPelvis(Checker & checker)
       brightOutside += volume.labels[v] != bmr::PelvisProstate ? 1 : 0;
     }
   }
-  checker.Check(bright > 0 && brightOutside == 0, "seed voxels lie inside the prostate label");
+  checker.Check(bright > 0, "some voxels exceed 1000 HU (the seeds)");
+  checker.Check(brightOutside == 0,
+                "seed voxels lie inside the prostate label (" + ToString(brightOutside) + " of " + ToString(bright) +
+                  " voxels above 1000 HU are not)");
 
   // The anatomy is fixed in physical space: a few known points must carry the
   // expected labels (exact, they are far from any boundary).
@@ -180,9 +202,15 @@ TestDefaultPelvis(Checker & checker)
   };
   for (const auto & probe : probes)
   {
-    const long long offset = NearestOffset(grid, probe.first);
-    checker.Check(offset >= 0 && volume.labels[offset] == probe.second,
-                  "label at probe point is " + std::to_string(probe.second));
+    const long long   offset = NearestOffset(grid, probe.first);
+    const std::string where = "probe point (" + ToString(probe.first[0]) + ", " + ToString(probe.first[1]) + ", " +
+                              ToString(probe.first[2]) + ")";
+    if (checker.Check(offset >= 0, where + " inside the grid"))
+    {
+      checker.Check(volume.labels[offset] == probe.second,
+                    "label at " + where + " is " + std::to_string(probe.second) + " (got " +
+                      std::to_string(volume.labels[offset]) + ")");
+    }
   }
 }
 
@@ -212,9 +240,12 @@ TestObliquePelvis(Checker & checker)
   // IndexToPoint / PointToIndex round trip (exact inverse up to rounding).
   const std::array<double, 3> index{ { 12.25, -3.5, 40.75 } };
   const std::array<double, 3> back = grid.PointToIndex(grid.IndexToPoint(index));
-  checker.Check(std::abs(back[0] - index[0]) < 1e-9 && std::abs(back[1] - index[1]) < 1e-9 &&
-                  std::abs(back[2] - index[2]) < 1e-9,
-                "PointToIndex inverts IndexToPoint on an oblique grid");
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    checker.Check(std::abs(back[a] - index[a]) < 1e-9,
+                  "PointToIndex inverts IndexToPoint on an oblique grid: index " + std::to_string(a) +
+                    " within 1e-9 (error " + ToString(back[a] - index[a]) + ")");
+  }
 
   const bmr::PhantomVolume    volume = bmr::MakePelvisPhantom(parameters);
   const std::array<double, 3> center = bmr::GridCenter(volume.grid);
@@ -266,7 +297,11 @@ TestObliquePelvis(Checker & checker)
   for (const bmr::Seed & seed : volume.seeds)
   {
     const long long offset = NearestOffset(grid, seed.center);
-    checker.Check(offset >= 0 && volume.labels[offset] == bmr::PelvisProstate, "oblique seed centre labelled prostate");
+    if (checker.Check(offset >= 0, "oblique seed centre inside the grid"))
+    {
+      checker.Check(volume.labels[offset] == bmr::PelvisProstate,
+                    "oblique seed centre labelled prostate (got " + std::to_string(volume.labels[offset]) + ")");
+    }
   }
 }
 
@@ -281,17 +316,26 @@ TestDeterminism(Checker & checker)
   // Exact equality: the generators are self-contained, nothing may vary.
   checker.Check(first.labels == second.labels, "two calls give identical labels");
   checker.Check(first.ct == second.ct, "two calls give identical CT (with noise)");
-  bool sameSeeds = first.seeds.size() == second.seeds.size();
-  for (std::size_t s = 0; sameSeeds && s < first.seeds.size(); ++s)
+  if (checker.Check(first.seeds.size() == second.seeds.size(),
+                    "two calls give the same number of seeds (" + ToString(first.seeds.size()) + " vs " +
+                      ToString(second.seeds.size()) + ")"))
   {
-    sameSeeds = first.seeds[s].center == second.seeds[s].center && first.seeds[s].axis == second.seeds[s].axis;
+    for (std::size_t s = 0; s < first.seeds.size(); ++s)
+    {
+      checker.Check(first.seeds[s].center == second.seeds[s].center,
+                    "two calls give seed " + ToString(s) + " the same centre");
+      checker.Check(first.seeds[s].axis == second.seeds[s].axis,
+                    "two calls give seed " + ToString(s) + " the same axis");
+    }
   }
-  checker.Check(sameSeeds, "two calls give identical seeds");
 
   parameters.seedPlacementSeed = 2;
   const bmr::PhantomVolume other = bmr::MakePelvisPhantom(parameters);
-  checker.Check(other.seeds.size() == 5 && other.seeds[0].center != first.seeds[0].center,
-                "another placement seed moves the seeds");
+  if (checker.Check(other.seeds.size() == 5,
+                    "another placement seed still places 5 seeds (got " + ToString(other.seeds.size()) + ")"))
+  {
+    checker.Check(other.seeds[0].center != first.seeds[0].center, "another placement seed moves the seeds");
+  }
 }
 
 void
@@ -311,7 +355,9 @@ TestSphere(Checker & checker)
   checker.Check(std::abs(shell - analyticShell) <= 0.05 * analyticShell, "sphere shell volume within 5 %");
   // Centre voxel value exact: 8 voxels around the centre are homogeneous core.
   const std::size_t centerOffset = 48 + 96 * (48 + 96 * 48);
-  checker.Check(volume.ct[centerOffset] == 60.0f && volume.ct[0] == -1000.0f, "sphere core 60 HU, corner air");
+  checker.Check(volume.ct[centerOffset] == 60.0f,
+                "sphere core exactly 60 HU at the centre (got " + ToString(volume.ct[centerOffset]) + ")");
+  checker.Check(volume.ct[0] == -1000.0f, "corner voxel exactly -1000 HU, air (got " + ToString(volume.ct[0]) + ")");
 }
 
 void

@@ -1,0 +1,191 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkBiomechanicalPipelines_h
+#define itkBiomechanicalPipelines_h
+
+#include "bmrElasticityEstimator.h"
+#include "bmrLandmarks.h"
+#include "bmrPhantom.h"
+#include "bmrSimulation.h"
+#include "itkImage.h"
+#include "itkVector.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace itk {
+
+/** \defgroup BiomechanicalRegistrationPipelines Pipelines
+ * Whole jobs as one call, returning result structs: simulate a scene, register a pair, make a phantom pair.
+ * biomechreg parses, calls these, prints and writes; nothing else. */
+
+/** The image types of the pipelines: CT [HU], label maps, displacement fields [mm, LPS].
+ * \ingroup BiomechanicalRegistrationPipelines */
+using BiomechanicalCTImageType = Image<float, 3>;
+using BiomechanicalLabelImageType = Image<std::int32_t, 3>;
+using BiomechanicalFieldType = Image<Vector<double, 3>, 3>;
+
+/** Receives what a pipeline is doing; every method does nothing by default.
+ * \ingroup BiomechanicalRegistrationPipelines */
+class BiomechanicalRegistration_EXPORT PipelineObserver
+{
+public:
+  virtual ~PipelineObserver() = default;
+  virtual void
+  StageBegin(const std::string & /*stage*/)
+  {}
+  /** \a detail: a short result of the stage ("41043 tetrahedra, ..."), or empty. */
+  virtual void
+  StageEnd(const std::string & /*stage*/, double /*seconds*/, const std::string & /*detail*/)
+  {}
+  virtual void
+  Warning(const std::string & /*message*/)
+  {}
+  /** After every inner solve of the estimation. */
+  virtual void
+  Iteration(const bmr::IterationRecord & /*record*/)
+  {}
+};
+
+/** Wall time of one stage [s]. */
+struct BiomechanicalRegistration_EXPORT PipelineStage
+{
+  std::string name;
+  double      seconds{ 0.0 };
+};
+
+/** What SimulateLabelImage() made. \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT SimulationResult
+{
+  bmr::TetrahedralMesh              mesh;       ///< with displacement [mm] and force [mN]
+  bmr::ForwardSimulation            simulation; ///< per-node and per-element fields of the solution
+  BiomechanicalFieldType::Pointer   pullBack;   ///< fixed -> moving [mm] on the reference grid
+  BiomechanicalFieldType::Pointer   push;       ///< moving -> fixed [mm] on the moving grid (if asked for)
+  SizeValueType                     invertedElements{ 0 }; ///< elements the displacement inverts
+  std::vector<std::string>          warnings;
+  std::vector<PipelineStage>        stages;
+};
+
+/** Meshes \a movingLabels for \a scene (CGAL Mesh_3), solves the scene's forward problem and computes the
+ * pull-back field on \a reference's grid (and the push field on the moving grid when \a pushField).
+ * \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT SimulationResult
+SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
+                   const bmr::Scene &                  scene,
+                   const ImageBase<3> *                reference,
+                   PipelineObserver *                  observer = nullptr,
+                   bool                                pushField = true);
+
+/** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.
+ * \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT RegistrationSettings
+{
+  bmr::EstimatorSettings estimator;
+  bmr::WallLoadSettings  walls;
+  double                 coarseFactor{ 1.6 }; ///< coarse (sweep) mesh sizes = scene's x this; <= 1: no coarse mesh
+  double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
+};
+
+/** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT RegistrationResult
+{
+  SimulationResult                     state;      ///< the estimated state: mesh, fields, stress
+  bmr::EstimationResult                estimation; ///< moduli, loads, history, identifiability, uncertainty
+  std::vector<bmr::UnknownModulus>     unknowns;   ///< in the order of estimation.youngsModuli
+  std::map<std::string, double>        youngsModulus;      ///< kPa, by unknown label name
+  std::map<std::string, double>        modulusUncertainty; ///< standard deviation of log E, by name
+  std::string                          gaugeLabel;
+  double                               gaugeModulus{ 0.0 }; ///< kPa
+  BiomechanicalLabelImageType::Pointer warpedLabels;        ///< nearest neighbour
+  BiomechanicalCTImageType::Pointer    warpedCT;            ///< linear; null without a moving CT
+  std::map<std::string, double>        dice;                ///< warped against fixed labels, by name
+  double                               jacobianMinimum{ 0.0 };
+  double                               jacobianNonPositiveFraction{ 0.0 };
+};
+
+/** Standard deviation of log E above which RegisterSegmentedPair() warns: one sigma beyond the 10 % the
+ * estimate aims at. */
+constexpr double BiomechanicalUncertaintyWarningLogSigma = 0.1;
+
+/** Everything biomechreg register does but reading and writing: the images' overlap and the scene are
+ * checked; distance maps of the fixed labels; the moving labels meshed (and a coarse mesh for the sweep
+ * when a modulus is unknown); FEMElasticityOptimizer; the pull-back and push fields; the moving labels (and
+ * CT, when given) warped; Dice per organ and the Jacobian of the pull-back field; warnings. \a movingCT may
+ * be null. \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT RegistrationResult
+RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
+                      const BiomechanicalLabelImageType * fixedLabels,
+                      const BiomechanicalCTImageType *    movingCT,
+                      const bmr::Scene &                  scene,
+                      const RegistrationSettings &        settings = RegistrationSettings(),
+                      PipelineObserver *                  observer = nullptr);
+
+/** Settings of a phantom pair; the defaults are biomechreg phantom's.
+ * \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT PhantomSettings
+{
+  enum class Anatomy : std::uint8_t
+  {
+    Pelvis,
+    Spheres
+  };
+  Anatomy              anatomy{ Anatomy::Pelvis };
+  bmr::GridGeometry    grid{ bmr::PelvisPhantomParameters().grid };
+  double               prostateE{ 50.0 };  ///< kPa (the core of the spheres)
+  double               prostateNu{ 0.40 }; ///< the estimation scene assumes 0.40
+  double               bladderMM{ 4.0 };   ///< filling [mm]; the spheres: inward motion of the outer boundary
+  double               rectumMM{ 3.0 };
+  bmr::WallFillingEnum filling{ bmr::WallFillingEnum::AlongNormals };
+  double               tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour
+  double               tumourE{ 100.0 };      ///< kPa
+  double               bladderKPa{ 0.0 };     ///< > 0: bladder and rectum loaded by pressure [kPa] instead
+  double               rectumKPa{ 0.0 };
+  double               noiseHU{ 10.0 };
+  std::uint64_t        seed{ 1 };
+  unsigned int         numberOfSeeds{ 3 };
+  double               truthRefinement{ 0.75 }; ///< the truth's mesh sizes relative to the scene's
+};
+
+/** A moving/fixed pair with its ground truth. \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT PhantomPair
+{
+  BiomechanicalCTImageType::Pointer    movingCT, fixedCT;
+  BiomechanicalLabelImageType::Pointer movingLabels, fixedLabels;
+  BiomechanicalFieldType::Pointer      truthField; ///< fixed -> moving [mm]
+  bmr::Scene                           scene;      ///< what the estimator sees (prostate modulus unknown)
+  bmr::Scene                           truthScene; ///< known moduli and wall loads
+  std::vector<bmr::Landmark>           movingLandmarks, fixedLandmarks; ///< seed centres [mm, LPS]
+  std::size_t                          truthTetrahedra{ 0 }, truthNodes{ 0 };
+  std::vector<PipelineStage>           stages;
+};
+
+/** Makes a pair: the fixed images are the moving ones warped by a forward simulation with known moduli on
+ * a finer, independently meshed model (another random seed of the mesher), the fixed labels voxelised once
+ * from the deformed analytic anatomy (pelvis), the fixed CT with its own noise; the seeds moved with the
+ * simulated displacement. \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT PhantomPair
+MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = nullptr);
+
+/** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
+BiomechanicalRegistration_EXPORT bmr::Scene
+ScaledMeshSizes(bmr::Scene scene, double factor);
+
+} // namespace itk
+
+#endif

@@ -1,0 +1,48 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkBiomechanicalReports_h
+#define itkBiomechanicalReports_h
+
+#include "itkBiomechanicalPipelines.h"
+
+namespace itk {
+
+/** report.json of a registration (JSON; units: mm, kPa, mN, mm^2, s): the recovered moduli with their
+ * uncertainty and one-sigma interval, the gauge, identifiability, residuals and surface distances, Dice,
+ * the Jacobian of the pull-back field, inverted elements, the step limit, warnings, the mesh, the number
+ * of iterations and the wall time of each stage in \a wallTimes (and their total).
+ * \ingroup BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+RegistrationReportJson(const RegistrationResult &         result,
+                       const RegistrationSettings &       settings,
+                       const std::vector<PipelineStage> & wallTimes);
+
+/** The inner solves \a records as CSV, one row each (E [kPa] per unknown in \a unknownNames, Phi* [mm^2],
+ * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames);
+
+/** truth.json of a phantom pair (JSON; mm, kPa, mN): the true moduli and Poisson's ratios, the tumour
+ * fraction, the wall loads, the truth's mesh, the CT noise and the seed landmarks (moving and fixed).
+ * \ingroup BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings);
+
+} // namespace itk
+
+#endif

@@ -1,0 +1,200 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkBiomechanicalReports.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace itk {
+namespace {
+using Json = nlohmann::ordered_json;
+
+/** A number for JSON, which has no infinity: null when not finite. */
+Json
+Number(double x)
+{
+  return std::isfinite(x) ? Json(x) : Json(nullptr);
+}
+
+/** A whole number as a JSON integer ("100", not "100.0"), as scene files and scripts write moduli. */
+Json
+Compact(double x)
+{
+  return std::isfinite(x) && x == std::round(x) && std::abs(x) < 1e15 ? Json(static_cast<std::int64_t>(x)) : Json(x);
+}
+
+Json
+Units()
+{
+  return { { "length", "mm" }, { "modulus", "kPa" }, { "force", "mN" }, { "phi", "mm^2" }, { "time", "s" } };
+}
+
+Json
+ModulusSection(const RegistrationResult & r)
+{
+  Json uncertainty = Json::object();
+  for (const auto & kv : r.modulusUncertainty)
+  {
+    const double E = r.youngsModulus.at(kv.first);
+    uncertainty[kv.first] = { { "sigma_log_E", Number(kv.second) },
+                              { "one_sigma_interval_kPa",
+                                { Number(E * std::exp(-kv.second)), Number(E * std::exp(kv.second)) } } };
+  }
+  Json j;
+  j["youngs_modulus_kPa"] = r.youngsModulus;
+  j["gauge"] = { { "label", r.gaugeLabel }, { "youngs_modulus_kPa", r.gaugeModulus } };
+  j["identifiable"] = r.estimation.identifiable;
+  j["identifiability"] = r.estimation.identifiabilityMessage;
+  j["youngs_modulus_uncertainty"] = uncertainty;
+  return j;
+}
+} // namespace
+
+std::string
+RegistrationReportJson(const RegistrationResult &         r,
+                       const RegistrationSettings &       settings,
+                       const std::vector<PipelineStage> & wallTimes)
+{
+  Json j;
+  j["units"] = Units();
+  j.update(ModulusSection(r));
+  j["residual_standard_deviation_mm"] = r.estimation.residualStandardDeviation;
+  j["final_phi_mm2"] = r.estimation.value;
+  Json surfaces = Json::object();
+  for (const auto & s : r.estimation.residuals)
+  {
+    surfaces[s.name] = { { "rms", s.rms }, { "max", s.maximum }, { "mean_signed", s.mean } };
+  }
+  j["surface_distance_mm"] = surfaces;
+  j["dice"] = r.dice;
+  j["jacobian_determinant"] = { { "minimum", r.jacobianMinimum },
+                                { "fraction_nonpositive", r.jacobianNonPositiveFraction } };
+  j["inverted_elements"] = r.state.invertedElements;
+  j["step_limit"] = { { "element_inversion", settings.estimator.limitElementInversion ? "limit" : "allow" },
+                      { "rejected_trial_points", r.estimation.rejectedSteps } };
+  j["warnings"] = r.state.warnings;
+  j["mesh"] = { { "tetrahedra", r.state.mesh.GetNumberOfTetrahedra() }, { "nodes", r.state.mesh.GetNumberOfPoints() } };
+  j["iterations"] = { { "sweep", r.estimation.sweep.size() }, { "fine", r.estimation.history.size() } };
+  Json   times = Json::object();
+  double total = 0.0;
+  for (const PipelineStage & s : wallTimes)
+  {
+    times[s.name] = s.seconds;
+    total += s.seconds;
+  }
+  times["total"] = total;
+  j["wall_time_s"] = times;
+  return j.dump(2) + "\n";
+}
+
+std::string
+IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames)
+{
+  std::ostringstream o;
+  o << "# Phi* [mm^2] at the inner optimum; |dPhi/dd| [mm]; dPhi/dlogE [mm^2]; E [kPa]\nstage,iteration";
+  for (const auto & n : unknownNames)
+  {
+    o << ",E_" << n << "_kPa";
+  }
+  o << ",phi_mm2,wall_gradient_norm_mm";
+  for (const auto & n : unknownNames)
+  {
+    o << ",dphi_dlogE_" << n << "_mm2";
+  }
+  o << ",inner_iterations,seconds\n" << std::setprecision(10);
+  for (const auto & r : records)
+  {
+    o << r.stage << "," << r.iteration;
+    for (double E : r.youngsModuli)
+    {
+      o << "," << E;
+    }
+    o << "," << r.value << "," << r.wallGradientNorm;
+    for (double g : r.logModulusGradient)
+    {
+      o << "," << g;
+    }
+    o << "," << r.innerIterations << "," << r.seconds << "\n";
+  }
+  return o.str();
+}
+
+namespace {
+Json
+LoadJson(const bmr::SceneLoad & l)
+{
+  if (l.type == bmr::SceneLoad::Type::Pressure)
+  {
+    return { { "surface", l.surface }, { "type", "pressure" }, { "pressure_kPa", l.magnitude } };
+  }
+  Json j = { { "surface", l.surface }, { "type", "radial_displacement" }, { "center_mm", l.center } };
+  if (l.axis != std::array<double, 3>{ { 0, 0, 0 } })
+  {
+    j["axis"] = l.axis;
+  }
+  if (l.semiAxes != std::array<double, 3>{ { 0, 0, 0 } })
+  {
+    j["semi_axes_mm"] = l.semiAxes;
+  }
+  j["magnitude_mm"] = l.magnitude;
+  return j;
+}
+} // namespace
+
+std::string
+PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
+{
+  const bool pelvis = settings.anatomy == PhantomSettings::Anatomy::Pelvis;
+  Json       moduli = Json::object(), ratios = Json::object(), loads = Json::array(), landmarks = Json::array();
+  for (const auto & l : pair.truthScene.labels)
+  {
+    if (l.role == bmr::LabelRole::Material)
+    {
+      moduli[l.name] = Compact(l.youngsModulus);
+      ratios[l.name] = Compact(l.poissonRatio);
+    }
+  }
+  for (const bmr::SceneLoad & l : pair.truthScene.loads)
+  {
+    loads.push_back(LoadJson(l));
+  }
+  for (std::size_t i = 0; i < pair.movingLandmarks.size(); ++i)
+  {
+    landmarks.push_back({ { "id", pair.movingLandmarks[i].id },
+                          { "moving_mm", pair.movingLandmarks[i].point },
+                          { "fixed_mm", pair.fixedLandmarks[i].point } });
+  }
+  Json j;
+  j["units"] = { { "length", "mm" }, { "modulus", "kPa" }, { "force", "mN" } };
+  j["scene"] = pelvis ? "pelvis" : "spheres";
+  j["youngs_modulus_kPa"] = moduli;
+  j["poisson_ratio"] = ratios;
+  j["tumour_volume_fraction"] = pelvis ? settings.tumourFraction : 0.0;
+  j["wall_loads"] = loads;
+  j["truth_mesh"] = { { "tetrahedra", pair.truthTetrahedra },
+                      { "nodes", pair.truthNodes },
+                      { "cell_size_mm", pair.truthScene.mesh.cellSize } };
+  j["ct_noise_sigma_HU"] = settings.noiseHU;
+  j["landmarks"] = landmarks;
+  return j.dump(2) + "\n";
+}
+
+} // namespace itk

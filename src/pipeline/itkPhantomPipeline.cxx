@@ -1,0 +1,234 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The phantom pipeline: a moving/fixed pair with known moduli and wall loads, made without inverse crime.
+#include "itkPipelineStages.h"
+
+#include "bmrError.h"
+#include "bmrDisplacementFieldRasterizer.h"
+#include "itkGridGeometryConversion.h"
+
+#include <cmath>
+
+namespace itk {
+namespace {
+/** Label of the tumour inside the prostate, in the truth's label map only. */
+constexpr std::int32_t PelvisTumour = 6;
+
+bool
+IsPelvis(const PhantomSettings & s)
+{
+  return s.anatomy == PhantomSettings::Anatomy::Pelvis;
+}
+
+bmr::PelvisPhantomParameters
+PelvisParameters(const PhantomSettings & s)
+{
+  bmr::PelvisPhantomParameters p;
+  p.grid = s.grid;
+  p.seedPlacementSeed = s.seed;
+  p.numberOfSeeds = s.numberOfSeeds;
+  p.noiseSigmaHU = s.noiseHU;
+  p.noiseSeed = 1000 + s.seed;
+  return p;
+}
+
+bmr::PhantomVolume
+MovingVolume(const PhantomSettings & s)
+{
+  if (IsPelvis(s))
+  {
+    return bmr::MakePelvisPhantom(PelvisParameters(s));
+  }
+  bmr::SpherePhantomParameters p;
+  p.grid = s.grid;
+  bmr::PhantomVolume moving = bmr::MakeSpherePhantom(p);
+  bmr::AddGaussianNoise(moving.ct, s.noiseHU, 1000 + s.seed);
+  return moving;
+}
+
+/** Known moduli and wall loads, on a finer mesh with another random seed of the mesher. */
+bmr::Scene
+TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
+{
+  bmr::Scene truth = ScaledMeshSizes(IsPelvis(s) ? bmr::PelvisPhantomScene(s.prostateE, false, s.prostateNu)
+                                                 : bmr::SpherePhantomScene(s.prostateE, false),
+                                     s.truthRefinement);
+  truth.mesh.randomSeed = 12345;
+  if (IsPelvis(s) && (s.bladderKPa > 0.0 || s.rectumKPa > 0.0))
+  {
+    // Pressure in the lumens: the walls move as the tissue lets them (no wall is driven into the prostate).
+    truth.loads = { { "bladder", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, s.bladderKPa },
+                    { "rectum", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, s.rectumKPa } };
+  }
+  else if (IsPelvis(s))
+  {
+    truth.loads = bmr::PelvisFillingLoads(PelvisParameters(s), s.bladderMM, s.rectumMM, s.filling);
+  }
+  else
+  {
+    truth.loads = { { "outside", bmr::SceneLoad::Type::RadialDisplacement, bmr::GridCenter(grid), -s.bladderMM } };
+  }
+  truth.Validate();
+  return truth;
+}
+
+/** The truth may hold a stiffer tumour inside the prostate (dissertation Table 3.4): a ball at the
+ * prostate's centroid with the requested fraction of its volume, labelled only in the truth's label map
+ * and scene. The estimator sees one homogeneous prostate. */
+std::vector<std::int32_t>
+WithTumour(std::vector<std::int32_t> labels, const bmr::GridGeometry & g, const PhantomSettings & s, bmr::Scene & truth)
+{
+  const auto at = [&g](std::size_t v) {
+    return g.IndexToPoint(
+      { { double(v % g.size[0]), double((v / g.size[0]) % g.size[1]), double(v / (g.size[0] * g.size[1])) } });
+  };
+  std::array<double, 3> c{ { 0, 0, 0 } };
+  std::size_t           n = 0;
+  for (std::size_t v = 0; v < labels.size(); ++v)
+  {
+    if (labels[v] == bmr::PelvisProstate)
+    {
+      const auto x = at(v);
+      for (int a = 0; a < 3; ++a)
+      {
+        c[a] += x[a];
+      }
+      ++n;
+    }
+  }
+  const double voxel = g.spacing[0] * g.spacing[1] * g.spacing[2];
+  const double r = std::cbrt(s.tumourFraction * double(n) * voxel * 3.0 / (4.0 * 3.14159265358979));
+  for (int a = 0; a < 3; ++a)
+  {
+    c[a] /= double(std::max<std::size_t>(n, 1));
+  }
+  for (std::size_t v = 0; v < labels.size(); ++v)
+  {
+    const auto x = at(v);
+    if (labels[v] == bmr::PelvisProstate && std::hypot(x[0] - c[0], x[1] - c[1], x[2] - c[2]) <= r)
+    {
+      labels[v] = PelvisTumour;
+    }
+  }
+  truth.labels.push_back({ "tumour", PelvisTumour, bmr::LabelRole::Material, s.tumourE, s.prostateNu });
+  truth.mesh.cellSizePerLabel[PelvisTumour] = truth.mesh.cellSizePerLabel[bmr::PelvisProstate];
+  return labels;
+}
+
+/** The physical points x + d(x) of every voxel x of \a grid under the fixed -> moving \a field [mm]. */
+std::vector<double>
+PullBackPoints(const bmr::GridGeometry & grid, const BiomechanicalFieldType * field)
+{
+  std::vector<double> points(3 * grid.GetNumberOfVoxels());
+  const auto *        d = field->GetBufferPointer();
+  for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
+  {
+    const auto x = grid.IndexToPoint({ { double(v % grid.size[0]),
+                                         double((v / grid.size[0]) % grid.size[1]),
+                                         double(v / (grid.size[0] * grid.size[1])) } });
+    for (int c = 0; c < 3; ++c)
+    {
+      points[3 * v + c] = x[c] + d[v][c];
+    }
+  }
+  return points;
+}
+
+/** The fixed labels voxelise the deformed analytic anatomy once (the label at each voxel's pull-back
+ * point), as a scan would; resampling the voxelised moving labels would quantise twice, and the second
+ * staircase, carried along rigidly, favours the stiffest modulus. */
+BiomechanicalLabelImageType::Pointer
+FixedLabels(const PhantomSettings & s, const bmr::GridGeometry & grid, const BiomechanicalFieldType * field)
+{
+  const std::vector<double> points = PullBackPoints(grid, field);
+  if (IsPelvis(s))
+  {
+    return MakeImageOnGrid<BiomechanicalLabelImageType>(grid, bmr::PelvisLabelsAt(PelvisParameters(s), points));
+  }
+  bmr::SpherePhantomParameters p;
+  p.grid = s.grid;
+  return MakeImageOnGrid<BiomechanicalLabelImageType>(grid, bmr::SphereLabelsAt(p, points));
+}
+
+/** Seed centres moved by the simulated displacement: the ground-truth landmark pairs. */
+void
+MoveSeeds(PhantomPair & pair, const std::vector<bmr::Seed> & seeds, const bmr::TetrahedralMesh & mesh)
+{
+  const bmr::PointLocator locator(mesh.points, mesh.tetrahedra);
+  for (std::size_t i = 0; i < seeds.size(); ++i)
+  {
+    const auto &          X = seeds[i].center;
+    std::array<double, 3> u;
+    if (!bmr::InterpolateDisplacement(locator, mesh, mesh.displacement, X, u))
+    {
+      bmr::Fail("MakePhantomPair", "seed " + std::to_string(i) + " lies outside the simulated mesh");
+    }
+    pair.movingLandmarks.push_back({ "seed" + std::to_string(i), X });
+    pair.fixedLandmarks.push_back({ "seed" + std::to_string(i), { { X[0] + u[0], X[1] + u[1], X[2] + u[2] } } });
+  }
+}
+} // namespace
+
+PhantomPair
+MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
+{
+  PhantomPair          pair;
+  pipeline::StageClock clock(observer, pair.stages);
+  clock.Begin("phantom volume");
+  const bmr::PhantomVolume moving = MovingVolume(s);
+  clock.End();
+
+  pair.truthScene = TruthScene(s, moving.grid);
+  pair.movingCT = MakeImageOnGrid<BiomechanicalCTImageType>(moving.grid, moving.ct);
+  pair.movingLabels = MakeImageOnGrid<BiomechanicalLabelImageType>(moving.grid, moving.labels);
+  BiomechanicalLabelImageType::Pointer truthLabels = pair.movingLabels;
+  if (IsPelvis(s) && s.tumourFraction > 0.0)
+  {
+    truthLabels = MakeImageOnGrid<BiomechanicalLabelImageType>(
+      moving.grid, WithTumour(moving.labels, moving.grid, s, pair.truthScene));
+  }
+  const SimulationResult truth = SimulateLabelImage(truthLabels, pair.truthScene, pair.movingLabels, observer, false);
+  pair.truthField = truth.pullBack;
+  pair.truthTetrahedra = truth.mesh.GetNumberOfTetrahedra();
+  pair.truthNodes = truth.mesh.GetNumberOfPoints();
+  pair.stages.insert(pair.stages.end(), truth.stages.begin(), truth.stages.end());
+
+  clock.Begin("warp to the fixed volume");
+  pair.fixedCT = WarpImage(pair.movingCT.GetPointer(), truth.pullBack.GetPointer(), false, -1000.0f);
+  pair.fixedLabels = FixedLabels(s, moving.grid, truth.pullBack);
+  // The fixed scan has its own noise on top of the warped (noisy) moving one.
+  std::vector<float> noise(pair.fixedCT->GetBufferedRegion().GetNumberOfPixels(), 0.0f);
+  bmr::AddGaussianNoise(noise, s.noiseHU, 2000 + s.seed);
+  float * p = pair.fixedCT->GetBufferPointer();
+  for (std::size_t i = 0; i < noise.size(); ++i)
+  {
+    p[i] += noise[i];
+  }
+  clock.End();
+
+  MoveSeeds(pair, moving.seeds, truth.mesh);
+  pair.scene = IsPelvis(s) ? bmr::PelvisPhantomScene(50.0, true) : bmr::SpherePhantomScene(50.0, true);
+  if (!moving.seeds.empty())
+  {
+    pair.scene.movingLandmarks = "landmarks_moving.csv";
+    pair.scene.fixedLandmarks = "landmarks_fixed.csv";
+  }
+  return pair;
+}
+
+} // namespace itk

@@ -1,0 +1,81 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkPipelineStages_h
+#define itkPipelineStages_h
+
+// Stages shared by the pipelines (private to src/pipeline).
+#include "itkBiomechanicalPipelines.h"
+#include "itkImageWarper.h"
+
+#include <chrono>
+
+namespace itk {
+namespace pipeline {
+
+/** Times the stages of a pipeline into a list and tells the observer. */
+class StageClock
+{
+public:
+  StageClock(PipelineObserver * observer, std::vector<PipelineStage> & stages)
+    : m_Observer(observer)
+    , m_Stages(stages)
+  {}
+  void
+  Begin(const std::string & name);
+  void
+  End(const std::string & detail = std::string());
+  void
+  Add(const std::string & name, double seconds)
+  {
+    m_Stages.push_back({ name, seconds });
+  }
+  void
+  Warn(std::vector<std::string> & list, const std::vector<std::string> & warnings);
+  PipelineObserver *
+  GetObserver() const
+  {
+    return m_Observer;
+  }
+
+private:
+  PipelineObserver *                    m_Observer;
+  std::vector<PipelineStage> &          m_Stages;
+  std::string                           m_Current;
+  std::chrono::steady_clock::time_point m_Start;
+};
+
+/** Meshes the labels for the scene (CGAL Mesh_3), as one stage. */
+bmr::TetrahedralMesh
+MeshLabelImage(const BiomechanicalLabelImageType * labels,
+               const bmr::Scene &                  scene,
+               StageClock &                        clock,
+               const std::string &                 stage);
+
+/** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
+ * field on \a movingReference's grid. */
+void
+ComputeFields(SimulationResult &   result,
+              const ImageBase<3> * fixedReference,
+              const ImageBase<3> * movingReference,
+              bool                 pushField,
+              StageClock &         clock);
+
+} // namespace pipeline
+} // namespace itk
+
+#endif

@@ -1,0 +1,169 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The forward pipeline: label map -> mesh -> FEM -> displacement fields.
+#include "itkPipelineStages.h"
+
+#include "itkLabelImageToTetrahedralMeshFilter.h"
+#include "itkPhysicsDeformationFieldSource.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace itk {
+namespace pipeline {
+
+void
+StageClock::Begin(const std::string & name)
+{
+  m_Current = name;
+  if (m_Observer)
+  {
+    m_Observer->StageBegin(name);
+  }
+  m_Start = std::chrono::steady_clock::now();
+}
+
+void
+StageClock::End(const std::string & detail)
+{
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_Start).count();
+  m_Stages.push_back({ m_Current, seconds });
+  if (m_Observer)
+  {
+    m_Observer->StageEnd(m_Current, seconds, detail);
+  }
+}
+
+void
+StageClock::Warn(std::vector<std::string> & list, const std::vector<std::string> & warnings)
+{
+  for (const std::string & w : warnings)
+  {
+    list.push_back(w);
+    if (m_Observer)
+    {
+      m_Observer->Warning(w);
+    }
+  }
+}
+
+bmr::TetrahedralMesh
+MeshLabelImage(const BiomechanicalLabelImageType * labels,
+               const bmr::Scene &                  scene,
+               StageClock &                        clock,
+               const std::string &                 stage)
+{
+  clock.Begin(stage);
+  auto mesher = LabelImageToTetrahedralMeshFilter<BiomechanicalLabelImageType>::New();
+  mesher->SetInput(labels);
+  mesher->SetScene(scene);
+  mesher->Update();
+  bmr::TetrahedralMesh   mesh = mesher->GetOutput()->Get();
+  const bmr::MeshQuality q = mesher->GetMeshQuality();
+  std::ostringstream     detail;
+  detail << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << mesh.GetNumberOfPoints() << " nodes, min dihedral "
+         << std::setprecision(1) << q.minimumDihedralAngleDegrees << " deg";
+  clock.End(detail.str());
+  return mesh;
+}
+
+void
+ComputeFields(SimulationResult &   result,
+              const ImageBase<3> * fixedReference,
+              const ImageBase<3> * movingReference,
+              bool                 pushField,
+              StageClock &         clock)
+{
+  using SourceType = PhysicsDeformationFieldSource<BiomechanicalFieldType>;
+  auto meshObject = TetrahedralMeshObject::New();
+  meshObject->Set(result.mesh);
+  clock.Begin("pull-back field (fixed -> moving)");
+  auto pull = SourceType::New();
+  pull->SetMesh(meshObject);
+  pull->SetReferenceImage(fixedReference);
+  pull->Update();
+  result.pullBack = pull->GetOutput();
+  result.invertedElements = pull->GetNumberOfInvertedElements();
+  clock.End();
+  if (!pushField)
+  {
+    return;
+  }
+  clock.Begin("push field (moving -> fixed)");
+  auto push = SourceType::New();
+  push->SetMesh(meshObject);
+  push->SetReferenceImage(movingReference);
+  push->SetFieldDirection(SourceType::FieldDirectionEnum::MovingToFixed);
+  push->Update();
+  result.push = push->GetOutput();
+  clock.End();
+}
+
+} // namespace pipeline
+
+bmr::Scene
+ScaledMeshSizes(bmr::Scene scene, double factor)
+{
+  scene.mesh.cellSize *= factor;
+  scene.mesh.facetSize *= factor;
+  scene.mesh.facetDistance *= factor;
+  for (auto & kv : scene.mesh.cellSizePerLabel)
+  {
+    kv.second *= factor;
+  }
+  return scene;
+}
+
+SimulationResult
+SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
+                   const bmr::Scene &                  scene,
+                   const ImageBase<3> *                reference,
+                   PipelineObserver *                  observer,
+                   bool                                pushField)
+{
+  SimulationResult   out;
+  pipeline::StageClock clock(observer, out.stages);
+  clock.Warn(out.warnings, scene.Warnings());
+  out.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");
+  clock.Warn(out.warnings, bmr::MeshResolutionWarnings(scene, out.mesh));
+
+  clock.Begin("FEM (assemble, factorise, solve)");
+  out.simulation = bmr::SimulateScene(scene, out.mesh);
+  out.mesh.displacement = out.simulation.displacement;
+  out.mesh.force = out.simulation.force;
+  double umax = 0.0;
+  for (std::size_t n = 0; n < out.mesh.GetNumberOfPoints(); ++n)
+  {
+    const double * u = &out.mesh.displacement[3 * n];
+    umax = std::max(umax, std::hypot(u[0], u[1], u[2]));
+  }
+  std::ostringstream fem;
+  fem << "max |u| " << std::setprecision(2) << umax << " mm";
+  clock.End(fem.str());
+  // The FEM stage in the solver's own parts.
+  out.stages.pop_back();
+  const bmr::SolverTimings & t = out.simulation.timings;
+  clock.Add("assemble", t.assemble);
+  clock.Add("factorise", t.analyse + t.factorise);
+  clock.Add("solve", t.solve);
+  pipeline::ComputeFields(out, reference, movingLabels, pushField, clock);
+  return out;
+}
+
+} // namespace itk

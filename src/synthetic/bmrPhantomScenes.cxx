@@ -1,0 +1,73 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrPhantom.h"
+
+namespace bmr {
+
+Scene
+PelvisPhantomScene(double prostateE, bool unknown, double prostateNu)
+{
+  Scene s;
+  s.name = "pelvis phantom";
+  using R = LabelRole;
+  SceneLabel prostate{ "prostate", PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, prostateNu };
+  if (unknown)
+  {
+    prostate.lowerBound = 20.0;
+    prostate.upperBound = 600.0;
+  }
+  s.labels = { { "air", PelvisAir, R::Outside },
+               { "soft_tissue", PelvisSoftTissue, R::Material, 10.0, 0.35 },
+               prostate,
+               { "bladder", PelvisBladder, R::Hollow },
+               { "rectum", PelvisRectum, R::Hollow },
+               { "bone", PelvisBone, R::Fixed } };
+  s.gauge = "soft_tissue";
+  s.forceSurfaces = { "bladder", "rectum" };
+  s.objective = { { "prostate", 1.0 }, { "bladder", 1.0 }, { "rectum", 1.0 } };
+  s.roiMargin = 25.0;
+  s.mesh.cellSize = 7.0;
+  s.mesh.facetSize = 6.0;
+  s.mesh.facetDistance = 0.5;
+  s.mesh.cellSizePerLabel[PelvisProstate] = 4.5;
+  return s;
+}
+
+Scene
+SpherePhantomScene(double innerE, bool unknown)
+{
+  Scene s;
+  s.name = "concentric spheres";
+  using R = LabelRole;
+  SceneLabel inner{ "inner", SphereInnerCore, unknown ? R::UnknownMaterial : R::Material, innerE, 0.40 };
+  if (unknown)
+  {
+    inner.lowerBound = 30.0;
+    inner.upperBound = 300.0;
+  }
+  s.labels = { { "outside", SphereOutside, R::Outside }, { "outer", SphereOuterShell, R::Material, 10.0, 0.35 }, inner };
+  s.gauge = "outer";
+  s.forceSurfaces = { "outside" };
+  s.objective = { { "inner", 1.0 }, { "outer", 1.0 } };
+  s.mesh.cellSize = 4.0;
+  s.mesh.facetSize = 3.0;
+  s.mesh.facetDistance = 0.5;
+  return s;
+}
+
+} // namespace bmr
