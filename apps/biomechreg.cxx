@@ -116,8 +116,9 @@ PhantomCommand(const Arguments & args)
   const auto        settings = ParsePhantomSettings(args);
   args.CheckAllUsed();
   StageTimer timer;
-  std::cout << "biomechreg phantom: " << (settings.anatomy == itk::PhantomSettings::Anatomy::Pelvis ? "pelvis" : "spheres")
-            << " -> " << out << std::endl;
+  std::cout << "biomechreg phantom: "
+            << (settings.anatomy == itk::PhantomSettings::Anatomy::Pelvis ? "pelvis" : "spheres") << " -> " << out
+            << std::endl;
   const itk::PhantomPair pair = itk::MakePhantomPair(settings, &timer);
   WritePhantom(out, pair, settings, timer);
   Stages all = pair.stages;
@@ -141,9 +142,9 @@ SimulateCommand(const Arguments & args)
   StageTimer timer;
   std::cout << "biomechreg simulate -> " << out << std::endl;
   timer.Begin("read inputs");
-  const bmr::Scene     scene = bmr::ReadScene(scenePath);
-  auto                 labels = ReadImage<LabelImageType>(labelsPath, "moving label image");
-  CTImageType::Pointer ct = ctPath.empty() ? nullptr : ReadImage<CTImageType>(ctPath, "moving CT");
+  const bmr::Scene                scene = bmr::ReadScene(scenePath);
+  auto                            labels = ReadImage<LabelImageType>(labelsPath, "moving label image");
+  CTImageType::Pointer            ct = ctPath.empty() ? nullptr : ReadImage<CTImageType>(ctPath, "moving CT");
   itk::ImageBase<3>::ConstPointer reference = labels.GetPointer();
   if (!referencePath.empty())
   {
@@ -192,8 +193,8 @@ DemoCommand()
 
   std::cout << "\n2. registration: the estimator sees the scans, the label maps and scene.json (prostate E unknown)\n";
   StageTimer run(true);
-  const auto result = itk::RegisterSegmentedPair(pair.movingLabels, pair.fixedLabels, pair.movingCT, pair.scene,
-                                                 itk::RegistrationSettings(), &run);
+  const auto result = itk::RegisterSegmentedPair(
+    pair.movingLabels, pair.fixedLabels, pair.movingCT, pair.scene, itk::RegistrationSettings(), &run);
   run.stages.insert(run.stages.end(), result.state.stages.begin(), result.state.stages.end());
   WriteRegistration(dir + "/register", result, itk::RegistrationSettings(), run);
   PrintOuterIterations(result);
@@ -204,7 +205,8 @@ DemoCommand()
             << std::noshowpos << " %)" << UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
             << "\n  (the error over 50-350 kPa on this phantom: docs/benchmarks.md, estimation benchmark)"
             << (result.estimation.identifiable ? "" : "\n  warning: ")
-            << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage) << "\n  Dice after warping:";
+            << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
+            << "\n  Dice after warping:";
   for (const auto & kv : result.dice)
   {
     std::cout << "  " << kv.first << " " << std::setprecision(4) << kv.second;
@@ -252,7 +254,10 @@ PrintUsage(std::ostream & os)
 
 namespace bmrcli {
 void
-WritePhantom(const std::string & out, const itk::PhantomPair & pair, const itk::PhantomSettings & settings, StageTimer & timer)
+WritePhantom(const std::string &          out,
+             const itk::PhantomPair &     pair,
+             const itk::PhantomSettings & settings,
+             StageTimer &                 timer)
 {
   MakeDirectory(out);
   timer.Begin("write outputs");

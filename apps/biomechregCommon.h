@@ -92,14 +92,14 @@ MakeDirectory(const std::string & path)
   }
 }
 
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 ReadImage(const std::string & path, const std::string & what)
 {
   return itk::ReadBiomechanicalImage<TImage>(path, what);
 }
 
-template <typename TImage>
+template<typename TImage>
 void
 WriteImage(const TImage * image, const std::string & path)
 {
@@ -112,10 +112,10 @@ WriteMesh(const std::string & path, const itk::SimulationResult & s);
 
 /** Writes mesh.vtu, field.nrrd, forward_field.nrrd (when computed) and the warped images into \a out. */
 void
-WriteSimulationOutputs(const std::string &            out,
-                       const itk::SimulationResult &  s,
-                       const LabelImageType *         warpedLabels,
-                       const CTImageType *            warpedCT);
+WriteSimulationOutputs(const std::string &           out,
+                       const itk::SimulationResult & s,
+                       const LabelImageType *        warpedLabels,
+                       const CTImageType *           warpedCT);
 
 // ------------------------------------------------------------ argument parsing
 
@@ -181,7 +181,10 @@ RegisterCommand(const Arguments & args);
 /** Writes a phantom pair into \a out: the four images, truth_field.nrrd, scene.json, truth_scene.json,
  * truth.json and the landmark files. */
 void
-WritePhantom(const std::string & out, const itk::PhantomPair & pair, const itk::PhantomSettings & settings, StageTimer & timer);
+WritePhantom(const std::string &          out,
+             const itk::PhantomPair &     pair,
+             const itk::PhantomSettings & settings,
+             StageTimer &                 timer);
 
 // ---------------------------------------------------------------- Demons and compare
 

@@ -97,8 +97,14 @@ ReadPair(const itk::ImagePairEntry & pair, const CompareOptions & o, const std::
   }
   else
   {
-    itk::DetectPairedSeeds(d.movingCT, d.movingLabels, d.fixedCT, d.fixedLabels, organ->value,
-                           "pair \"" + pair.name + "\"", d.movingLandmarks, d.fixedLandmarks);
+    itk::DetectPairedSeeds(d.movingCT,
+                           d.movingLabels,
+                           d.fixedCT,
+                           d.fixedLabels,
+                           organ->value,
+                           "pair \"" + pair.name + "\"",
+                           d.movingLandmarks,
+                           d.fixedLandmarks);
     bmr::WriteLandmarks(dir + "/seeds_moving.csv", d.movingLandmarks);
     bmr::WriteLandmarks(dir + "/seeds_fixed.csv", d.fixedLandmarks);
   }
@@ -147,8 +153,8 @@ MethodField(const std::string &         method,
   std::cout << "  Demons (" << o.demons.variant << ", " << o.demons.levels << " levels x " << o.demons.iterations
             << " iterations, flattened labels: " << flatten << ") ..." << std::flush;
   const auto start = Clock::now();
-  auto       field = RunDemons(
-    d.fixedCT, d.movingCT, d.fixedLabels, d.movingLabels, ParseLabelList(flatten, &d.scene), o.demons);
+  auto       field =
+    RunDemons(d.fixedCT, d.movingCT, d.fixedLabels, d.movingLabels, ParseLabelList(flatten, &d.scene), o.demons);
   seconds = std::chrono::duration<double>(Clock::now() - start).count();
   std::cout << " " << std::fixed << std::setprecision(1) << seconds << " s" << std::endl;
   MakeDirectory(dir + "/demons");
@@ -158,7 +164,10 @@ MethodField(const std::string &         method,
 
 /** Every method on one pair: fields, scores, checkerboards, table rows. */
 void
-ComparePair(const itk::ImagePairEntry & pair, const CompareOptions & o, const std::string & out, itk::ComparisonTables & tables)
+ComparePair(const itk::ImagePairEntry & pair,
+            const CompareOptions &      o,
+            const std::string &         out,
+            itk::ComparisonTables &     tables)
 {
   std::cout << "\n=== pair " << pair.name << " ===" << std::endl;
   const std::string dir = out + "/" + pair.name;

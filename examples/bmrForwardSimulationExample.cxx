@@ -33,7 +33,7 @@ main()
   phantom.grid.spacing = { { 2.0, 2.0, 2.0 } };
   phantom.grid.origin = { { -47.0, -47.0, -47.0 } };
   const bmr::PhantomVolume volume = bmr::MakeSpherePhantom(phantom);
-  const auto labels = itk::MakeImageOnGrid<itk::BiomechanicalLabelImageType>(volume.grid, volume.labels);
+  const auto               labels = itk::MakeImageOnGrid<itk::BiomechanicalLabelImageType>(volume.grid, volume.labels);
 
   bmr::Scene scene = bmr::SpherePhantomScene(50.0, false);
   scene.loads = { { "outside", bmr::SceneLoad::Type::RadialDisplacement, bmr::GridCenter(volume.grid), -1.5 } };

@@ -32,8 +32,8 @@ main()
   itk::PhantomSettings phantom;
   phantom.anatomy = itk::PhantomSettings::Anatomy::Spheres;
   phantom.grid = bmr::SpherePhantomParameters().grid; // 96^3 voxels of 1 mm: the shapes resolve the modulus
-  phantom.prostateE = 80.0; // kPa, the core
-  phantom.bladderMM = 1.5;  // the outer surface moves inwards by 1.5 mm
+  phantom.prostateE = 80.0;                           // kPa, the core
+  phantom.bladderMM = 1.5;                            // the outer surface moves inwards by 1.5 mm
   const itk::PhantomPair pair = itk::MakePhantomPair(phantom);
 
   const itk::RegistrationResult result =
@@ -43,8 +43,8 @@ main()
   const auto   sigma = result.modulusUncertainty.find("inner"); // absent when the estimate lies on a bound
   std::cout << "core modulus: true " << phantom.prostateE << " kPa, recovered " << E << " kPa (sigma of log E "
             << (sigma == result.modulusUncertainty.end() ? std::string("not computed") : std::to_string(sigma->second))
-            << "); gauge " << result.gaugeLabel << " "
-            << result.gaugeModulus << " kPa; " << result.estimation.identifiabilityMessage << std::endl;
+            << "); gauge " << result.gaugeLabel << " " << result.gaugeModulus << " kPa; "
+            << result.estimation.identifiabilityMessage << std::endl;
   for (const auto & kv : result.dice)
   {
     std::cout << "  Dice " << kv.first << " " << kv.second << std::endl;

@@ -30,7 +30,7 @@ namespace bmr {
 struct BiomechanicalRegistration_EXPORT ResidualStatistics
 {
   std::string name;
-  std::size_t count{ 0 };  ///< residuals (surface nodes, landmarks)
+  std::size_t count{ 0 }; ///< residuals (surface nodes, landmarks)
   double      weight{ 1.0 };
   double      rms{ 0.0 };
   double      maximum{ 0.0 }; ///< of the absolute value

@@ -56,9 +56,9 @@ struct BiomechanicalRegistration_EXPORT IterationRecord
 /** Settings of ElasticityEstimator; the defaults are those of FEMElasticityOptimizer and biomechreg. */
 struct BiomechanicalRegistration_EXPORT EstimatorSettings
 {
-  unsigned int numberOfSweepSamples{ 10 };    ///< per unknown modulus, >= 3
+  unsigned int numberOfSweepSamples{ 10 }; ///< per unknown modulus, >= 3
   unsigned int maximumInnerIterations{ 2000 };
-  unsigned int maximumOuterIterations{ 20 };  ///< function evaluations of the outer L-BFGS-B
+  unsigned int maximumOuterIterations{ 20 }; ///< function evaluations of the outer L-BFGS-B
   double       innerGradientTolerance{ 1e-5 };
   double       outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
   double       flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds

@@ -93,7 +93,7 @@ enum class WallMotionEnum : std::uint8_t
   Free
 };
 BiomechanicalRegistration_EXPORT std::ostream &
-operator<<(std::ostream & os, WallMotionEnum value);
+                                 operator<<(std::ostream & os, WallMotionEnum value);
 
 /** The settings of WallLoads in an estimation; the defaults are FEMElasticityOptimizer's and biomechreg's. */
 struct BiomechanicalRegistration_EXPORT WallLoadSettings

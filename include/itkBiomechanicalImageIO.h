@@ -44,7 +44,7 @@ constexpr double BiomechanicalMaximumNumberOfVoxels = 2147483648.0;
 
 /** Throws naming the first voxel of \a image that is NaN or infinite (floating-point pixels and vectors of
  * them); \a what names the image. \ingroup BiomechanicalRegistrationIO */
-template <typename TImage>
+template<typename TImage>
 void
 CheckImageIsFinite(const TImage * image, const std::string & what)
 {
@@ -96,7 +96,7 @@ private:
   std::streambuf *   m_Old;
 };
 
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 ReadDicomSeries(const std::string & path, const std::string & what)
 {
@@ -115,7 +115,7 @@ ReadDicomSeries(const std::string & path, const std::string & what)
   return reader->GetOutput();
 }
 
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 ReadImageFile(const std::string & path, const std::string & what)
 {
@@ -148,7 +148,7 @@ ReadImageFile(const std::string & path, const std::string & what)
  * itk::ExceptionObject whose description names \a what and \a path in one line, images that cannot be
  * read, are not 3-D, declare more than 2^31 voxels, have a zero, negative or non-finite spacing, or hold a
  * non-finite voxel. \ingroup BiomechanicalRegistrationIO */
-template <typename TImage>
+template<typename TImage>
 typename TImage::Pointer
 ReadBiomechanicalImage(const std::string & path, const std::string & what)
 {
@@ -164,7 +164,8 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
     catch (const ExceptionObject & e)
     {
       const std::string description = e.GetDescription();
-      failure = description.rfind(what, 0) == 0 ? description : "cannot read " + what + " \"" + path + "\": " + description;
+      failure =
+        description.rfind(what, 0) == 0 ? description : "cannot read " + what + " \"" + path + "\": " + description;
     }
     if (failure.empty() && !diagnostics.FirstLine().empty())
     {
@@ -182,7 +183,7 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
 
 /** Writes \a image to \a path (format by the extension, compressed when \a compress) through a temporary
  * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistrationIO */
-template <typename TImage>
+template<typename TImage>
 void
 WriteImageAtomically(const TImage * image, const std::string & path, bool compress = true)
 {

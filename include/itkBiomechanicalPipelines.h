@@ -73,13 +73,13 @@ struct BiomechanicalRegistration_EXPORT PipelineStage
 /** What SimulateLabelImage() made. \ingroup BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT SimulationResult
 {
-  bmr::TetrahedralMesh              mesh;       ///< with displacement [mm] and force [mN]
-  bmr::ForwardSimulation            simulation; ///< per-node and per-element fields of the solution
-  BiomechanicalFieldType::Pointer   pullBack;   ///< fixed -> moving [mm] on the reference grid
-  BiomechanicalFieldType::Pointer   push;       ///< moving -> fixed [mm] on the moving grid (if asked for)
-  SizeValueType                     invertedElements{ 0 }; ///< elements the displacement inverts
-  std::vector<std::string>          warnings;
-  std::vector<PipelineStage>        stages;
+  bmr::TetrahedralMesh            mesh;                  ///< with displacement [mm] and force [mN]
+  bmr::ForwardSimulation          simulation;            ///< per-node and per-element fields of the solution
+  BiomechanicalFieldType::Pointer pullBack;              ///< fixed -> moving [mm] on the reference grid
+  BiomechanicalFieldType::Pointer push;                  ///< moving -> fixed [mm] on the moving grid (if asked for)
+  SizeValueType                   invertedElements{ 0 }; ///< elements the displacement inverts
+  std::vector<std::string>        warnings;
+  std::vector<PipelineStage>      stages;
 };
 
 /** Meshes \a movingLabels for \a scene (CGAL Mesh_3), solves the scene's forward problem and computes the
@@ -105,9 +105,9 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
 /** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationResult
 {
-  SimulationResult                     state;      ///< the estimated state: mesh, fields, stress
-  bmr::EstimationResult                estimation; ///< moduli, loads, history, identifiability, uncertainty
-  std::vector<bmr::UnknownModulus>     unknowns;   ///< in the order of estimation.youngsModuli
+  SimulationResult                     state;              ///< the estimated state: mesh, fields, stress
+  bmr::EstimationResult                estimation;         ///< moduli, loads, history, identifiability, uncertainty
+  std::vector<bmr::UnknownModulus>     unknowns;           ///< in the order of estimation.youngsModuli
   std::map<std::string, double>        youngsModulus;      ///< kPa, by unknown label name
   std::map<std::string, double>        modulusUncertainty; ///< standard deviation of log E, by name
   std::string                          gaugeLabel;
@@ -184,7 +184,7 @@ MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = 
 
 /** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
 BiomechanicalRegistration_EXPORT bmr::Scene
-ScaledMeshSizes(bmr::Scene scene, double factor);
+                                 ScaledMeshSizes(bmr::Scene scene, double factor);
 
 } // namespace itk
 

@@ -28,12 +28,13 @@ namespace itk {
  * of iterations and the wall time of each stage in \a wallTimes (and their total).
  * \ingroup BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
-RegistrationReportJson(const RegistrationResult &         result,
-                       const RegistrationSettings &       settings,
-                       const std::vector<PipelineStage> & wallTimes);
+                                 RegistrationReportJson(const RegistrationResult &         result,
+                                                        const RegistrationSettings &       settings,
+                                                        const std::vector<PipelineStage> & wallTimes);
 
 /** The inner solves \a records as CSV, one row each (E [kPa] per unknown in \a unknownNames, Phi* [mm^2],
- * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistrationIO */
+ * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistrationIO
+ */
 BiomechanicalRegistration_EXPORT std::string
 IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames);
 
@@ -41,7 +42,7 @@ IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std
  * fraction, the wall loads, the truth's mesh, the CT noise and the seed landmarks (moving and fixed).
  * \ingroup BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
-PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings);
+                                 PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings);
 
 } // namespace itk
 

@@ -294,29 +294,29 @@ private:
   Settings() const;
   /** The scene's objective on \a mesh with this object's wall settings. */
   std::unique_ptr<bmr::SurfaceMatchingObjective>
-  MakeObjective(const bmr::TetrahedralMesh &                                                                 mesh,
+  MakeObjective(const bmr::TetrahedralMesh &                                                      mesh,
                 const std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> & samplers) const;
   /** Copies the estimator's result into the outputs. */
   void
   TakeResult(const bmr::EstimationResult & result);
 
-  bmr::Scene                    m_Scene;
-  std::vector<std::string>      m_DistanceMapNames;
+  bmr::Scene               m_Scene;
+  std::vector<std::string> m_DistanceMapNames;
   // Defaults: those of the library's estimator and wall loads (one place, read by the CLI too).
-  unsigned int m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
-  unsigned int m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
-  unsigned int m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
-  double       m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
-  double       m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
-  double       m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
-  bool         m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
-  bool         m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
-  double       m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
-  double       m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
-  double       m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
-  bool         m_WallMotionAlongNormals{ bmr::WallLoadSettings{}.motion == bmr::WallMotionEnum::AlongNormals };
-  SizeValueType                 m_NumberOfRejectedSteps{ 0 };
-  SizeValueType                 m_NumberOfInvertedElements{ 0 };
+  unsigned int  m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
+  unsigned int  m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
+  unsigned int  m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
+  double        m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
+  double        m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
+  double        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
+  bool          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
+  bool          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
+  double        m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
+  double        m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
+  double        m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
+  bool          m_WallMotionAlongNormals{ bmr::WallLoadSettings{}.motion == bmr::WallMotionEnum::AlongNormals };
+  SizeValueType m_NumberOfRejectedSteps{ 0 };
+  SizeValueType m_NumberOfInvertedElements{ 0 };
   std::map<std::string, double> m_ModulusUncertainty;
   double                        m_ResidualStandardDeviation{ 0.0 };
   double                        m_ModulusCurvature{ 0.0 };

@@ -192,7 +192,7 @@ struct ElasticityEstimator::Stages
   const EstimatorSettings &  settings;
   EstimationResult           result;
   std::vector<double>        moduli;
-  std::vector<double>        loads; // warm start of the next inner solve
+  std::vector<double>        loads;  // warm start of the next inner solve
   std::vector<SweepAnalysis> status; // per unknown
   double                     progress{ 0.0 };
 

@@ -223,7 +223,7 @@ struct AffineState
 AffineState
 LinearizeState(ForwardModel & model, const LoadParameterization & loads, const std::vector<std::int32_t> & dofs)
 {
-  AffineState s;
+  AffineState        s;
   const BoundaryLoad zero = loads.Apply(std::vector<double>(loads.GetNumberOfParameters(), 0.0));
   s.u0 = model.SolveState(zero.forces, zero.prescribed);
   s.rowOfDof.assign(s.u0.size(), -1);

@@ -295,8 +295,7 @@ WallLoads::WallLoads(const TetrahedralMesh &           mesh,
     }
   }
   d.basis.reset(new WallBasis(mesh.points, d.walls, d.controlNodes.size(), 0.0));
-  d.normals =
-    SmoothedUnitNormals(mesh, d.walls, FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size()));
+  d.normals = SmoothedUnitNormals(mesh, d.walls, FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size()));
   d.constrained = heldNodes;
   d.constrained.insert(d.constrained.end(), d.controlNodes.begin(), d.controlNodes.end());
   std::sort(d.constrained.begin(), d.constrained.end());

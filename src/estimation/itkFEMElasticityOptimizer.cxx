@@ -138,7 +138,7 @@ FEMElasticityOptimizer::Settings() const
 
 std::unique_ptr<bmr::SurfaceMatchingObjective>
 FEMElasticityOptimizer::MakeObjective(
-  const bmr::TetrahedralMesh &                                                                 mesh,
+  const bmr::TetrahedralMesh &                                                      mesh,
   const std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> & samplers) const
 {
   std::unique_ptr<bmr::SurfaceMatchingObjective> objective(

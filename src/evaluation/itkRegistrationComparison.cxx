@@ -84,12 +84,12 @@ ReadImagePairList(const std::string & path)
   {
     bmr::Fail("ReadImagePairList", "cannot open the pair list \"" + path + "\"");
   }
-  const std::size_t        slash = path.find_last_of('/');
-  const std::string        base = slash == std::string::npos ? "." : path.substr(0, slash);
-  std::vector<std::string> header;
-  std::vector<ImagePairEntry>  pairs;
-  std::string              line;
-  std::size_t              number = 0;
+  const std::size_t           slash = path.find_last_of('/');
+  const std::string           base = slash == std::string::npos ? "." : path.substr(0, slash);
+  std::vector<std::string>    header;
+  std::vector<ImagePairEntry> pairs;
+  std::string                 line;
+  std::size_t                 number = 0;
   while (std::getline(in, line))
   {
     ++number;
@@ -134,9 +134,9 @@ ReadImagePairList(const std::string & path)
     }
     if (fields.size() != header.size())
     {
-      bmr::Fail("ReadImagePairList", "pair list \"" + path + "\" line " + std::to_string(number) + ": " +
-                               std::to_string(fields.size()) + " fields, the header has " +
-                               std::to_string(header.size()));
+      bmr::Fail("ReadImagePairList",
+                "pair list \"" + path + "\" line " + std::to_string(number) + ": " + std::to_string(fields.size()) +
+                  " fields, the header has " + std::to_string(header.size()));
     }
     ImagePairEntry p;
     for (std::size_t i = 0; i < header.size(); ++i)
@@ -152,15 +152,17 @@ ReadImagePairList(const std::string & path)
     }
     if (p.name.empty() || p.name.find_first_of("/\\ ") != std::string::npos)
     {
-      bmr::Fail("ReadImagePairList", "pair list \"" + path + "\" line " + std::to_string(number) +
-                               ": the name must be non-empty, without spaces or slashes");
+      bmr::Fail("ReadImagePairList",
+                "pair list \"" + path + "\" line " + std::to_string(number) +
+                  ": the name must be non-empty, without spaces or slashes");
     }
     for (std::size_t c = 1; c < RequiredColumns.size(); ++c)
     {
       if (p.paths[RequiredColumns[c]].empty())
       {
-        bmr::Fail("ReadImagePairList", "pair list \"" + path + "\" line " + std::to_string(number) + ": the column \"" +
-                                 RequiredColumns[c] + "\" is empty");
+        bmr::Fail("ReadImagePairList",
+                  "pair list \"" + path + "\" line " + std::to_string(number) + ": the column \"" + RequiredColumns[c] +
+                    "\" is empty");
       }
     }
     for (const auto & other : pairs)
@@ -192,11 +194,11 @@ WriteCheckerboardPNG(const BiomechanicalCTImageType * fixed,
   Index<3> index;
   fixed->TransformPhysicalPointToIndex(centre, index);
   auto region = fixed->GetLargestPossibleRegion();
-  index[2] = std::max<IndexValueType>(region.GetIndex(2),
-                                           std::min<IndexValueType>(index[2], region.GetUpperIndex()[2]));
+  index[2] =
+    std::max<IndexValueType>(region.GetIndex(2), std::min<IndexValueType>(index[2], region.GetUpperIndex()[2]));
   region.SetIndex(2, index[2]);
   region.SetSize(2, 0);
-  SliceType::Pointer  slices[2];
+  SliceType::Pointer               slices[2];
   const BiomechanicalCTImageType * images[2] = { fixed, warped };
   for (int i = 0; i < 2; ++i)
   {

@@ -19,7 +19,7 @@
 
 namespace bmr {
 
-LinearForwardModel::LinearForwardModel(const TetrahedralMesh &                             mesh,
+LinearForwardModel::LinearForwardModel(const TetrahedralMesh &                            mesh,
                                        const std::map<std::int32_t, MaterialParameters> & materials)
   : m_Mesh(mesh)
   , m_Model(new LinearElasticModel(mesh, materials))

@@ -135,12 +135,12 @@ ObserveIterations(FEMElasticityOptimizer * optimizer, PipelineObserver * observe
 
 /** Runs FEMElasticityOptimizer on the fine mesh (and a coarse one for the sweep) and keeps its outputs. */
 void
-Estimate(RegistrationResult &                                  r,
-         const bmr::Scene &                                    scene,
+Estimate(RegistrationResult &                                    r,
+         const bmr::Scene &                                      scene,
          const std::map<std::string, Image<float, 3>::Pointer> & maps,
-         const BiomechanicalLabelImageType *                   movingLabels,
-         const RegistrationSettings &                          settings,
-         pipeline::StageClock &                                clock)
+         const BiomechanicalLabelImageType *                     movingLabels,
+         const RegistrationSettings &                            settings,
+         pipeline::StageClock &                                  clock)
 {
   auto optimizer = FEMElasticityOptimizer::New();
   auto fine = TetrahedralMeshObject::New();
@@ -198,9 +198,9 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene)
       materials[l.value].youngsModulus = it->second;
     }
   }
-  const bmr::TetrahedralMesh &    mesh = r.state.mesh;
-  const bmr::LinearElasticModel   model(mesh, materials);
-  bmr::ForwardSimulation &        s = r.state.simulation;
+  const bmr::TetrahedralMesh &  mesh = r.state.mesh;
+  const bmr::LinearElasticModel model(mesh, materials);
+  bmr::ForwardSimulation &      s = r.state.simulation;
   s.displacement = mesh.displacement;
   s.force = mesh.force;
   s.vonMises = model.ComputeVonMisesStress(mesh.displacement);
@@ -223,8 +223,7 @@ Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLa
     {
       continue;
     }
-    const LabelOverlap overlap =
-      ComputeLabelOverlap<BiomechanicalLabelImageType>(r.warpedLabels, fixedLabels, l.value);
+    const LabelOverlap overlap = ComputeLabelOverlap<BiomechanicalLabelImageType>(r.warpedLabels, fixedLabels, l.value);
     if (overlap.inA + overlap.inB > 0)
     {
       r.dice[l.name] = overlap.dice;

@@ -137,7 +137,7 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
                    PipelineObserver *                  observer,
                    bool                                pushField)
 {
-  SimulationResult   out;
+  SimulationResult     out;
   pipeline::StageClock clock(observer, out.stages);
   clock.Warn(out.warnings, scene.Warnings());
   out.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");

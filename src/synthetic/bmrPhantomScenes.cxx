@@ -60,7 +60,9 @@ SpherePhantomScene(double innerE, bool unknown)
     inner.lowerBound = 30.0;
     inner.upperBound = 300.0;
   }
-  s.labels = { { "outside", SphereOutside, R::Outside }, { "outer", SphereOuterShell, R::Material, 10.0, 0.35 }, inner };
+  s.labels = { { "outside", SphereOutside, R::Outside },
+               { "outer", SphereOuterShell, R::Material, 10.0, 0.35 },
+               inner };
   s.gauge = "outer";
   s.forceSurfaces = { "outside" };
   s.objective = { { "inner", 1.0 }, { "outer", 1.0 } };
