@@ -39,32 +39,22 @@ using namespace bmrcli;
 bmr::GridGeometry
 GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults)
 {
-  bmr::GridGeometry     g = defaults;
-  std::array<double, 3> size = args.Triple("--size", { { double(g.size[0]), double(g.size[1]), double(g.size[2]) } });
-  g.spacing = args.Triple("--spacing", g.spacing);
+  const std::array<double, 3> size =
+    args.Triple("--size", { { double(defaults.size[0]), double(defaults.size[1]), double(defaults.size[2]) } });
+  std::array<std::size_t, 3> voxels;
   for (int i = 0; i < 3; ++i)
   {
     if (!(size[i] >= 1.0 && size[i] <= 4096.0 && size[i] == std::floor(size[i])))
     {
       throw UsageError("--size must be three integers in [1, 4096]");
     }
-    g.size[i] = static_cast<std::size_t>(size[i]);
+    voxels[i] = static_cast<std::size_t>(size[i]);
   }
-  // Rotation of the grid about the superior (z) axis makes an oblique volume.
-  const double a = args.Number("--rotate-z-deg", 0.0) * 3.14159265358979323846 / 180.0;
-  g.direction = { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 };
-  // Centre the grid on the physical origin unless an origin is given.
-  std::array<double, 3> half;
-  for (int i = 0; i < 3; ++i)
-  {
-    half[i] = 0.5 * (static_cast<double>(g.size[i]) - 1.0) * g.spacing[i];
-  }
-  std::array<double, 3> centred;
-  for (int r = 0; r < 3; ++r)
-  {
-    centred[r] = -(g.direction[3 * r] * half[0] + g.direction[3 * r + 1] * half[1] + g.direction[3 * r + 2] * half[2]);
-  }
-  g.origin = args.Triple("--origin", centred);
+  // Centred on the physical origin unless an origin is given; a rotation about z makes an oblique volume.
+  bmr::GridGeometry g = bmr::CenteredGrid(voxels,
+                                          args.Triple("--spacing", defaults.spacing),
+                                          args.Number("--rotate-z-deg", 0.0) * 3.14159265358979323846 / 180.0);
+  g.origin = args.Triple("--origin", g.origin);
   g.Validate("phantom grid (--size/--spacing/--origin)");
   return g;
 }
@@ -157,9 +147,8 @@ SimulateCommand(const Arguments & args)
   const auto warpedLabels = itk::WarpImage(labels.GetPointer(), sim.pullBack.GetPointer(), true, 0);
   const auto warpedCT = ct ? itk::WarpImage(ct.GetPointer(), sim.pullBack.GetPointer(), false, -1000.0f) : nullptr;
   timer.End();
-  MakeDirectory(out);
   timer.Begin("write outputs");
-  WriteSimulationOutputs(out, sim, warpedLabels, warpedCT);
+  itk::WriteSimulationOutputs(out, sim, warpedLabels, warpedCT);
   timer.End();
   PrintTimings(timer.stages);
   return EXIT_SUCCESS;
@@ -202,7 +191,7 @@ DemoCommand()
   const double recovered = result.youngsModulus.at("prostate");
   std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
             << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
-            << std::noshowpos << " %)" << UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
+            << std::noshowpos << " %)" << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
             << "\n  (the error over 50-350 kPa on this phantom: docs/benchmarks.md, estimation benchmark)"
             << (result.estimation.identifiable ? "" : "\n  warning: ")
             << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
@@ -259,21 +248,8 @@ WritePhantom(const std::string &          out,
              const itk::PhantomSettings & settings,
              StageTimer &                 timer)
 {
-  MakeDirectory(out);
   timer.Begin("write outputs");
-  WriteImage<CTImageType>(pair.movingCT, out + "/moving_ct.nrrd");
-  WriteImage<LabelImageType>(pair.movingLabels, out + "/moving_labels.nrrd");
-  WriteImage<CTImageType>(pair.fixedCT, out + "/fixed_ct.nrrd");
-  WriteImage<LabelImageType>(pair.fixedLabels, out + "/fixed_labels.nrrd");
-  WriteImage<FieldType>(pair.truthField, out + "/truth_field.nrrd");
-  bmr::WriteTextFileAtomically(out + "/scene.json", bmr::SceneToJson(pair.scene));
-  bmr::WriteTextFileAtomically(out + "/truth_scene.json", bmr::SceneToJson(pair.truthScene));
-  if (!pair.movingLandmarks.empty())
-  {
-    bmr::WriteLandmarks(out + "/" + pair.scene.movingLandmarks, pair.movingLandmarks);
-    bmr::WriteLandmarks(out + "/" + pair.scene.fixedLandmarks, pair.fixedLandmarks);
-  }
-  bmr::WriteTextFileAtomically(out + "/truth.json", itk::PhantomTruthJson(pair, settings));
+  itk::WritePhantomPair(out, pair, settings);
   timer.End();
 }
 } // namespace bmrcli

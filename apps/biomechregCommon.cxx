@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "biomechregCommon.h"
+#include "itkBiomechanicalReports.h"
 
 #include <cmath>
 
@@ -51,18 +52,7 @@ StageTimer::Iteration(const bmr::IterationRecord & r)
   {
     std::cout << "\n  estimation (sweep of E on the coarse mesh, then L-BFGS-B over log E on the fine mesh):\n";
   }
-  std::cout << "    " << std::left << std::setw(6) << r.stage << std::right << std::setw(3) << r.iteration;
-  for (double E : r.youngsModuli)
-  {
-    std::cout << "  E " << std::fixed << std::setprecision(2) << std::setw(8) << E << " kPa";
-  }
-  std::cout << "  Phi* " << std::scientific << std::setprecision(5) << r.value << " mm^2";
-  for (double g : r.logModulusGradient)
-  {
-    std::cout << "  dPhi/dlogE " << std::setprecision(2) << std::setw(9) << g;
-  }
-  std::cout << "  |dPhi/dd| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4)
-            << r.innerIterations << "  " << std::fixed << std::setprecision(2) << r.seconds << " s" << std::endl;
+  std::cout << itk::FormatIterationRecord(r) << std::endl;
 }
 
 void
@@ -84,49 +74,7 @@ StageTimer::End(const std::string & detail)
 void
 PrintTimings(const Stages & stages)
 {
-  std::cout << "\n  stage                               wall [s]\n";
-  double total = 0.0;
-  for (const auto & s : stages)
-  {
-    std::cout << "  " << std::left << std::setw(36) << s.name << std::right << std::fixed << std::setprecision(3)
-              << std::setw(8) << s.seconds << "\n";
-    total += s.seconds;
-  }
-  std::cout << "  " << std::left << std::setw(36) << "total" << std::right << std::setw(8) << total << std::endl;
-}
-
-void
-WriteMesh(const std::string & path, const itk::SimulationResult & s)
-{
-  std::vector<double> dirichlet(s.simulation.dirichlet.begin(), s.simulation.dirichlet.end());
-  std::vector<double> labels(s.mesh.labels.begin(), s.mesh.labels.end());
-  bmr::WriteVtu(
-    path,
-    s.mesh,
-    { { "displacement", 3, s.mesh.displacement }, { "force", 3, s.mesh.force }, { "dirichlet", 1, dirichlet } },
-    { { "label", 1, labels },
-      { "youngs_modulus", 1, s.simulation.youngsModulus },
-      { "poisson_ratio", 1, s.simulation.poissonRatio },
-      { "von_mises", 1, s.simulation.vonMises } });
-}
-
-void
-WriteSimulationOutputs(const std::string &           out,
-                       const itk::SimulationResult & s,
-                       const LabelImageType *        warpedLabels,
-                       const CTImageType *           warpedCT)
-{
-  WriteMesh(out + "/mesh.vtu", s);
-  WriteImage<FieldType>(s.pullBack, out + "/field.nrrd");
-  if (s.push)
-  {
-    WriteImage<FieldType>(s.push, out + "/forward_field.nrrd");
-  }
-  WriteImage<LabelImageType>(warpedLabels, out + "/warped_labels.nrrd");
-  if (warpedCT)
-  {
-    WriteImage<CTImageType>(warpedCT, out + "/warped_ct.nrrd");
-  }
+  std::cout << "\n" << itk::StageTable(stages) << std::flush;
 }
 
 Arguments::Arguments(int argc, char * argv[], int first)

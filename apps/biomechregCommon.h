@@ -21,13 +21,12 @@
 #define biomechregCommon_h
 
 #include "bmrAtomicFile.h"
-#include "bmrVtuWriter.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkBiomechanicalPipelines.h"
+#include "itkBiomechanicalWriters.h"
 #include "itkImageWarper.h"
 
 #include <chrono>
-#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -80,17 +79,7 @@ private:
 void
 PrintTimings(const Stages & stages);
 
-/** Like mkdir -p. */
-inline void
-MakeDirectory(const std::string & path)
-{
-  std::error_code error;
-  std::filesystem::create_directories(path, error);
-  if (error || !std::filesystem::is_directory(path))
-  {
-    throw std::runtime_error("cannot create output directory \"" + path + "\"");
-  }
-}
+using itk::MakeOutputDirectory;
 
 template<typename TImage>
 typename TImage::Pointer
@@ -98,24 +87,6 @@ ReadImage(const std::string & path, const std::string & what)
 {
   return itk::ReadBiomechanicalImage<TImage>(path, what);
 }
-
-template<typename TImage>
-void
-WriteImage(const TImage * image, const std::string & path)
-{
-  itk::WriteImageAtomically(image, path);
-}
-
-/** mesh.vtu: displacement [mm], force [mN], Dirichlet flags; label, E [kPa], nu, von Mises [kPa]. */
-void
-WriteMesh(const std::string & path, const itk::SimulationResult & s);
-
-/** Writes mesh.vtu, field.nrrd, forward_field.nrrd (when computed) and the warped images into \a out. */
-void
-WriteSimulationOutputs(const std::string &           out,
-                       const itk::SimulationResult & s,
-                       const LabelImageType *        warpedLabels,
-                       const CTImageType *           warpedCT);
 
 // ------------------------------------------------------------ argument parsing
 
@@ -152,10 +123,6 @@ private:
 
 // ---------------------------------------------------------------- register
 
-/** The modulus with " (uncertainty x/ exp(s), i.e. +-N %, one standard deviation)" when computed. */
-std::string
-UncertaintyText(const itk::RegistrationResult & result, const std::string & label);
-
 /** Reads register's settings (--sweep-samples, --coarse-factor, --mesh-scale, --wall-*, --max-outer-iterations,
  * --outer-tolerance, --element-inversion; register, compare); defaults from itk::RegistrationSettings. */
 itk::RegistrationSettings
@@ -188,33 +155,9 @@ WritePhantom(const std::string &          out,
 
 // ---------------------------------------------------------------- Demons and compare
 
-/** Settings of the Demons baseline (itk::DemonsBaselineRegistrationFilter; defaults as documented there). */
-struct DemonsSettings
-{
-  std::string  variant{ "diffeomorphic" }; ///< or "symmetric" (fast symmetric forces)
-  unsigned int levels{ 3 };
-  unsigned int iterations{ 50 }; ///< per level
-  double       sigma{ 1.5 };     ///< field smoothing [voxels]
-  bool         histogramMatching{ true };
-};
-
 /** Reads --demons-variant, --demons-levels, --demons-iterations, --demons-sigma, --histogram-matching. */
-DemonsSettings
+itk::DemonsSettings
 ParseDemonsSettings(const Arguments & args);
-
-/** Demons of the moving CT onto the fixed CT; returns the fixed -> moving field [mm]. The labels are
- * used only when \a flatten names organs to flatten. */
-FieldType::Pointer
-RunDemons(const CTImageType *               fixedCT,
-          const CTImageType *               movingCT,
-          const LabelImageType *            fixedLabels,
-          const LabelImageType *            movingLabels,
-          const std::vector<std::int32_t> & flatten,
-          const DemonsSettings &            settings);
-
-/** Comma-separated labels, by value or (with a scene) by name; "none" gives an empty list. */
-std::vector<std::int32_t>
-ParseLabelList(const std::string & text, const bmr::Scene * scene);
 
 int
 DemonsCommand(const Arguments & args);

@@ -22,7 +22,6 @@
 #include "itkRegistrationComparison.h"
 
 #include <cmath>
-#include <random>
 
 namespace bmrcli {
 namespace {
@@ -33,7 +32,7 @@ struct CompareOptions
   std::string               tag{ "default" };
   std::string               seedOrgan; ///< "" : the scene's first unknown material
   std::string               flatten;   ///< "" : the seed organ
-  DemonsSettings            demons;
+  itk::DemonsSettings       demons;
   itk::RegistrationSettings fem;
 };
 
@@ -153,12 +152,12 @@ MethodField(const std::string &         method,
   std::cout << "  Demons (" << o.demons.variant << ", " << o.demons.levels << " levels x " << o.demons.iterations
             << " iterations, flattened labels: " << flatten << ") ..." << std::flush;
   const auto start = Clock::now();
-  auto       field =
-    RunDemons(d.fixedCT, d.movingCT, d.fixedLabels, d.movingLabels, ParseLabelList(flatten, &d.scene), o.demons);
+  auto       field = itk::RunDemonsBaseline(
+    d.fixedCT, d.movingCT, d.fixedLabels, d.movingLabels, bmr::ParseLabelList(flatten, &d.scene), o.demons);
   seconds = std::chrono::duration<double>(Clock::now() - start).count();
   std::cout << " " << std::fixed << std::setprecision(1) << seconds << " s" << std::endl;
-  MakeDirectory(dir + "/demons");
-  WriteImage<FieldType>(field, dir + "/demons/field.nrrd");
+  MakeOutputDirectory(dir + "/demons");
+  itk::WriteImageAtomically(field.GetPointer(), dir + "/demons/field.nrrd");
   return field;
 }
 
@@ -171,17 +170,17 @@ ComparePair(const itk::ImagePairEntry & pair,
 {
   std::cout << "\n=== pair " << pair.name << " ===" << std::endl;
   const std::string dir = out + "/" + pair.name;
-  MakeDirectory(dir);
+  MakeOutputDirectory(dir);
   StageTimer     timer;
   const PairData d = ReadPair(pair, o, dir, timer);
-  // Centre of the checkerboard slice: the seeds' centroid in the fixed image.
-  itk::Point<double, 3> centre;
-  centre.Fill(0.0);
+  // Center of the checkerboard slice: the seeds' centroid in the fixed image.
+  itk::Point<double, 3> center;
+  center.Fill(0.0);
   for (const auto & l : d.fixedLandmarks)
   {
     for (int a = 0; a < 3; ++a)
     {
-      centre[a] += l.point[a] / double(d.fixedLandmarks.size());
+      center[a] += l.point[a] / double(d.fixedLandmarks.size());
     }
   }
   for (const std::string & method : o.methods)
@@ -191,7 +190,7 @@ ComparePair(const itk::ImagePairEntry & pair,
     const auto evaluation =
       itk::EvaluateField(field, d.movingLabels, d.fixedLabels, d.scene, d.movingLandmarks, d.fixedLandmarks);
     const auto warpedCT = itk::WarpImage(d.movingCT.GetPointer(), field.GetPointer(), false, -1000.0f);
-    itk::WriteCheckerboardPNG(d.fixedCT, warpedCT, centre, dir + "/checkerboard_" + method + ".png");
+    itk::WriteCheckerboardPNG(d.fixedCT, warpedCT, center, dir + "/checkerboard_" + method + ".png");
     tables.Add(pair.name, method, seconds, d.fixedLandmarks, evaluation);
     std::cout << "  " << std::left << std::setw(9) << method << std::right << " "
               << itk::ComparisonTables::Summary(evaluation, seconds) << std::endl;
@@ -219,7 +218,7 @@ CompareCommand(const Arguments & args)
     }
     bmr::ReadScene(pair.paths.at("scene"));
   }
-  MakeDirectory(out);
+  MakeOutputDirectory(out);
   itk::ComparisonTables tables(o.tag);
   for (const auto & pair : pairs)
   {
@@ -248,28 +247,19 @@ PhantomSetCommand(const Arguments & args)
     throw UsageError("--count must be an integer in [1, 100] and --seed a non-negative integer");
   }
   args.CheckAllUsed();
-  MakeDirectory(out);
-  // Reproducible draws: std::mt19937_64's sequence is fixed by the standard (its distributions are not,
-  // so the uniform numbers are made from the raw integers).
-  std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
-  const auto      uniform = [&rng](double lo, double hi) {
-    return lo + (hi - lo) * (double(rng() >> 11) / double(std::uint64_t(1) << 53));
-  };
+  MakeOutputDirectory(out);
   std::ostringstream list, parameters;
   list << "# pelvis phantom pairs with ground-truth seed landmarks (biomechreg phantom-set)\n"
        << "name,moving_ct,moving_labels,fixed_ct,fixed_labels,scene,moving_landmarks,fixed_landmarks\n";
   parameters << "name,true_E_kPa,bladder_mm,rectum_mm,seed\n";
-  for (unsigned int k = 0; k < static_cast<unsigned int>(count); ++k)
+  const auto set = itk::DrawPhantomSet(static_cast<unsigned int>(count), static_cast<std::uint64_t>(seed));
+  for (std::size_t k = 0; k < set.size(); ++k)
   {
-    itk::PhantomSettings o;
-    const std::string    name = "pair" + std::to_string(k + 1);
-    o.prostateE = std::round(std::exp(uniform(std::log(50.0), std::log(300.0))));
-    o.bladderMM = std::round(100.0 * uniform(3.0, 8.0)) / 100.0;
-    o.rectumMM = std::round(100.0 * uniform(2.0, 5.0)) / 100.0;
-    o.seed = static_cast<std::uint64_t>(seed) * 1000 + k + 1;
+    const itk::PhantomSettings & o = set[k];
+    const std::string            name = "pair" + std::to_string(k + 1);
     std::cout << "\n"
-              << name << ": prostate " << o.prostateE << " kPa, bladder +" << o.bladderMM << " mm, rectum +"
-              << o.rectumMM << " mm, seed " << o.seed << std::endl;
+              << std::defaultfloat << name << ": prostate " << o.prostateE << " kPa, bladder +" << o.bladderMM
+              << " mm, rectum +" << o.rectumMM << " mm, seed " << o.seed << std::endl;
     StageTimer timer;
     WritePhantom(out + "/" + name, itk::MakePhantomPair(o, &timer), o, timer);
     list << name << "," << name << "/moving_ct.nrrd," << name << "/moving_labels.nrrd," << name << "/fixed_ct.nrrd,"

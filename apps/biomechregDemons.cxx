@@ -18,14 +18,13 @@
 // biomechreg demons: the intensity-based baseline (itk::DemonsBaselineRegistrationFilter) from the command line,
 // and the settings parser shared with biomechreg compare.
 #include "biomechregCommon.h"
-#include "itkDemonsBaselineRegistrationFilter.h"
 
 namespace bmrcli {
 
-DemonsSettings
+itk::DemonsSettings
 ParseDemonsSettings(const Arguments & args)
 {
-  DemonsSettings s;
+  itk::DemonsSettings s;
   s.variant = args.Get("--demons-variant", s.variant);
   if (s.variant != "diffeomorphic" && s.variant != "symmetric")
   {
@@ -54,67 +53,6 @@ ParseDemonsSettings(const Arguments & args)
   return s;
 }
 
-FieldType::Pointer
-RunDemons(const CTImageType *               fixedCT,
-          const CTImageType *               movingCT,
-          const LabelImageType *            fixedLabels,
-          const LabelImageType *            movingLabels,
-          const std::vector<std::int32_t> & flatten,
-          const DemonsSettings &            settings)
-{
-  using FilterType = itk::DemonsBaselineRegistrationFilter<CTImageType, FieldType, LabelImageType>;
-  auto demons = FilterType::New();
-  demons->SetFixedImage(fixedCT);
-  demons->SetMovingImage(movingCT);
-  demons->SetVariant(settings.variant == "symmetric" ? FilterType::VariantEnum::FastSymmetricForces
-                                                     : FilterType::VariantEnum::Diffeomorphic);
-  demons->SetNumberOfLevels(settings.levels);
-  demons->SetNumberOfIterations(std::vector<unsigned int>(settings.levels, settings.iterations));
-  demons->SetStandardDeviation(settings.sigma);
-  demons->SetHistogramMatching(settings.histogramMatching);
-  if (!flatten.empty())
-  {
-    demons->SetFixedLabelImage(fixedLabels);
-    demons->SetMovingLabelImage(movingLabels);
-    demons->SetFlattenLabels(flatten);
-  }
-  demons->Update();
-  return demons->GetOutput();
-}
-
-std::vector<std::int32_t>
-ParseLabelList(const std::string & text, const bmr::Scene * scene)
-{
-  std::vector<std::int32_t> labels;
-  if (text == "none")
-  {
-    return labels;
-  }
-  std::istringstream in(text);
-  std::string        item;
-  while (std::getline(in, item, ','))
-  {
-    if (item.empty())
-    {
-      continue;
-    }
-    const bmr::SceneLabel * named = scene ? scene->FindLabel(item) : nullptr;
-    if (named)
-    {
-      labels.push_back(named->value);
-      continue;
-    }
-    char *     end = nullptr;
-    const long v = std::strtol(item.c_str(), &end, 10);
-    if (end == item.c_str() || *end != '\0')
-    {
-      throw UsageError("label \"" + item + "\" is neither an integer nor a label of the scene");
-    }
-    labels.push_back(static_cast<std::int32_t>(v));
-  }
-  return labels;
-}
-
 int
 DemonsCommand(const Arguments & args)
 {
@@ -123,7 +61,7 @@ DemonsCommand(const Arguments & args)
   const std::string out = args.Require("--out");
   const std::string movingLabelsPath = args.Get("--moving-labels");
   const std::string fixedLabelsPath = args.Get("--fixed-labels");
-  const auto        flatten = ParseLabelList(args.Get("--flatten"), nullptr);
+  const auto        flatten = bmr::ParseLabelList(args.Get("--flatten"), nullptr);
   const auto        settings = ParseDemonsSettings(args);
   args.CheckAllUsed();
   if (!flatten.empty() && (movingLabelsPath.empty() || fixedLabelsPath.empty()))
@@ -143,18 +81,18 @@ DemonsCommand(const Arguments & args)
     fixedLabels = ReadImage<LabelImageType>(fixedLabelsPath, "fixed label image");
   }
   timer.End();
-  MakeDirectory(out);
+  MakeOutputDirectory(out);
   std::ostringstream detail;
   detail << settings.variant << ", " << settings.levels << " levels x " << settings.iterations << " iterations";
   timer.Begin("Demons");
-  const auto field = RunDemons(fixedCT, movingCT, fixedLabels, movingLabels, flatten, settings);
+  const auto field = itk::RunDemonsBaseline(fixedCT, movingCT, fixedLabels, movingLabels, flatten, settings);
   timer.End(detail.str());
   timer.Begin("warp CT (linear)");
   auto warped = itk::WarpImage(movingCT.GetPointer(), field.GetPointer(), false, -1000.0f);
   timer.End();
   timer.Begin("write outputs");
-  WriteImage<FieldType>(field, out + "/field.nrrd");
-  WriteImage<CTImageType>(warped, out + "/warped_ct.nrrd");
+  itk::WriteImageAtomically(field.GetPointer(), out + "/field.nrrd");
+  itk::WriteImageAtomically(warped.GetPointer(), out + "/warped_ct.nrrd");
   timer.End();
   PrintTimings(timer.stages);
   return EXIT_SUCCESS;

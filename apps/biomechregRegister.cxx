@@ -24,24 +24,6 @@
 
 namespace bmrcli {
 
-std::string
-UncertaintyText(const itk::RegistrationResult & result, const std::string & label)
-{
-  const auto it = result.modulusUncertainty.find(label);
-  if (it == result.modulusUncertainty.end())
-  {
-    return std::string();
-  }
-  if (!std::isfinite(it->second))
-  {
-    return " (uncertainty: not determined, Phi* has no positive curvature there)";
-  }
-  std::ostringstream os;
-  os << " (uncertainty x/ exp(" << std::setprecision(3) << it->second << "), i.e. +-" << std::setprecision(2)
-     << 100.0 * it->second << " %, one standard deviation)";
-  return os.str();
-}
-
 itk::RegistrationSettings
 ParseRegistrationSettings(const Arguments & args)
 {
@@ -91,24 +73,9 @@ WriteRegistration(const std::string &               out,
                   const itk::RegistrationSettings & settings,
                   StageTimer &                      timer)
 {
-  MakeDirectory(out);
-  timer.Begin("write outputs");
-  WriteSimulationOutputs(out, result.state, result.warpedLabels, result.warpedCT);
-  std::vector<std::string> unknownNames;
-  for (const auto & u : result.unknowns)
-  {
-    unknownNames.push_back(u.name);
-  }
-  // Every fine-mesh inner solve (stages "fine" and "curvature"), then the accepted outer iterates ("outer").
-  auto history = result.estimation.history;
-  history.insert(history.end(), result.estimation.outerIterations.begin(), result.estimation.outerIterations.end());
-  bmr::WriteTextFileAtomically(out + "/history.csv", itk::IterationHistoryCsv(history, unknownNames));
-  if (!result.estimation.sweep.empty())
-  {
-    bmr::WriteTextFileAtomically(out + "/sweep.csv", itk::IterationHistoryCsv(result.estimation.sweep, unknownNames));
-  }
-  timer.End();
-  bmr::WriteTextFileAtomically(out + "/report.json", itk::RegistrationReportJson(result, settings, timer.stages));
+  timer.StageBegin("write outputs");
+  timer.stages.push_back(itk::WriteRegistrationOutputs(out, result, settings, timer.stages));
+  timer.StageEnd("write outputs", timer.stages.back().seconds, "");
 }
 
 void
@@ -160,7 +127,7 @@ RegisterCommand(const Arguments & args)
   for (const auto & kv : result.youngsModulus)
   {
     std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa"
-              << UncertaintyText(result, kv.first);
+              << itk::UncertaintyText(result, kv.first);
   }
   if (!result.estimation.identifiable)
   {

@@ -196,10 +196,10 @@ fig, ax = plt.subplots(1, 2, figsize=(14, 4.5))
 labels = [f'{r["group"][:14]} h{r["cell_size_mm"]} r{float(r["E_ratio"]):g} nu{r["nu"]}'
           f'{" NAP" if r["formulation"] != "standard" else ""}' for r in sphere]
 errs = [100 * float(r["radial_error"]) for r in sphere]
-# Colour by verdict: what the tool said about the case, not only how far off it was.
-colours = {"ok": "tab:blue", "warned": "tab:orange", "refused": "tab:gray", "inaccurate": "tab:red",
+# Color by verdict: what the tool said about the case, not only how far off it was.
+colors = {"ok": "tab:blue", "warned": "tab:orange", "refused": "tab:gray", "inaccurate": "tab:red",
            "FAILED": "black"}
-ax[0].bar(range(len(errs)), errs, color=[colours.get(r["verdict"], "black") for r in sphere])
+ax[0].bar(range(len(errs)), errs, color=[colors.get(r["verdict"], "black") for r in sphere])
 ax[0].axhline(2.0, color="k", linestyle="--", linewidth=0.8)
 ax[0].set_yscale("log")
 ax[0].set_xticks(range(len(errs)))
@@ -208,10 +208,10 @@ ax[0].set_ylabel("radial error vs closed form [%]")
 ax[0].set_title("two-layer sphere (NAP: nodal-averaged pressure)")
 est = [r for r in rows if r["error"]]
 ax[1].bar(range(len(est)), [abs(float(r["error"].split()[0])) for r in est],
-          color=[colours.get(r["verdict"], "black") for r in est])
+          color=[colors.get(r["verdict"], "black") for r in est])
 ax[1].axhline(10.0, color="k", linestyle="--", linewidth=0.8)
 ax[1].set_yscale("log")
-ax[1].legend(handles=[matplotlib.patches.Patch(color=c, label=v) for v, c in colours.items()], fontsize=7)
+ax[1].legend(handles=[matplotlib.patches.Patch(color=c, label=v) for v, c in colors.items()], fontsize=7)
 ax[1].set_xticks(range(len(est)))
 ax[1].set_xticklabels([f'{r["case"][12:]}\n{r["detail"]}' for r in est], rotation=90, fontsize=6)
 ax[1].set_ylabel("|recovered E - true E| / true E [%]")

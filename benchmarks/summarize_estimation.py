@@ -1,4 +1,4 @@
-"""Summarises benchmarks/results/estimation_runs.csv: medians per configuration (estimation.csv),
+"""Summarizes benchmarks/results/estimation_runs.csv: medians per configuration (estimation.csv),
 a plot (estimation.png: recovered vs true E; relative error against run time over mesh sizes)
 and markdown tables on stdout."""
 import csv

@@ -37,8 +37,8 @@ header = f"{'stage':36s}" + "".join(f"{meta[h][0]:>12d}" for h in sizes)
 print(header + "   <- tetrahedra")
 for s in stages:
     print(f"{s:36s}" + "".join(f"{statistics.median(times[(h, s)]):12.3f}" for h in sizes))
-core = ["mesh (CGAL Mesh_3)", "assemble", "factorise", "solve"]
-print(f"{'mesh+assemble+factorise+solve':36s}" + "".join(
+core = ["mesh (CGAL Mesh_3)", "assemble", "factorize", "solve"]
+print(f"{'mesh+assemble+factorize+solve':36s}" + "".join(
     f"{sum(statistics.median(times[(h, s)]) for s in core if (h, s) in times):12.3f}" for h in sizes))
 print(f"{'peak RSS [MB]':36s}" + "".join(f"{meta[h][2]:12.0f}" for h in sizes))
 fig, ax = plt.subplots(figsize=(8, 5))

@@ -88,7 +88,7 @@ struct BiomechanicalRegistration_EXPORT ObjectiveSurface
  *     \partial\Phi_d/\partial u_l = w_s\, \phi_s \nabla\phi_s, \f]
  * with residuals \f$ r = \sqrt{w_s}\,\phi_s \f$ (\f$\phi\nabla\phi\f$ is the dissertation's vector
  * distance). MatchDisplacement() is the surface matching of dissertation 5.3.1.1: every node is pulled
- * along \f$-\phi\nabla\phi\f$ while springs to its neighbours on the same surface keep the displacement
+ * along \f$-\phi\nabla\phi\f$ while springs to its neighbors on the same surface keep the displacement
  * smooth, \f$ v \leftarrow v - \alpha \phi\nabla\phi + \beta(\bar v_{nb} - v) \f$, alpha = 0.5,
  * beta = 0.25, for SetMatchingIterations() steps (default 200).
  * \ingroup BiomechanicalRegistrationEstimation

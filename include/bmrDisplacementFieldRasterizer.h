@@ -39,7 +39,7 @@ enum class FieldKind
 
 /** \brief Evaluates the FE displacement on the voxels of a grid covered by the mesh.
  *
- * Each element's bounding box is scanned and every voxel centre inside the
+ * Each element's bounding box is scanned and every voxel center inside the
  * element (barycentric coordinates >= -1e-10) gets the barycentric
  * interpolation. A voxel on a shared face belongs to the element of lowest
  * index, so a region gives the same values whatever the split of the grid into
@@ -91,7 +91,7 @@ private:
  *
  * Solves Laplace's equation (anisotropic 7-point stencil, physical spacing) on a
  * grid coarsened by \a coarsening, with the covered voxels' mean as Dirichlet
- * value at each coarse node whose neighbourhood touches the mesh and 0 on the
+ * value at each coarse node whose neighborhood touches the mesh and 0 on the
  * border of the grid, then interpolates the coarse solution trilinearly into
  * every uncovered fine voxel. Hollow organs (lumens) thus get the harmonic
  * interpolation of their wall motion, bone interiors (enclosed by u = 0) get

@@ -90,7 +90,7 @@ struct BiomechanicalRegistration_EXPORT EstimationResult
 };
 
 /** \brief Joint estimation of the loads and the unknown moduli over any EstimationObjective
- * (dissertation chapter 3): sweep, outer bounded optimisation, uncertainty, identifiability.
+ * (dissertation chapter 3): sweep, outer bounded optimization, uncertainty, identifiability.
  *
  * - inner: \f$\Phi^*(E) = \min_p \Phi(E, p)\f$ by L-BFGS (itk::LBFGS2Optimizerv4, More-Thuente line
  *   search) with the adjoint gradient, or Levenberg-Marquardt (EstimationObjective::SolveLoadsGaussNewton)

@@ -46,7 +46,7 @@ public:
 
   virtual const TetrahedralMesh &
   GetMesh() const = 0;
-  /** The nodes whose displacement is prescribed in every SolveState(); changing them refactorises. */
+  /** The nodes whose displacement is prescribed in every SolveState(); changing them refactorizes. */
   virtual void
   SetConstrainedNodes(const std::vector<std::int32_t> & nodes) = 0;
   /** Modulus [kPa] of every element of \a label. */
@@ -80,7 +80,7 @@ public:
 
 /** \brief The linear-elastic forward model: P1 tetrahedra, standard or nodal-averaged pressure per
  * material (bmr::LinearElasticModel), \f$ f_{int} = K(E) u = \sum_m E_m \hat K_m u \f$, so
- * \f$K_T = K\f$ and \f$\partial f_{int}/\partial E_m = \hat K_m u\f$. One sparse Cholesky factorisation
+ * \f$K_T = K\f$ and \f$\partial f_{int}/\partial E_m = \hat K_m u\f$. One sparse Cholesky factorization
  * per value of the moduli serves every state and adjoint solve.
  * \ingroup BiomechanicalRegistrationFEM
  */

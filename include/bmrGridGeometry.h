@@ -28,7 +28,7 @@ namespace bmr {
 /** \brief Geometry of a 3-D image grid, as ITK defines it.
  *
  * x = origin + D diag(spacing) i, where i is the (continuous) index, D the
- * direction cosine matrix (row-major), all in LPS millimetres. Buffers on the
+ * direction cosine matrix (row-major), all in LPS millimeters. Buffers on the
  * grid are stored with index 0 fastest: offset = i0 + size0 (i1 + size1 i2).
  * \ingroup BiomechanicalRegistration
  */
@@ -58,6 +58,11 @@ struct BiomechanicalRegistration_EXPORT GridGeometry
   void
   Validate(const char * what) const;
 };
+
+/** A grid of \a size voxels of \a spacing [mm], rotated by \a rotationZ [rad] about the superior (z) axis,
+ * whose centre is the physical origin. */
+BiomechanicalRegistration_EXPORT GridGeometry
+CenteredGrid(const std::array<std::size_t, 3> & size, const std::array<double, 3> & spacing, double rotationZ = 0.0);
 
 } // namespace bmr
 

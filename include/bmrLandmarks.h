@@ -55,7 +55,7 @@ WriteLandmarks(const std::string & path, const std::vector<Landmark> & landmarks
 
 /** Pairs two landmark sets of the same objects seen in two scans (e.g. implanted seeds detected in the
  * moving and in the fixed CT). Returns, for every landmark of \a a, the index of its partner in \a b:
- * the assignment that minimises the sum of squared distances after the translation between the two
+ * the assignment that minimizes the sum of squared distances after the translation between the two
  * centroids is removed (organ motion between scans is mostly a translation). Exhaustive for up to 8
  * landmarks, greedy nearest pairs beyond. Throws when the two sets differ in size or are empty. */
 BiomechanicalRegistration_EXPORT std::vector<std::size_t>

@@ -20,26 +20,37 @@
 
 #include "bmrTetrahedralMesh.h"
 
+#include <iosfwd>
 #include <map>
 #include <memory>
 
 namespace bmr {
 
-/** Isotropic linear-elastic material: Young's modulus E [kPa] and Poisson's ratio nu. */
+/** The element formulation of a material (LinearElasticModel). */
+enum class ElementFormulationEnum : std::uint8_t
+{
+  /** Plain P1 tetrahedra: volumetric locking as nu -> 0.5. */
+  Standard,
+  /** Nodal-averaged pressure (Bonet & Burton 1998): locking-free to nu = 0.499. */
+  NodalAveragedPressure
+};
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, ElementFormulationEnum value);
+
+/** Isotropic linear-elastic material: Young's modulus E [kPa], Poisson's ratio nu and the element formulation. */
 struct BiomechanicalRegistration_EXPORT MaterialParameters
 {
-  double youngsModulus{ 10.0 };
-  double poissonRatio{ 0.35 };
-  /** Nodal-averaged pressure (locking-free) formulation for this material; see LinearElasticModel. */
-  bool averagedPressure{ false };
+  double                 youngsModulus{ 10.0 };
+  double                 poissonRatio{ 0.35 };
+  ElementFormulationEnum formulation{ ElementFormulationEnum::Standard };
 };
 
 /** Wall times [s] of the stages of the last Factorize()/Solve(). */
 struct BiomechanicalRegistration_EXPORT SolverTimings
 {
   double assemble{ 0.0 };
-  double analyse{ 0.0 };
-  double factorise{ 0.0 };
+  double analyze{ 0.0 };
+  double factorize{ 0.0 };
   double solve{ 0.0 };
 };
 
@@ -54,8 +65,8 @@ struct BiomechanicalRegistration_EXPORT SolverTimings
  * Units: u in mm, E in kPa, forces in mN (kPa mm^2).
  *
  * Near incompressibility (nu -> 0.5) locks P1 tetrahedra: the bulk modulus kappa = lambda + 2 mu / 3
- * penalises the piecewise-constant volumetric strain of every element, which has too few degrees of
- * freedom to vanish. A material with MaterialParameters::averagedPressure uses the nodal-averaged pressure
+ * penalizes the piecewise-constant volumetric strain of every element, which has too few degrees of
+ * freedom to vanish. A material with ElementFormulationEnum::NodalAveragedPressure uses the nodal-averaged pressure
  * formulation instead (Bonet & Burton 1998): the element keeps only its deviatoric part
  * (lambda replaced by -2 mu / 3), and the volumetric energy is taken at the nodes,
  * \f[ \tfrac12 \sum_p \kappa V_p \theta_p^2, \quad \theta_p = \bar g_p^T u, \quad
@@ -64,11 +75,11 @@ struct BiomechanicalRegistration_EXPORT SolverTimings
  * element's divergence operator (b_e^T u = tr eps_e). With one volumetric constraint per node instead of
  * per element (about 5 elements per node) the mesh can represent isochoric motion, and the solution stays
  * accurate to nu = 0.499 (see bmrTwoLayerSphereTest). K becomes wider (each node couples to its patch
- * neighbours' neighbours), so assembly and factorisation cost more; the stress deviator, and so the von
+ * neighbors' neighbors), so assembly and factorization cost more; the stress deviator, and so the von
  * Mises stress, is unchanged.
  *
  * Dirichlet conditions u_p = g are eliminated: K_ff u_f = f_f - K_fp g. The
- * sparse Cholesky factorisation of K_ff (CHOLMOD supernodal) is computed once
+ * sparse Cholesky factorization of K_ff (CHOLMOD supernodal) is computed once
  * by Factorize() and reused by every Solve(); changing a modulus or the
  * Dirichlet set invalidates it (the symbolic analysis is kept when only a
  * modulus changes). Reaction forces are r = K u - f at the constrained nodes.
@@ -78,7 +89,7 @@ struct BiomechanicalRegistration_EXPORT SolverTimings
  * Errors (itk::ExceptionObject): an element label without material, E <= 0 or
  * not finite, nu outside (-1, 0.5), a degenerate or inverted element (named),
  * a connected component of the mesh that no Dirichlet condition holds against
- * rigid-body motion (named by its labels), and a factorisation that fails.
+ * rigid-body motion (named by its labels), and a factorization that fails.
  * \ingroup BiomechanicalRegistration
  */
 class BiomechanicalRegistration_EXPORT LinearElasticModel
@@ -100,7 +111,7 @@ public:
   double
   GetYoungsModulus(std::int32_t label) const;
 
-  /** Assembles K_ff and factorises it; checks the model first. */
+  /** Assembles K_ff and factorizes it; checks the model first. */
   void
   Factorize();
   bool
@@ -113,7 +124,7 @@ public:
 
   /** As Solve(), but with the prescribed displacements taken from \a prescribed
    * (3N [mm]; read at the constrained dofs only) instead of those given to
-   * SetDirichletConditions(). The constrained set, and so the factorisation, is
+   * SetDirichletConditions(). The constrained set, and so the factorization, is
    * unchanged: this is the cheap path for many boundary displacements on one
    * model (u_f = K_ff^{-1} (f_f - K_fp g)). */
   std::vector<double>

@@ -38,7 +38,7 @@ struct BiomechanicalRegistration_EXPORT BoundaryLoad
  * owns the choice between prescribing displacements (Dirichlet) and applying forces.
  *
  * The constrained nodes (GetConstrainedNodes()) do not depend on p, so the forward model's
- * factorisation is reused over every p. The estimator minimises
+ * factorization is reused over every p. The estimator minimizes
  * \f$ \Phi(u(p)) + R(p) \f$ with the parameterization's prior R (EvaluatePrior()); the chain rule
  * through the boundary conditions is PullBackGradient().
  * \ingroup BiomechanicalRegistrationEstimation

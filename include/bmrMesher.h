@@ -66,10 +66,10 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
 BiomechanicalRegistration_EXPORT TetrahedralMesh
 MeshLabelVolume(const std::int32_t * labels, const GridGeometry & grid, const MeshingParameters & parameters);
 
-/** Meshes the labelled domain given by \a labelAt (physical mm -> label, 0
+/** Meshes the labeled domain given by \a labelAt (physical mm -> label, 0
  * outside) inside the ball (\a center, \a boundingRadius), with CGAL's exact
  * implicit-function domain. Used for analytic test geometries such as the
- * concentric spheres, where a voxelised surface would hide the convergence
+ * concentric spheres, where a voxelized surface would hide the convergence
  * order of the finite elements. */
 BiomechanicalRegistration_EXPORT TetrahedralMesh
 MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & labelAt,

@@ -45,7 +45,7 @@ enum SphereLabel : std::int32_t
   SphereInnerCore = 2
 };
 
-/** An implanted seed: a cylinder of the given length and diameter [mm] centred
+/** An implanted seed: a cylinder of the given length and diameter [mm] centered
  * at \c center (LPS mm) along the unit vector \c axis. */
 struct BiomechanicalRegistration_EXPORT Seed
 {
@@ -69,7 +69,7 @@ struct BiomechanicalRegistration_EXPORT PhantomVolume
  *
  * The anatomy is defined in patient LPS coordinates (x towards the patient's
  * left, y posterior, z superior) around \c center (by default the physical
- * centre of \c grid), so an oblique or anisotropic grid samples the same
+ * center of \c grid), so an oblique or anisotropic grid samples the same
  * physical anatomy. All lengths in mm, intensities in HU.
  */
 struct BiomechanicalRegistration_EXPORT PelvisPhantomParameters
@@ -87,7 +87,7 @@ struct BiomechanicalRegistration_EXPORT PelvisPhantomParameters
 
 /** Parameters of the two concentric spheres of dissertation section 3.2.2:
  * an inner core (label 2) of radius \c innerRadius inside a shell (label 1)
- * of outer radius \c outerRadius, centred on the grid by default [mm]. */
+ * of outer radius \c outerRadius, centered on the grid by default [mm]. */
 struct BiomechanicalRegistration_EXPORT SpherePhantomParameters
 {
   GridGeometry          grid;
@@ -108,15 +108,15 @@ BiomechanicalRegistration_EXPORT PhantomVolume
 MakePelvisPhantom(const PelvisPhantomParameters & parameters);
 
 /** Labels of the pelvis phantom's anatomy at physical points [mm] (3 per point), as the label map of
- * MakePelvisPhantom() holds them at voxel centres (seeds count as prostate). A deformed anatomy is
- * voxelised once with it: the label of a fixed voxel v is the label at its pull-back point v + d(v).
- * Resampling the already voxelised moving labels instead quantises the surface twice (0.22 mm RMS
+ * MakePelvisPhantom() holds them at voxel centers (seeds count as prostate). A deformed anatomy is
+ * voxelized once with it: the label of a fixed voxel v is the label at its pull-back point v + d(v).
+ * Resampling the already voxelized moving labels instead quantizes the surface twice (0.22 mm RMS
  * against 0.06 mm at 1 mm voxels), which is larger than the shape change of a stiff organ. */
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<double> & points);
 
 /** Labels of the concentric spheres at physical points [mm] (3 per point), as MakeSpherePhantom() labels
- * voxel centres: a deformed anatomy voxelised once, as PelvisLabelsAt(). */
+ * voxel centers: a deformed anatomy voxelized once, as PelvisLabelsAt(). */
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 SphereLabelsAt(const SpherePhantomParameters & parameters, const std::vector<double> & points);
 
@@ -142,7 +142,7 @@ SpherePhantomScene(double innerE, bool unknown);
 enum class WallFillingEnum : std::uint8_t
 {
   /** Each wall along its own normals: the bladder along those of its ellipsoid, the rectum radially from its
-   * axis and from the centre of its dome. */
+   * axis and from the center of its dome. */
   AlongNormals,
   /** Radially from one point per organ: also slides the walls along themselves (the rectal wall next to the
    * prostate by up to 0.8 |d| along its axis), motion that no segmentation shows. */
@@ -150,14 +150,14 @@ enum class WallFillingEnum : std::uint8_t
 };
 
 /** The truth's loads for a filling of the bladder by \a bladderMM and the rectum by \a rectumMM [mm]
- * (radial displacements about the phantom's own organ centres for \a parameters' grid). */
+ * (radial displacements about the phantom's own organ centers for \a parameters' grid). */
 BiomechanicalRegistration_EXPORT std::vector<SceneLoad>
                                  PelvisFillingLoads(const PelvisPhantomParameters & parameters,
                                                     double                          bladderMM,
                                                     double                          rectumMM,
                                                     WallFillingEnum                 filling);
 
-/** Physical centre of the grid (centre of the voxel box). */
+/** Physical center of the grid (center of the voxel box). */
 BiomechanicalRegistration_EXPORT std::array<double, 3>
                                  GridCenter(const GridGeometry & grid);
 

@@ -18,6 +18,7 @@
 #ifndef bmrScene_h
 #define bmrScene_h
 
+#include "bmrLinearElasticModel.h"
 #include "bmrMesher.h"
 
 #include <set>
@@ -57,15 +58,15 @@ struct BiomechanicalRegistration_EXPORT ObjectiveTerm
  * excluded label (hollow organ) or to the outer boundary ("outside").
  * RadialDisplacement: every wall node moves by magnitude [mm] along the unit
  * vector from \c center [LPS mm] (positive = expansion, bladder filling).
- * With a non-zero \c axis (scene key "axis", normalised on reading) the
+ * With a non-zero \c axis (scene key "axis", normalized on reading) the
  * direction is taken from the nearest point of the half-line
  * {center - t axis, t >= 0} instead: a tube along the axis capped by a
  * hemisphere at \c center inflates along its own normals (rectal filling),
- * where a single centre would also slide the tube's wall along its length.
+ * where a single center would also slide the tube's wall along its length.
  * With \c semiAxes (scene key "semi_axes_mm", all > 0) the direction is the
  * normal of the ellipsoid with these semi-axes about \c center, \f$ \propto
  * ((x-c)_i / a_i^2)_i \f$: an ellipsoidal bladder grows along its normals
- * (radial from the centre, its wall would also slide along itself).
+ * (radial from the center, its wall would also slide along itself).
  * Pressure: a uniform pressure [kPa] on the wall, pushing into the tissue,
  * lumped to nodal forces [mN] (one third of each face's area per node). */
 struct BiomechanicalRegistration_EXPORT SceneLoad
@@ -106,7 +107,7 @@ struct BiomechanicalRegistration_EXPORT Scene
   MeshingParameters          mesh;
   /** "formulation": "nodal_averaged_pressure" — the locking-free element formulation for every material
    * (bmr::LinearElasticModel); "standard" (default): plain P1 tetrahedra. */
-  bool nodalAveragedPressure{ false };
+  ElementFormulationEnum formulation{ ElementFormulationEnum::Standard };
 
   /** Warnings about the scene that are not errors: nu > 0.45 on standard P1 tetrahedra (volumetric
    * locking; use the nodal-averaged pressure formulation). */
@@ -156,12 +157,17 @@ ParseScene(const std::string & json, const std::string & source);
 BiomechanicalRegistration_EXPORT Scene
 ReadScene(const std::string & fileName);
 
-/** Serialises a scene to JSON text (the format ParseScene reads). */
+/** Serializes a scene to JSON text (the format ParseScene reads). */
 BiomechanicalRegistration_EXPORT std::string
                                  SceneToJson(const Scene & scene);
 
 BiomechanicalRegistration_EXPORT const char *
 LabelRoleName(LabelRole role);
+
+/** Comma-separated labels, by value or (with a scene) by name; "none" gives an empty list. Throws naming an
+ * entry that is neither. */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+                                 ParseLabelList(const std::string & text, const Scene * scene);
 
 } // namespace bmr
 

@@ -33,7 +33,7 @@ namespace bmr {
  *     \qquad \xi = M^{-1}(x - o),\ M = D\,\mathrm{diag}(s), \f]
  * and its gradient is \f$ \nabla\phi(x) = M^{-T} \nabla_\xi \phi \f$.
  * This quasi-interpolant is C2 and reproduces affine functions exactly, so the
- * distance to a flat surface is unbiased while the staircase of a voxelised
+ * distance to a flat surface is unbiased while the staircase of a voxelized
  * label is smoothed; unlike trilinear interpolation its gradient is continuous
  * and is the exact derivative of the value, which is what the adjoint gradient
  * of the registration objective and its finite-difference check need.

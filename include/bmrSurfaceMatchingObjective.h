@@ -43,7 +43,7 @@ struct BiomechanicalRegistration_EXPORT LoadSolution
  *
  * \f[ \Phi(E, p) = \sum_t \Phi_t(u) + R(p), \qquad f_{int}(u; E) = f(p) \text{ on free dofs},\ u = \bar u(p)
  *     \text{ on constrained dofs}, \f]
- * with \f$g = \partial\sum_t\Phi_t/\partial u\f$. Adjoint (one solve with the cached factorisation):
+ * with \f$g = \partial\sum_t\Phi_t/\partial u\f$. Adjoint (one solve with the cached factorization):
  * \f$K_T\lambda = g\f$ on the free dofs, \f$\lambda = 0\f$ on the constrained ones; then
  * \f[ \partial\Phi/\partial p = \Big(\frac{\partial\bar u}{\partial p}\Big)^T (g - K_T\lambda)_c
  *     + \Big(\frac{\partial f}{\partial p}\Big)^T \lambda + \nabla R, \qquad
@@ -98,7 +98,7 @@ public:
 
   /** min_p Phi(E, p) at the current E by Levenberg-Marquardt, for an affine parameterization of a linear
    * model: u = u0 + A p, so A (3 rows per data node, one column per parameter) is computed once with one
-   * solve per parameter on the cached factorisation; every iteration then only evaluates the residuals:
+   * solve per parameter on the cached factorization; every iteration then only evaluates the residuals:
    * \f$ (J^TJ + \mu\,\mathrm{diag}(J^TJ))\,\delta = -J^T r - \nabla R \f$ with \f$ J = \partial r/\partial u\, A \f$.
    * Stops when \f$\|J^T r + \nabla R\| \le\f$ tolerance max(1, |p|), when Phi no longer decreases
    * (relative 1e-10), or after maximumIterations. Meant for reduced bases (tens to hundreds of parameters).

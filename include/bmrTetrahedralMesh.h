@@ -30,12 +30,12 @@
  *
  * Nothing in these headers exposes Eigen or CGAL types; the ITK classes in
  * this module are thin pipeline wrappers around these functions.
- * Units everywhere: millimetres (LPS physical space), kPa, mN (= kPa mm^2).
+ * Units everywhere: millimeters (LPS physical space), kPa, mN (= kPa mm^2).
  * \ingroup BiomechanicalRegistration
  */
 namespace bmr {
 
-/** \brief A labelled 4-node tetrahedral mesh in physical LPS millimetres.
+/** \brief A labeled 4-node tetrahedral mesh in physical LPS millimeters.
  *
  * Shapes: \c points is 3N (x,y,z of node i at 3i..3i+2), \c tetrahedra is 4M
  * (node indices of element e at 4e..4e+3, positively oriented), \c labels is M.

@@ -31,7 +31,7 @@ namespace bmr {
  * Control points are picked on every wall by farthest-point sampling (start:
  * the node farthest from the wall's centroid; then the node farthest from every
  * point picked so far, until no node is farther than \c spacing [mm]), and the
- * displacement of wall node k is the normalised Gaussian blend of the control
+ * displacement of wall node k is the normalized Gaussian blend of the control
  * displacements c_j of its own wall:
  * \f[ d_k = \sum_j W_{kj} c_j, \qquad
  *     W_{kj} = \frac{\exp(-|x_k - p_j|^2 / 2\sigma^2)}{\sum_i \exp(-|x_k - p_i|^2 / 2\sigma^2)},
@@ -45,7 +45,7 @@ namespace bmr {
  * Weights below 1e-4 of a node's largest are dropped. The parameters are not
  * the control displacements c themselves but q = L^T c, with L L^T = W^T W the
  * Cholesky factor of the Gram matrix: the columns of W L^{-T} are orthonormal,
- * so overlapping Gaussians do not make the optimisation ill-conditioned.
+ * so overlapping Gaussians do not make the optimization ill-conditioned.
  * Deterministic.
  * \ingroup BiomechanicalRegistration
  */

@@ -112,7 +112,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationResult
   std::map<std::string, double>        modulusUncertainty; ///< standard deviation of log E, by name
   std::string                          gaugeLabel;
   double                               gaugeModulus{ 0.0 }; ///< kPa
-  BiomechanicalLabelImageType::Pointer warpedLabels;        ///< nearest neighbour
+  BiomechanicalLabelImageType::Pointer warpedLabels;        ///< nearest neighbor
   BiomechanicalCTImageType::Pointer    warpedCT;            ///< linear; null without a moving CT
   std::map<std::string, double>        dice;                ///< warped against fixed labels, by name
   double                               jacobianMinimum{ 0.0 };
@@ -170,17 +170,46 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
   BiomechanicalFieldType::Pointer      truthField; ///< fixed -> moving [mm]
   bmr::Scene                           scene;      ///< what the estimator sees (prostate modulus unknown)
   bmr::Scene                           truthScene; ///< known moduli and wall loads
-  std::vector<bmr::Landmark>           movingLandmarks, fixedLandmarks; ///< seed centres [mm, LPS]
+  std::vector<bmr::Landmark>           movingLandmarks, fixedLandmarks; ///< seed centers [mm, LPS]
   std::size_t                          truthTetrahedra{ 0 }, truthNodes{ 0 };
   std::vector<PipelineStage>           stages;
 };
 
 /** Makes a pair: the fixed images are the moving ones warped by a forward simulation with known moduli on
- * a finer, independently meshed model (another random seed of the mesher), the fixed labels voxelised once
+ * a finer, independently meshed model (another random seed of the mesher), the fixed labels voxelized once
  * from the deformed analytic anatomy (pelvis), the fixed CT with its own noise; the seeds moved with the
  * simulated displacement. \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT PhantomPair
 MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = nullptr);
+
+/** \a count pelvis phantom settings for a comparison (biomechreg phantom-set), drawn reproducibly from \a seed:
+ * prostate modulus log-uniform in [50, 300] kPa (whole kPa), bladder filling uniform in [3, 8] mm and rectum in
+ * [2, 5] mm (0.01 mm), noise and seed placement seeded by seed * 1000 + k + 1. \ingroup
+ * BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT std::vector<PhantomSettings>
+                                 DrawPhantomSet(unsigned int count, std::uint64_t seed);
+
+/** Settings of the Demons baseline (itk::DemonsBaselineRegistrationFilter); the defaults are biomechreg's.
+ * \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT DemonsSettings
+{
+  std::string  variant{ "diffeomorphic" }; ///< or "symmetric" (fast symmetric forces)
+  unsigned int levels{ 3 };
+  unsigned int iterations{ 50 }; ///< per level
+  double       sigma{ 1.5 };     ///< field smoothing [voxels]
+  bool         histogramMatching{ true };
+};
+
+/** Demons of the moving CT onto the fixed CT; returns the fixed -> moving field [mm]. The label images are used
+ * only when \a flatten names organs to flatten (each replaced by its mean in its own image).
+ * \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT BiomechanicalFieldType::Pointer
+                                 RunDemonsBaseline(const BiomechanicalCTImageType *    fixedCT,
+                                                   const BiomechanicalCTImageType *    movingCT,
+                                                   const BiomechanicalLabelImageType * fixedLabels,
+                                                   const BiomechanicalLabelImageType * movingLabels,
+                                                   const std::vector<std::int32_t> &   flatten,
+                                                   const DemonsSettings &              settings);
 
 /** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
 BiomechanicalRegistration_EXPORT bmr::Scene

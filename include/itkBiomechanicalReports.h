@@ -38,6 +38,20 @@ BiomechanicalRegistration_EXPORT std::string
 BiomechanicalRegistration_EXPORT std::string
 IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames);
 
+/** One line for a console per inner solve: stage, iteration, E [kPa], Phi* [mm^2], dPhi* / dlogE [mm^2],
+ * |dPhi/dp|, inner iterations, wall time [s]. \ingroup BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+                                 FormatIterationRecord(const bmr::IterationRecord & record);
+
+/** The stages' wall times [s] as a table, with their total. \ingroup BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+                                 StageTable(const std::vector<PipelineStage> & stages);
+
+/** " (uncertainty x/ exp(s), i.e. +-N %, one standard deviation)" for an unknown modulus \a label whose
+ * uncertainty was computed, a note when it is not determined, else empty. \ingroup BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+                                 UncertaintyText(const RegistrationResult & result, const std::string & label);
+
 /** truth.json of a phantom pair (JSON; mm, kPa, mN): the true moduli and Poisson's ratios, the tumour
  * fraction, the wall loads, the truth's mesh, the CT noise and the seed landmarks (moving and fixed).
  * \ingroup BiomechanicalRegistrationIO */

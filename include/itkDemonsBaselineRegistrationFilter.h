@@ -44,7 +44,7 @@ namespace itk {
  *    - FastSymmetricForcesDemonsRegistrationFilter (Variant FastSymmetricForces): s <- s + u,
  *    both with the symmetric (fixed + warped moving) gradient, update steps limited to
  *    MaximumUpdateStepLength voxels and the displacement smoothed by a Gaussian of StandardDeviation voxels
- *    after every iteration (the elastic-like regularisation of Demons).
+ *    after every iteration (the elastic-like regularization of Demons).
  *
  * The update of one iteration at voxel x, with f the fixed image, m∘s the warped moving image and
  * J = (∇f + ∇(m∘s)) / 2, is u(x) = (f − m∘s) J / (‖J‖² + (f − m∘s)² / K), K the mean squared voxel size.

@@ -45,15 +45,15 @@ namespace itk {
  * \f[ \Phi(E, F) = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l(E, F))^2 \f]
  * with K(E) u = F (linear elasticity, u = 0 on fixed walls).
  *
- * Nested optimisation:
- * - inner: \f$\Phi^*(E) = \min_F \Phi(E, F)\f$. The loads are parameterised
+ * Nested optimization:
+ * - inner: \f$\Phi^*(E) = \min_F \Phi(E, F)\f$. The loads are parameterized
  *   by the wall displacements d they cause (F = S(E) d with S the Schur
  *   complement on the walls, an exact change of variables, so Phi* is
  *   unchanged), measured in mm, which makes the inner problem well conditioned
  *   and its gradient of the same size as the outer one. By default every wall
  *   node moves along its wall's normal, d_k = n_k s_k (WallMotionAlongNormals:
  *   the tangential part, invisible to the objective, would otherwise compete
- *   with E), with the E-independent regulariser WallRegularization/2 |s|^2, and
+ *   with E), with the E-independent regularizer WallRegularization/2 |s|^2, and
  *   the inner problem is solved by L-BFGS (itk::LBFGS2Optimizerv4, More-Thuente
  *   line search) with the adjoint gradient. With WallControlSpacing > 0 the wall
  *   motion is spanned by a smooth reduced basis (bmr::WallBasis) and solved by
@@ -91,7 +91,7 @@ namespace itk {
  * \f$s^2 = \sum_s w_s \sum_{l \in s}\phi_s^2 / \sum_s w_s n_s\f$ [mm^2].
  * Treating the residuals as independent noise of variance s^2 (the voxel
  * staircase of the fixed labels is about h/\sqrt{12} per node), the
- * linearised least-squares estimate has
+ * linearized least-squares estimate has
  * \f$\mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1}\f$ with
  * \f$w_{\mathrm{eff}} = \sum_s w_s^2 n_s / \sum_s w_s n_s\f$ (exact for equal
  * weights; invariant under scaling all weights), and
@@ -173,7 +173,7 @@ public:
   /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node. */
   itkSetMacro(WallControlSpacing, double);
   itkGetConstMacro(WallControlSpacing, double);
-  /** Weight of the E-independent regulariser alpha/2 |p|^2 on the wall parameters (bmr::SurfaceMatchingObjective). */
+  /** Weight of the E-independent regularizer alpha/2 |p|^2 on the wall parameters (bmr::SurfaceMatchingObjective). */
   itkSetMacro(WallRegularization, double);
   itkGetConstMacro(WallRegularization, double);
   /** Walls move along their normals (default on; bmr::SurfaceMatchingObjective::SetWallMotionAlongNormals). */

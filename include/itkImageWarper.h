@@ -27,7 +27,7 @@ namespace itk {
  * \brief Warps an image through a displacement field: a composite of
  * ResampleImageFilter and DisplacementFieldTransform.
  *
- * out(x) = in(x + d(x)) for every voxel centre x of the field's grid, with d
+ * out(x) = in(x + d(x)) for every voxel center x of the field's grid, with d
  * the fixed -> moving field (ITK's convention, as PhysicsDeformationFieldSource
  * produces it). Interpolation: Linear for CT, NearestNeighbor (default for
  * integer pixel types) or LabelGaussian (ITK's label-preserving Gaussian
@@ -91,7 +91,7 @@ private:
   PixelType         m_DefaultPixelValue{};
 };
 
-/** \a image warped through the fixed -> moving \a field with one call: nearest neighbour for a label map
+/** \a image warped through the fixed -> moving \a field with one call: nearest neighbor for a label map
  * (\a labels true), linear otherwise; points mapped outside take \a outside.
  * \ingroup BiomechanicalRegistration */
 template <typename TImage, typename TDisplacementField>

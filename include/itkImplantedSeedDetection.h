@@ -49,9 +49,9 @@ struct ImplantedSeedDetectionParameters
  * the high one and would split it). Its position is the
  * intensity-weighted centroid
  * \f[ c = \frac{\sum_v w_v x_v}{\sum_v w_v}, \qquad w_v = \max(0, I_v - b) , \f]
- * over the component and the voxels next to it (26-neighbours not in another component), with b the
+ * over the component and the voxels next to it (26-neighbors not in another component), with b the
  * organ's mean intensity below growThresholdHU. Weighting by the excess intensity over a one-voxel ring
- * counts the partial-volume voxels at the seed's surface, so the centroid is not quantised to the grid
+ * counts the partial-volume voxels at the seed's surface, so the centroid is not quantized to the grid
  * (sub-voxel accuracy; 0.5 mm or better at 1.25 x 1.25 x 2.5 mm voxels on the phantom, see the test).
  *
  * \a labels must share \a ct's grid. Throws itk::ExceptionObject when the grids differ or the organ is
@@ -177,15 +177,15 @@ DetectImplantedSeeds(const TImage *                           ct,
       bool       include = it.Get() == c;
       if (!include && it.Get() == 0)
       {
-        // A ring voxel: a 26-neighbour of the component.
-        typename ComponentImageType::RegionType neighbours;
+        // A ring voxel: a 26-neighbor of the component.
+        typename ComponentImageType::RegionType neighbors;
         for (unsigned int a = 0; a < Dimension; ++a)
         {
-          neighbours.SetIndex(a, index[a] - 1);
-          neighbours.SetSize(a, 3);
+          neighbors.SetIndex(a, index[a] - 1);
+          neighbors.SetSize(a, 3);
         }
-        neighbours.Crop(region);
-        for (ImageRegionConstIterator<ComponentImageType> n(cc, neighbours); !include && !n.IsAtEnd(); ++n)
+        neighbors.Crop(region);
+        for (ImageRegionConstIterator<ComponentImageType> n(cc, neighbors); !include && !n.IsAtEnd(); ++n)
         {
           include = n.Get() == c;
         }

@@ -26,9 +26,9 @@
 namespace itk {
 
 /** \class LabelImageToTetrahedralMeshFilter
- * \brief Meshes a label image into labelled 4-node tetrahedra with CGAL Mesh_3.
+ * \brief Meshes a label image into labeled 4-node tetrahedra with CGAL Mesh_3.
  *
- * Every non-zero label is meshed (CGAL's labelled image domain, the TetGen
+ * Every non-zero label is meshed (CGAL's labeled image domain, the TetGen
  * equivalent), so that every organ surface is made of element faces and organ
  * interfaces share nodes. The mesh is built in physical space: spacing
  * (anisotropic voxels), origin and direction cosines (oblique volumes) of the

@@ -35,7 +35,7 @@ namespace itk {
  * d trilinearly interpolated at x_f. The identity (d = 0) gives the landmarks' own displacement, the floor
  * every registration should beat. Landmarks are paired by id; the result follows the order of \a fixed.
  * Throws itk::ExceptionObject naming the landmark when an id has no partner or a fixed landmark lies
- * outside the field's grid (between the outermost voxel centres).
+ * outside the field's grid (between the outermost voxel centers).
  * \ingroup BiomechanicalRegistration
  */
 template<typename TDisplacementField>

@@ -30,7 +30,7 @@ namespace itk {
  * undeformed tetrahedra (moving space). The output grid is that of the
  * reference image. Two fields are available (SetFieldDirection()):
  *
- * - FixedToMoving (default, the pull-back): for every voxel centre x of the
+ * - FixedToMoving (default, the pull-back): for every voxel center x of the
  *   grid, the deformed element containing x is found and
  *   \f$ d(x) = \sum_a \lambda_a(x) X_a - x \f$ with the barycentric coordinates
  *   \f$\lambda_a\f$ of x in the deformed element and \f\f$ its undeformed

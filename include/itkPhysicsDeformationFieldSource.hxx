@@ -119,7 +119,7 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
 
   std::vector<double>        field(3 * grid.GetNumberOfVoxels(), 0.0);
   std::vector<unsigned char> inside(grid.GetNumberOfVoxels(), 0);
-  // Slabs along the last index: the rasteriser's ownership rule makes the result independent of the split.
+  // Slabs along the last index: the rasterizer's ownership rule makes the result independent of the split.
   const auto          largest = output->GetLargestPossibleRegion();
   const auto          start = largest.GetIndex();
   MultiThreaderBase * threader = this->GetMultiThreader();

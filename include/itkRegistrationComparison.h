@@ -76,12 +76,12 @@ DetectPairedSeeds(const BiomechanicalCTImageType *    movingCT,
                   std::vector<bmr::Landmark> &        moving,
                   std::vector<bmr::Landmark> &        fixed);
 
-/** A 4 x 4 checkerboard of \a fixed and \a warped on the axial slice through \a centre (soft-tissue window
+/** A 4 x 4 checkerboard of \a fixed and \a warped on the axial slice through \a center (soft-tissue window
  * -200 ... 300 HU) as a PNG, as dissertation Fig. 3.12. */
 BiomechanicalRegistration_EXPORT void
 WriteCheckerboardPNG(const BiomechanicalCTImageType * fixed,
                      const BiomechanicalCTImageType * warped,
-                     const Point<double, 3> &         centre,
+                     const Point<double, 3> &         center,
                      const std::string &              path);
 
 /** \brief The tables of a comparison of registration methods on seed landmarks (dissertation Table 3.5).

@@ -77,7 +77,7 @@ struct SurfaceDistanceStatistics
 
 /** \brief Symmetric surface distances [mm] between \a label in \a a and in \a b.
  *
- * The surface of a label is the set of its voxels with a 6-neighbour outside it. For each surface voxel of
+ * The surface of a label is the set of its voxels with a 6-neighbor outside it. For each surface voxel of
  * A, the distance to the surface of B is read from B's signed Maurer distance map (physical spacing); the
  * same from B to A. Of the pooled distances the result gives the mean, the 95th percentile (linear
  * interpolation) — the "HD95" of segmentation papers, robust to a few outlying voxels — and the maximum.

@@ -49,7 +49,7 @@ operator!=(const TetrahedralMesh & a, const TetrahedralMesh & b)
 } // namespace bmr
 
 namespace itk {
-/** \brief Pipeline data object holding a labelled tetrahedral mesh (bmr::TetrahedralMesh).
+/** \brief Pipeline data object holding a labeled tetrahedral mesh (bmr::TetrahedralMesh).
  *
  * Coordinates in LPS mm; optional nodal displacement [mm] and force [mN].
  * \ingroup BiomechanicalRegistration

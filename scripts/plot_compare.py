@@ -67,13 +67,13 @@ for t in table:
     print(f'| {t["method"]} | {t["tag"]} | {t["pairs"]} | {t["seeds"]} | {t["tre"]:.2f} | {t["tre_max"]:.2f} | '
           f'{t["hd95"]:.2f} | {t["dice"]:.4f} | {t["jmin"]:.3f} | {t["time"]:.1f} |')
 
-colours = {"fem": "tab:blue", "demons": "tab:orange", "identity": "tab:gray"}
+colors = {"fem": "tab:blue", "demons": "tab:orange", "identity": "tab:gray"}
 fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))
 for t in table:
     x = max(t["time"], 0.05)  # the identity takes no time; drawn at the left edge of the log axis
     for a, key, label in ((ax[0], "tre", "seed TRE, mean [mm]"), (ax[1], "hd95", "HD95, mean of organs [mm]"),
                           (ax[2], "dice", "Dice, mean of organs")):
-        a.scatter(x, t[key], color=colours.get(t["method"], "k"), label=t["method"])
+        a.scatter(x, t[key], color=colors.get(t["method"], "k"), label=t["method"])
         a.annotate(t["tag"], (x, t[key]), fontsize=6, xytext=(3, 3), textcoords="offset points")
         a.set_xscale("log")
         a.set_xlabel("compute time per pair (median) [s]")

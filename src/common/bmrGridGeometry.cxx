@@ -152,4 +152,23 @@ GridGeometry::Validate(const char * what) const
   }
 }
 
+GridGeometry
+CenteredGrid(const std::array<std::size_t, 3> & size, const std::array<double, 3> & spacing, double rotationZ)
+{
+  GridGeometry g;
+  g.size = size;
+  g.spacing = spacing;
+  g.direction = { std::cos(rotationZ), -std::sin(rotationZ), 0, std::sin(rotationZ), std::cos(rotationZ), 0, 0, 0, 1 };
+  std::array<double, 3> half;
+  for (int i = 0; i < 3; ++i)
+  {
+    half[i] = 0.5 * (static_cast<double>(size[i]) - 1.0) * spacing[i];
+  }
+  for (int r = 0; r < 3; ++r)
+  {
+    g.origin[r] = -(g.direction[3 * r] * half[0] + g.direction[3 * r + 1] * half[1] + g.direction[3 * r + 2] * half[2]);
+  }
+  return g;
+}
+
 } // namespace bmr

@@ -89,7 +89,7 @@ struct SweepAnalysis
  * solver's tolerance); the zero is interpolated linearly in log E_k. Without a sign change the minimum
  * lies on a bound; when Phi* varies by less than \a flatness (relative) the modulus is not identifiable. */
 SweepAnalysis
-AnalyseSweep(const std::vector<IterationRecord> & sweep, std::size_t k, const UnknownModulus & unknown, double flatness)
+Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const UnknownModulus & unknown, double flatness)
 {
   double vmin = sweep[0].value, vmax = sweep[0].value;
   for (const auto & r : sweep)
@@ -153,7 +153,7 @@ ResidualVarianceTimesWeight(const std::vector<ResidualStatistics> & residuals, d
   return variance * (weightedCount > 0.0 ? squaredWeights / weightedCount : 1.0);
 }
 
-/** Standard deviations of log E, sqrt(diag(v H^-1)) with v = s^2 w_eff [mm^2], from the symmetrised
+/** Standard deviations of log E, sqrt(diag(v H^-1)) with v = s^2 w_eff [mm^2], from the symmetrized
  * Hessian [mm^2]; infinite when it is not positive definite (no curvature to determine E). */
 std::vector<double>
 LogModulusStandardDeviations(const Eigen::MatrixXd & hessian, double residualVariance)
@@ -267,7 +267,7 @@ ElasticityEstimator::Stages::Sweep()
       samples.push_back(MakeRecord("sweep", index, E, s, Seconds(ts)));
       Record(samples.back(), result.sweep, 0.5 * double(index + 1) / total);
     }
-    status[k] = AnalyseSweep(samples, k, unknown, settings.flatnessThreshold);
+    status[k] = Analyzesweep(samples, k, unknown, settings.flatnessThreshold);
     moduli[k] = status[k].modulus;
   }
 }

@@ -27,7 +27,7 @@
 
 namespace bmr {
 
-/** Adapts a function with gradient to ITK's v4 metric interface, which v4 optimizers minimise; by ITK's
+/** Adapts a function with gradient to ITK's v4 metric interface, which v4 optimizers minimize; by ITK's
  * convention the "derivative" handed to the optimizer is the negative gradient. */
 class FunctionMetric : public itk::ObjectToObjectMetricBaseTemplate<double>
 {

@@ -49,9 +49,9 @@ SurfacesOfNodes(const TetrahedralMesh & mesh, const std::vector<ObjectiveSurface
   return onSurface;
 }
 
-/** The neighbours of every surface node along element edges on a common surface (sorted, unique). */
+/** The neighbors of every surface node along element edges on a common surface (sorted, unique). */
 std::vector<std::vector<std::int32_t>>
-SurfaceNeighbours(const TetrahedralMesh & mesh, const std::vector<std::vector<std::size_t>> & onSurface)
+SurfaceNeighbors(const TetrahedralMesh & mesh, const std::vector<std::vector<std::size_t>> & onSurface)
 {
   const auto shareSurface = [&](std::int32_t a, std::int32_t b) {
     for (std::size_t s : onSurface[a])
@@ -63,7 +63,7 @@ SurfaceNeighbours(const TetrahedralMesh & mesh, const std::vector<std::vector<st
     }
     return false;
   };
-  std::vector<std::vector<std::int32_t>> neighbours(mesh.GetNumberOfPoints());
+  std::vector<std::vector<std::int32_t>> neighbors(mesh.GetNumberOfPoints());
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
     const std::int32_t * t = &mesh.tetrahedra[4 * e];
@@ -73,17 +73,17 @@ SurfaceNeighbours(const TetrahedralMesh & mesh, const std::vector<std::vector<st
       {
         if (a != b && !onSurface[t[a]].empty() && shareSurface(t[a], t[b]))
         {
-          neighbours[t[a]].push_back(t[b]);
+          neighbors[t[a]].push_back(t[b]);
         }
       }
     }
   }
-  for (auto & nb : neighbours)
+  for (auto & nb : neighbors)
   {
     std::sort(nb.begin(), nb.end());
     nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
   }
-  return neighbours;
+  return neighbors;
 }
 } // namespace
 
@@ -184,7 +184,7 @@ SurfaceDistanceTerm::MatchDisplacement(const std::vector<char> & held) const
 {
   const std::size_t                            N = m_Mesh.GetNumberOfPoints();
   const std::vector<std::vector<std::size_t>>  onSurface = SurfacesOfNodes(m_Mesh, m_Surfaces);
-  const std::vector<std::vector<std::int32_t>> neighbours = SurfaceNeighbours(m_Mesh, onSurface);
+  const std::vector<std::vector<std::int32_t>> neighbors = SurfaceNeighbors(m_Mesh, onSurface);
   std::vector<std::int32_t>                    active;
   for (std::size_t n = 0; n < N; ++n)
   {
@@ -193,7 +193,7 @@ SurfaceDistanceTerm::MatchDisplacement(const std::vector<char> & held) const
       active.push_back(static_cast<std::int32_t>(n));
     }
   }
-  // alpha: fraction of the distance closed per step; beta: spring stiffness towards the neighbours' mean.
+  // alpha: fraction of the distance closed per step; beta: spring stiffness towards the neighbors' mean.
   const double        alpha = 0.5, beta = 0.25;
   std::vector<double> v(3 * N, 0.0), next(3 * N, 0.0);
   for (unsigned int it = 0; it < m_MatchingIterations; ++it)
@@ -212,17 +212,17 @@ SurfaceDistanceTerm::MatchDisplacement(const std::vector<char> & held) const
         }
       }
       double mean[3] = { 0.0, 0.0, 0.0 };
-      for (std::int32_t m : neighbours[n])
+      for (std::int32_t m : neighbors[n])
       {
         for (int c = 0; c < 3; ++c)
         {
-          mean[c] += v[3 * m + c] / static_cast<double>(neighbours[n].size());
+          mean[c] += v[3 * m + c] / static_cast<double>(neighbors[n].size());
         }
       }
       for (int c = 0; c < 3; ++c)
       {
         const double vc = v[3 * n + c];
-        next[3 * n + c] = vc + alpha * pull[c] + (neighbours[n].empty() ? 0.0 : beta * (mean[c] - vc));
+        next[3 * n + c] = vc + alpha * pull[c] + (neighbors[n].empty() ? 0.0 : beta * (mean[c] - vc));
       }
     }
     for (std::int32_t n : active)

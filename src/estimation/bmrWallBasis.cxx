@@ -91,7 +91,7 @@ SampleWallControlPoints(const std::vector<double> &          points,
   return first;
 }
 
-// Unnormalised Gaussian weights of the wall's nodes for the wall's control points controls[first..].
+// Unnormalized Gaussian weights of the wall's nodes for the wall's control points controls[first..].
 void
 AddWallGaussianWeights(const std::vector<double> &                points,
                        const WallNodes &                          wall,

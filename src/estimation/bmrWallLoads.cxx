@@ -28,12 +28,12 @@
 namespace bmr {
 namespace {
 /** Width [mm] of the Gaussian that averages wall face normals: several voxels (the staircase of a
- * voxelised wall), below the walls' radii of curvature (13 mm for the rectum). */
+ * voxelized wall), below the walls' radii of curvature (13 mm for the rectum). */
 constexpr double NormalSmoothing = 4.0;
 
 using WallList = std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>>;
 
-/** Area-weighted normals of the boundary faces labelled \a faceLabels, summed at each control node. */
+/** Area-weighted normals of the boundary faces labeled \a faceLabels, summed at each control node. */
 std::vector<double>
 FaceNormalSums(const TetrahedralMesh &           mesh,
                const std::set<std::int32_t> &    faceLabels,
@@ -68,7 +68,7 @@ FaceNormalSums(const TetrahedralMesh &           mesh,
   return normals;
 }
 
-/** The faces of a mesh of a voxelised wall tilt with the voxel staircase: Gaussian average of the face
+/** The faces of a mesh of a voxelized wall tilt with the voxel staircase: Gaussian average of the face
  * normals over NormalSmoothing mm of the same wall, so that "along the normal" means the organ's normal;
  * then unit length (a node on no wall face gets the zero vector). */
 std::vector<double>

@@ -33,7 +33,7 @@ Summarize(const std::vector<double> & values)
 {
   if (values.empty())
   {
-    Fail("bmr::Summarize", "no values to summarise");
+    Fail("bmr::Summarize", "no values to summarize");
   }
   SummaryStatistics s;
   s.count = values.size();

@@ -181,18 +181,18 @@ ReadImagePairList(const std::string & path)
   return pairs;
 }
 
-/** Writes a 4 x 4 checkerboard of the fixed CT and a warped CT on the axial slice through \a centre
+/** Writes a 4 x 4 checkerboard of the fixed CT and a warped CT on the axial slice through \a center
  * (soft-tissue window -200 ... 300 HU), as dissertation Fig. 3.12. */
 void
 WriteCheckerboardPNG(const BiomechanicalCTImageType * fixed,
                      const BiomechanicalCTImageType * warped,
-                     const Point<double, 3> &         centre,
+                     const Point<double, 3> &         center,
                      const std::string &              path)
 {
   using SliceType = Image<float, 2>;
   using PngType = Image<unsigned char, 2>;
   Index<3> index;
-  fixed->TransformPhysicalPointToIndex(centre, index);
+  fixed->TransformPhysicalPointToIndex(center, index);
   auto region = fixed->GetLargestPossibleRegion();
   index[2] =
     std::max<IndexValueType>(region.GetIndex(2), std::min<IndexValueType>(index[2], region.GetUpperIndex()[2]));

@@ -81,10 +81,10 @@ ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
 }
 
 /** Runs the BLAS that CHOLMOD calls on one thread. A multithreaded OpenBLAS splits the supernodal
- * updates differently for different thread counts, and so rounds differently: the factorisation, and with
+ * updates differently for different thread counts, and so rounds differently: the factorization, and with
  * it every field and estimate, would change with the machine's core count (measured: fields differing in
  * the last bits between OPENBLAS_NUM_THREADS=1 and 2). The symbol is looked up at run time, so any other
- * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorisations of
+ * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorizations of
  * this project take well under a second and are reused for every solve. */
 void
 PinBlasToOneThread()
@@ -124,7 +124,7 @@ struct LinearElasticModel::Impl
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
-  bool                                                                   analysed{ false };
+  bool                                                                   analyzed{ false };
   bool                                                                   factorized{ false };
   SolverTimings                                                          timings;
 
@@ -208,7 +208,7 @@ LinearElasticModel::Impl::BuildAveragingPatches() const -> std::vector<Averaging
   std::vector<std::vector<std::int32_t>> around(mesh.GetNumberOfPoints());
   for (std::size_t e = 0; e < M; ++e)
   {
-    if (materials.at(mesh.labels[e]).averagedPressure)
+    if (materials.at(mesh.labels[e]).formulation == ElementFormulationEnum::NodalAveragedPressure)
     {
       for (int a = 0; a < 4; ++a)
       {
@@ -244,7 +244,7 @@ LinearElasticModel::Impl::BuildAveragingPatches() const -> std::vector<Averaging
   return patches;
 }
 
-// Node adjacency (each node with itself and its element neighbours of higher or equal index).
+// Node adjacency (each node with itself and its element neighbors of higher or equal index).
 auto
 LinearElasticModel::Impl::ElementNodeAdjacency() const -> NodeAdjacency
 {
@@ -311,7 +311,7 @@ LinearElasticModel::Impl::SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper) 
   }
 }
 
-// Column 3n+c holds rows 3m+r >= 3n+c for every neighbour m >= n.
+// Column 3n+c holds rows 3m+r >= 3n+c for every neighbor m >= n.
 void
 LinearElasticModel::Impl::BuildColumnPattern(const NodeAdjacency & upper)
 {
@@ -361,7 +361,7 @@ LinearElasticModel::Impl::AccumulateUnitElementStiffnesses()
     double                     lambda, mu;
     const MaterialParameters & material = materials.at(mesh.labels[e]);
     LameParameters(1.0, material.poissonRatio, lambda, mu);
-    if (material.averagedPressure)
+    if (material.formulation == ElementFormulationEnum::NodalAveragedPressure)
     {
       // Deviatoric part only (lambda -> -2 mu / 3); the bulk part kappa comes from the nodal patches below.
       lambda = -2.0 * mu / 3.0;
@@ -645,7 +645,7 @@ LinearElasticModel::SetDirichletConditions(const std::vector<std::int32_t> & nod
       d.prescribed[3 * nodes[k] + c] = v;
     }
   }
-  d.analysed = false;
+  d.analyzed = false;
   d.factorized = false;
 }
 
@@ -692,7 +692,7 @@ LinearElasticModel::Factorize()
   }
   PinBlasToOneThread();
   auto t0 = Clock::now();
-  if (!d.analysed)
+  if (!d.analyzed)
   {
     d.CheckRigidBodyModes();
   }
@@ -734,16 +734,16 @@ LinearElasticModel::Factorize()
   d.Kff.resize(static_cast<Eigen::Index>(d.nfree), static_cast<Eigen::Index>(d.nfree));
   d.Kff.setFromTriplets(triplets.begin(), triplets.end());
   d.timings.assemble += Seconds(t0);
-  if (!d.analysed)
+  if (!d.analyzed)
   {
     t0 = Clock::now();
     d.solver.analyzePattern(d.Kff);
-    d.analysed = true;
-    d.timings.analyse = Seconds(t0);
+    d.analyzed = true;
+    d.timings.analyze = Seconds(t0);
   }
   t0 = Clock::now();
   d.solver.factorize(d.Kff);
-  d.timings.factorise = Seconds(t0);
+  d.timings.factorize = Seconds(t0);
   if (d.solver.info() != Eigen::Success)
   {
     Fail("LinearElasticModel::Factorize",

@@ -17,7 +17,22 @@
  *=========================================================================*/
 #include "bmrForwardModel.h"
 
+#include <ostream>
+
 namespace bmr {
+
+std::ostream &
+operator<<(std::ostream & os, ElementFormulationEnum value)
+{
+  switch (value)
+  {
+    case ElementFormulationEnum::Standard:
+      return os << "bmr::ElementFormulationEnum::Standard";
+    case ElementFormulationEnum::NodalAveragedPressure:
+      return os << "bmr::ElementFormulationEnum::NodalAveragedPressure";
+  }
+  return os << "INVALID VALUE FOR bmr::ElementFormulationEnum";
+}
 
 LinearForwardModel::LinearForwardModel(const TetrahedralMesh &                            mesh,
                                        const std::map<std::int32_t, MaterialParameters> & materials)

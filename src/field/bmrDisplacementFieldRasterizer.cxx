@@ -226,9 +226,9 @@ ComputeCoarseDirichletData(const GridGeometry &  grid,
         std::int64_t      lo[3], hi[3];
         for (int d = 0; d < 3; ++d)
         {
-          const std::int64_t centre = std::min<std::int64_t>(static_cast<std::int64_t>(ci[d] * c), n[d] - 1);
-          lo[d] = std::max<std::int64_t>(0, centre - half);
-          hi[d] = std::min<std::int64_t>(static_cast<std::int64_t>(n[d]) - 1, centre + half);
+          const std::int64_t center = std::min<std::int64_t>(static_cast<std::int64_t>(ci[d] * c), n[d] - 1);
+          lo[d] = std::max<std::int64_t>(0, center - half);
+          hi[d] = std::min<std::int64_t>(static_cast<std::int64_t>(n[d]) - 1, center + half);
         }
         for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
         {
@@ -278,7 +278,7 @@ struct CoarseLaplacian
   std::size_t               coord[3];
 };
 
-// y = A x on free nodes; A is the negative Laplacian, with fixed neighbours taken from bc (or 0).
+// y = A x on free nodes; A is the negative Laplacian, with fixed neighbors taken from bc (or 0).
 void
 ApplyCoarseLaplacian(const CoarseLaplacian &     A,
                      const std::vector<double> & x,
@@ -330,7 +330,7 @@ SolveCoarseComponent(const CoarseLaplacian &     A,
     bc[node] = value[3 * node + comp];
     x[node] = fixed[node] ? bc[node] : 0.0;
   }
-  // r = b - A x, with b carrying the fixed neighbours' values.
+  // r = b - A x, with b carrying the fixed neighbors' values.
   std::vector<double> zero(M, 0.0);
   ApplyCoarseLaplacian(A, zero, r, &bc); // A(0) with boundary data = -b
   for (std::size_t node = 0; node < M; ++node)

@@ -197,4 +197,57 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
   return j.dump(2) + "\n";
 }
 
+std::string
+FormatIterationRecord(const bmr::IterationRecord & r)
+{
+  std::ostringstream o;
+  o << "    " << std::left << std::setw(6) << r.stage << std::right << std::setw(3) << r.iteration;
+  for (double E : r.youngsModuli)
+  {
+    o << "  E " << std::fixed << std::setprecision(2) << std::setw(8) << E << " kPa";
+  }
+  o << "  Phi* " << std::scientific << std::setprecision(5) << r.value << " mm^2";
+  for (double g : r.logModulusGradient)
+  {
+    o << "  dPhi/dlogE " << std::setprecision(2) << std::setw(9) << g;
+  }
+  o << "  |dPhi/dd| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4) << r.innerIterations
+    << "  " << std::fixed << std::setprecision(2) << r.seconds << " s";
+  return o.str();
+}
+
+std::string
+StageTable(const std::vector<PipelineStage> & stages)
+{
+  std::ostringstream o;
+  o << "  stage                               wall [s]\n";
+  double total = 0.0;
+  for (const auto & s : stages)
+  {
+    o << "  " << std::left << std::setw(36) << s.name << std::right << std::fixed << std::setprecision(3)
+      << std::setw(8) << s.seconds << "\n";
+    total += s.seconds;
+  }
+  o << "  " << std::left << std::setw(36) << "total" << std::right << std::setw(8) << total << "\n";
+  return o.str();
+}
+
+std::string
+UncertaintyText(const RegistrationResult & result, const std::string & label)
+{
+  const auto it = result.modulusUncertainty.find(label);
+  if (it == result.modulusUncertainty.end())
+  {
+    return std::string();
+  }
+  if (!std::isfinite(it->second))
+  {
+    return " (uncertainty: not determined, Phi* has no positive curvature there)";
+  }
+  std::ostringstream os;
+  os << " (uncertainty x/ exp(" << std::setprecision(3) << it->second << "), i.e. +-" << std::setprecision(2)
+     << 100.0 * it->second << " %, one standard deviation)";
+  return os.str();
+}
+
 } // namespace itk

@@ -201,10 +201,10 @@ MakeCriteria(const MeshingParameters & parameters)
  * 6-connected component of every non-zero label, along the six axis directions
  * to the first sample with another label.
  *
- * CGAL's default initialisation shoots random rays from the centre of the
+ * CGAL's default initialization shoots random rays from the center of the
  * bounding box and keeps the first 12 hits; Delaunay refinement only discovers
  * surfaces that the initial triangulation comes close to, so small or
- * off-centre structures (a kidney, a lesion) could be silently missing from
+ * off-center structures (a kidney, a lesion) could be silently missing from
  * the mesh. Seeding each component makes every label present in the input
  * present in the mesh, deterministically. Returns the number of points. */
 std::size_t
@@ -233,12 +233,12 @@ InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLatt
       stack.pop_back();
       for (const LatticeIndex & step : AxisSteps)
       {
-        const LatticeIndex neighbour = index + step;
-        if (!lattice.Contains(neighbour))
+        const LatticeIndex neighbor = index + step;
+        if (!lattice.Contains(neighbor))
         {
           continue;
         }
-        const std::size_t offset = lattice.OffsetOf(neighbour);
+        const std::size_t offset = lattice.OffsetOf(neighbor);
         if (!visited[offset] && labels[offset] == labels[start])
         {
           visited[offset] = true;
@@ -285,7 +285,7 @@ InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLatt
       const Vertex_handle vertex = tr.insert(weighted(point));
       if (vertex != Vertex_handle())
       {
-        // Same bookkeeping as CGAL's own initialisation: a surface point.
+        // Same bookkeeping as CGAL's own initialization: a surface point.
         c3t3.set_dimension(vertex, 2);
         c3t3.set_index(vertex, std::get<1>(hit));
         ++inserted;
@@ -295,7 +295,7 @@ InsertComponentSeeds(Complex & c3t3, const MeshDomain & domain, const SampleLatt
   return inserted;
 }
 
-/** Seeds, refines and optionally optimises. The perturber and exuder get an
+/** Seeds, refines and optionally optimizes. The perturber and exuder get an
  * explicit time limit of 0 (= none): without it, refine_mesh_3 uses the wall
  * time of the refinement as their budget, which makes the result depend on
  * machine load. */
@@ -316,7 +316,7 @@ GenerateMesh(const MeshDomain &        domain,
   if (c3t3.triangulation().dimension() != 3)
   {
     Fail(where,
-         "could not find enough points on the labelled surfaces to start the mesh refinement (labelled regions "
+         "could not find enough points on the labeled surfaces to start the mesh refinement (labeled regions "
          "too thin, or only in the last slice of the volume)");
   }
 
@@ -365,7 +365,7 @@ ExtractMesh(const Complex & c3t3, const TMapToPhysical & toPhysical, const char 
   const auto      numberOfCells = static_cast<std::size_t>(c3t3.number_of_cells_in_complex());
   if (numberOfCells == 0)
   {
-    Fail(where, "CGAL produced no tetrahedron; the meshing sizes may be too large for the labelled regions");
+    Fail(where, "CGAL produced no tetrahedron; the meshing sizes may be too large for the labeled regions");
   }
   if (numberOfCells > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4))
   {
@@ -457,7 +457,7 @@ MeshLabelVolume(const std::int32_t * labels, const GridGeometry & grid, const Me
   const CGAL::Image_3 image(raw); // takes ownership of raw
 
   // The bisection tolerance is relative to the bounding box diagonal; a tenth
-  // of the finest voxel size (or of the surface tolerance) is all a voxelised
+  // of the finest voxel size (or of the surface tolerance) is all a voxelized
   // surface can justify, and a fixed 1e-3 would be 0.3 mm on a body-sized image.
   const double minimumSpacing = std::min({ grid.spacing[0], grid.spacing[1], grid.spacing[2] });
   const double tolerance = 0.1 * std::min(minimumSpacing, parameters.facetDistance);
@@ -509,7 +509,7 @@ MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & l
   CheckParameters(where, parameters);
   if (!labelAt)
   {
-    Fail(where, "no labelling function given");
+    Fail(where, "no labeling function given");
   }
   if (!std::isfinite(boundingRadius) || !(boundingRadius > 0.0))
   {
@@ -517,7 +517,7 @@ MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & l
   }
   if (!std::isfinite(center[0]) || !std::isfinite(center[1]) || !std::isfinite(center[2]))
   {
-    Fail(where, "the centre of the bounding ball must be finite");
+    Fail(where, "the center of the bounding ball must be finite");
   }
 
   // Labelled_mesh_domain_3 requires the domain to lie inside the bounding
@@ -531,7 +531,7 @@ MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & l
   };
 
   // A coarse sampling of the ball both proves the domain non-empty (CGAL's own
-  // initialisation would otherwise search forever) and provides the seeds.
+  // initialization would otherwise search forever) and provides the seeds.
   constexpr std::ptrdiff_t samplesPerAxis = 33;
   SampleLattice            lattice;
   lattice.size = { { samplesPerAxis, samplesPerAxis, samplesPerAxis } };
@@ -552,7 +552,7 @@ MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & l
   if (!anyLabel)
   {
     Fail(where,
-         "the labelling function is 0 at every sample of the bounding ball: the domain is empty or thinner than " +
+         "the labeling function is 0 at every sample of the bounding ball: the domain is empty or thinner than " +
            std::to_string(step) + " mm");
   }
   lattice.labels = lattice.ownedLabels.data();

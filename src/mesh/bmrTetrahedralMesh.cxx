@@ -56,10 +56,10 @@ Norm(const Vec & a)
   return std::sqrt(Dot(a, a));
 }
 
-/** For every element face (4e + f), the neighbouring element across it, or -1.
+/** For every element face (4e + f), the neighboring element across it, or -1.
  * Faces are matched by sorting their node triples, which is deterministic. */
 std::vector<std::int64_t>
-FaceNeighbours(const TetrahedralMesh & mesh)
+FaceNeighbors(const TetrahedralMesh & mesh)
 {
   const std::size_t M = mesh.GetNumberOfTetrahedra();
   struct Key
@@ -84,17 +84,17 @@ FaceNeighbours(const TetrahedralMesh & mesh)
   std::sort(keys.begin(), keys.end(), [](const Key & a, const Key & b) {
     return a.nodes < b.nodes || (a.nodes == b.nodes && a.face < b.face);
   });
-  std::vector<std::int64_t> neighbour(4 * M, -1);
+  std::vector<std::int64_t> neighbor(4 * M, -1);
   for (std::size_t k = 0; k + 1 < keys.size(); ++k)
   {
     if (keys[k].nodes == keys[k + 1].nodes)
     {
-      neighbour[keys[k].face] = keys[k + 1].face / 4;
-      neighbour[keys[k + 1].face] = keys[k].face / 4;
+      neighbor[keys[k].face] = keys[k + 1].face / 4;
+      neighbor[keys[k + 1].face] = keys[k].face / 4;
       ++k;
     }
   }
-  return neighbour;
+  return neighbor;
 }
 
 std::vector<std::int32_t>
@@ -163,7 +163,7 @@ ComputeMeshQuality(const TetrahedralMesh & mesh)
     };
     const double V = TetrahedronVolume(mesh, e);
     q.volume += V;
-    // Outward face normals (unnormalised: length = 2 area).
+    // Outward face normals (unnormalized: length = 2 area).
     Vec    n[4];
     double area = 0.0;
     for (int f = 0; f < 4; ++f)
@@ -273,7 +273,7 @@ ExtractSubmesh(const TetrahedralMesh & full, const std::vector<std::int32_t> & e
   auto              isExcluded = [&excluded](std::int32_t label) {
     return std::find(excluded.begin(), excluded.end(), label) != excluded.end();
   };
-  const std::vector<std::int64_t> neighbour = FaceNeighbours(full);
+  const std::vector<std::int64_t> neighbor = FaceNeighbors(full);
   std::vector<std::int32_t>       newNode(full.GetNumberOfPoints(), -1);
   TetrahedralMesh                 out;
   std::int32_t                    count = 0;
@@ -313,7 +313,7 @@ ExtractSubmesh(const TetrahedralMesh & full, const std::vector<std::int32_t> & e
     out.labels.push_back(full.labels[e]);
     for (int f = 0; f < 4; ++f)
     {
-      const std::int64_t other = neighbour[4 * e + f];
+      const std::int64_t other = neighbor[4 * e + f];
       std::int32_t       beyond;
       if (other < 0)
       {
@@ -358,7 +358,7 @@ NodesOnBoundary(const TetrahedralMesh & mesh, std::int32_t label)
 std::vector<std::int32_t>
 LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label)
 {
-  const std::vector<std::int64_t> neighbour = FaceNeighbours(mesh);
+  const std::vector<std::int64_t> neighbor = FaceNeighbors(mesh);
   std::vector<std::int32_t>       faces;
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
@@ -368,7 +368,7 @@ LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label)
     }
     for (int f = 0; f < 4; ++f)
     {
-      const std::int64_t other = neighbour[4 * e + f];
+      const std::int64_t other = neighbor[4 * e + f];
       if (other < 0 || mesh.labels[other] != label)
       {
         for (int i = 0; i < 3; ++i)
@@ -390,8 +390,8 @@ NodesOnLabelSurface(const TetrahedralMesh & mesh, std::int32_t label)
 std::vector<LabelResolution>
 ComputeLabelResolution(const TetrahedralMesh & mesh)
 {
-  // One pass over the elements: volume, edges, and the faces whose neighbour has another label (or none).
-  const std::vector<std::int64_t>         neighbour = FaceNeighbours(mesh);
+  // One pass over the elements: volume, edges, and the faces whose neighbor has another label (or none).
+  const std::vector<std::int64_t>         neighbor = FaceNeighbors(mesh);
   std::map<std::int32_t, LabelResolution> byLabel;
   std::map<std::int32_t, std::size_t>     elements;
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
@@ -412,7 +412,7 @@ ComputeLabelResolution(const TetrahedralMesh & mesh)
     }
     for (int f = 0; f < 4; ++f)
     {
-      const std::int64_t other = neighbour[4 * e + f];
+      const std::int64_t other = neighbor[4 * e + f];
       if (other < 0 || mesh.labels[other] != mesh.labels[e])
       {
         r.surfaceArea +=

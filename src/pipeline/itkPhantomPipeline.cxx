@@ -23,6 +23,7 @@
 #include "itkGridGeometryConversion.h"
 
 #include <cmath>
+#include <random>
 
 namespace itk {
 namespace {
@@ -88,7 +89,7 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
 }
 
 /** The truth may hold a stiffer tumour inside the prostate (dissertation Table 3.4): a ball at the
- * prostate's centroid with the requested fraction of its volume, labelled only in the truth's label map
+ * prostate's centroid with the requested fraction of its volume, labeled only in the truth's label map
  * and scene. The estimator sees one homogeneous prostate. */
 std::vector<std::int32_t>
 WithTumour(std::vector<std::int32_t> labels, const bmr::GridGeometry & g, const PhantomSettings & s, bmr::Scene & truth)
@@ -149,9 +150,9 @@ PullBackPoints(const bmr::GridGeometry & grid, const BiomechanicalFieldType * fi
   return points;
 }
 
-/** The fixed labels voxelise the deformed analytic anatomy once (the label at each voxel's pull-back
- * point), as a scan would; resampling the voxelised moving labels would quantise twice, and the second
- * staircase, carried along rigidly, favours the stiffest modulus. */
+/** The fixed labels voxelize the deformed analytic anatomy once (the label at each voxel's pull-back
+ * point), as a scan would; resampling the voxelized moving labels would quantize twice, and the second
+ * staircase, carried along rigidly, favors the stiffest modulus. */
 BiomechanicalLabelImageType::Pointer
 FixedLabels(const PhantomSettings & s, const bmr::GridGeometry & grid, const BiomechanicalFieldType * field)
 {
@@ -165,7 +166,7 @@ FixedLabels(const PhantomSettings & s, const bmr::GridGeometry & grid, const Bio
   return MakeImageOnGrid<BiomechanicalLabelImageType>(grid, bmr::SphereLabelsAt(p, points));
 }
 
-/** Seed centres moved by the simulated displacement: the ground-truth landmark pairs. */
+/** Seed centers moved by the simulated displacement: the ground-truth landmark pairs. */
 void
 MoveSeeds(PhantomPair & pair, const std::vector<bmr::Seed> & seeds, const bmr::TetrahedralMesh & mesh)
 {
@@ -229,6 +230,26 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
     pair.scene.fixedLandmarks = "landmarks_fixed.csv";
   }
   return pair;
+}
+
+std::vector<PhantomSettings>
+DrawPhantomSet(unsigned int count, std::uint64_t seed)
+{
+  // std::mt19937_64's sequence is fixed by the standard (its distributions are not, so the uniform numbers are
+  // made from the raw integers): the same set on every platform.
+  std::mt19937_64 rng(seed);
+  const auto      uniform = [&rng](double lo, double hi) {
+    return lo + (hi - lo) * (double(rng() >> 11) / double(std::uint64_t(1) << 53));
+  };
+  std::vector<PhantomSettings> set(count);
+  for (unsigned int k = 0; k < count; ++k)
+  {
+    set[k].prostateE = std::round(std::exp(uniform(std::log(50.0), std::log(300.0))));
+    set[k].bladderMM = std::round(100.0 * uniform(3.0, 8.0)) / 100.0;
+    set[k].rectumMM = std::round(100.0 * uniform(2.0, 5.0)) / 100.0;
+    set[k].seed = seed * 1000 + k + 1;
+  }
+  return set;
 }
 
 } // namespace itk

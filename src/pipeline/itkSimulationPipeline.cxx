@@ -143,7 +143,7 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
   out.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");
   clock.Warn(out.warnings, bmr::MeshResolutionWarnings(scene, out.mesh));
 
-  clock.Begin("FEM (assemble, factorise, solve)");
+  clock.Begin("FEM (assemble, factorize, solve)");
   out.simulation = bmr::SimulateScene(scene, out.mesh);
   out.mesh.displacement = out.simulation.displacement;
   out.mesh.force = out.simulation.force;
@@ -160,7 +160,7 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
   out.stages.pop_back();
   const bmr::SolverTimings & t = out.simulation.timings;
   clock.Add("assemble", t.assemble);
-  clock.Add("factorise", t.analyse + t.factorise);
+  clock.Add("factorize", t.analyze + t.factorize);
   clock.Add("solve", t.solve);
   pipeline::ComputeFields(out, reference, movingLabels, pushField, clock);
   return out;

@@ -238,7 +238,7 @@ std::vector<std::string>
 Scene::Warnings() const
 {
   std::vector<std::string> warnings;
-  if (nodalAveragedPressure)
+  if (formulation == ElementFormulationEnum::NodalAveragedPressure)
   {
     return warnings;
   }
@@ -573,7 +573,8 @@ ParseGaugeAndFormulation(const Json & root, const std::string & source, Scene & 
     {
       SceneError(source, "formulation", "\"" + f + "\" is not standard or nodal_averaged_pressure");
     }
-    scene.nodalAveragedPressure = f == "nodal_averaged_pressure";
+    scene.formulation =
+      f == "nodal_averaged_pressure" ? ElementFormulationEnum::NodalAveragedPressure : ElementFormulationEnum::Standard;
   }
 }
 
@@ -625,7 +626,7 @@ ParseObjective(const Json & objective, const std::string & source, std::vector<O
   }
 }
 
-// The keys of a radial_displacement load: centre, magnitude and the optional axis or semi-axes.
+// The keys of a radial_displacement load: center, magnitude and the optional axis or semi-axes.
 void
 ParseRadialDisplacement(const Json & j, const std::string & source, const std::string & entry, SceneLoad & load)
 {
@@ -922,7 +923,8 @@ SceneToJson(const Scene & scene)
   root["labels"] = labels;
   if (!scene.gauge.empty())
     root["gauge"] = scene.gauge;
-  root["formulation"] = scene.nodalAveragedPressure ? "nodal_averaged_pressure" : "standard";
+  root["formulation"] =
+    scene.formulation == ElementFormulationEnum::NodalAveragedPressure ? "nodal_averaged_pressure" : "standard";
   if (!scene.forceSurfaces.empty())
     root["force_surfaces"] = scene.forceSurfaces;
   if (!scene.objective.empty())
@@ -990,6 +992,39 @@ SceneToJson(const Scene & scene)
   }
   root["mesh"] = mesh;
   return root.dump(2) + "\n";
+}
+
+std::vector<std::int32_t>
+ParseLabelList(const std::string & text, const Scene * scene)
+{
+  std::vector<std::int32_t> labels;
+  if (text == "none")
+  {
+    return labels;
+  }
+  std::istringstream in(text);
+  std::string        item;
+  while (std::getline(in, item, ','))
+  {
+    if (item.empty())
+    {
+      continue;
+    }
+    const SceneLabel * named = scene ? scene->FindLabel(item) : nullptr;
+    if (named)
+    {
+      labels.push_back(named->value);
+      continue;
+    }
+    char *     end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (end == item.c_str() || *end != '\0')
+    {
+      Fail("ParseLabelList", "label \"" + item + "\" is neither an integer nor a label of the scene");
+    }
+    labels.push_back(static_cast<std::int32_t>(v));
+  }
+  return labels;
 }
 
 } // namespace bmr

@@ -58,7 +58,7 @@ SceneMaterials(const Scene & scene)
   {
     if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
     {
-      materials[l.value] = MaterialParameters{ l.youngsModulus, l.poissonRatio, scene.nodalAveragedPressure };
+      materials[l.value] = MaterialParameters{ l.youngsModulus, l.poissonRatio, scene.formulation };
     }
   }
   return materials;
@@ -284,7 +284,7 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
           d[c] = mesh.points[3 * node + c] - load.center[c];
           along += d[c] * load.axis[c];
         }
-        // Behind the centre along the axis: radial from the axis (the tube); otherwise from the centre (the cap).
+        // Behind the center along the axis: radial from the axis (the tube); otherwise from the center (the cap).
         // With semi-axes: the normal of the ellipsoid through the node.
         for (int c = 0; c < 3; ++c)
         {

@@ -33,7 +33,7 @@ using Vec3 = std::array<double, 3>;
 
 constexpr double Pi = 3.14159265358979323846;
 
-/** \name Pelvis anatomy, in mm relative to the phantom centre c (LPS: +x left,
+/** \name Pelvis anatomy, in mm relative to the phantom center c (LPS: +x left,
  * +y posterior, +z superior).
  *
  * The numbers were checked numerically for the separations the scene and the
@@ -214,7 +214,7 @@ private:
   Vec3 m_Upper{};
 };
 
-/** Seed cylinder stored relative to the phantom centre, with the squared
+/** Seed cylinder stored relative to the phantom center, with the squared
  * bounding radius used as a cheap rejection test. */
 struct SeedCylinder
 {
@@ -240,7 +240,7 @@ struct SeedCylinder
 
 /** Shortest distance between segments [p0, p1] and [q0, q1] (clamped
  * closest-point parameters). Used to keep tilted seeds from touching even when
- * their centres are far enough apart. */
+ * their centers are far enough apart. */
 double
 SegmentDistance(const Vec3 & p0, const Vec3 & p1, const Vec3 & q0, const Vec3 & q1)
 {
@@ -295,7 +295,7 @@ PlaceSeeds(const Vec3 & phantomCenter, unsigned int numberOfSeeds, std::uint64_t
   const double    cosMaxTilt = std::cos(SeedMaxTiltDegrees * Pi / 180.0);
 
   // Packing bound: the balls of radius SeedMinCenterDistance / 2 around the
-  // centres are disjoint and lie in the box that bounds the admissible centres
+  // centers are disjoint and lie in the box that bounds the admissible centers
   // grown by that radius. Refusing impossible requests here avoids spending
   // seconds in rejection sampling before failing.
   const double ballRadius = 0.5 * SeedMinCenterDistance;
@@ -314,7 +314,7 @@ PlaceSeeds(const Vec3 & phantomCenter, unsigned int numberOfSeeds, std::uint64_t
   }
 
   SplitMix64                         rng(randomSeed);
-  std::vector<std::pair<Vec3, Vec3>> axes; // end points, relative to the phantom centre
+  std::vector<std::pair<Vec3, Vec3>> axes; // end points, relative to the phantom center
   std::vector<Vec3>                  centers;
   const unsigned long long           maximumAttempts = 2000ULL * (numberOfSeeds + 10ULL);
   unsigned long long                 attempts = 0;
@@ -516,7 +516,7 @@ struct IndexBox
 
 /** Voxel boxes that must be supersampled whatever their corners say. A seed is
  * thinner than many voxels, so it can cross a voxel without touching any of its
- * corners or its centre; the corner test alone would then drop it. */
+ * corners or its center; the corner test alone would then drop it. */
 std::vector<IndexBox>
 SeedIndexBoxes(const GridGeometry & grid, const std::vector<Seed> & seeds)
 {
@@ -556,7 +556,7 @@ SeedIndexBoxes(const GridGeometry & grid, const std::vector<Seed> & seeds)
     bool     empty = false;
     for (unsigned int a = 0; a < 3; ++a)
     {
-      // One voxel of margin: a voxel reaches half a voxel beyond its centre index.
+      // One voxel of margin: a voxel reaches half a voxel beyond its center index.
       const double last = static_cast<double>(grid.size[a]) - 1.0;
       const double lower = std::max(0.0, std::floor(lowerIndex[a]) - 1.0);
       const double upper = std::min(last, std::ceil(upperIndex[a]) + 1.0);
@@ -572,13 +572,13 @@ SeedIndexBoxes(const GridGeometry & grid, const std::vector<Seed> & seeds)
   return boxes;
 }
 
-/** Fills the label map (class at the voxel centre) and the CT (class HU
- * averaged over 3x3x3 sub-voxel centres).
+/** Fills the label map (class at the voxel center) and the CT (class HU
+ * averaged over 3x3x3 sub-voxel centers).
  *
  * Supersampling every voxel would cost 27 classifications per voxel, so it is
  * done only where the voxel is not homogeneous: the classes at the 8 voxel
  * corners are computed once on the (n+1)^3 corner lattice, two z layers at a
- * time, and a voxel whose corners and centre share one class takes that class's
+ * time, and a voxel whose corners and center share one class takes that class's
  * HU directly. Convex organs much larger than a voxel cannot hide inside a
  * voxel without reaching a corner; the thin seeds can, hence \a forcedBoxes. */
 template<typename TModel>
@@ -716,9 +716,9 @@ CheckPhantomGrid(const GridGeometry & grid, const char * what, const char * wher
   }
 }
 
-/** Grid of \a size voxels of \a spacing, identity direction, centred on (0,0,0). */
+/** Grid of \a size voxels of \a spacing, identity direction, centered on (0,0,0). */
 GridGeometry
-CenteredGrid(const std::array<std::size_t, 3> & size, const Vec3 & spacing)
+AxisAlignedCenteredGrid(const std::array<std::size_t, 3> & size, const Vec3 & spacing)
 {
   GridGeometry grid;
   grid.size = size;
@@ -747,11 +747,11 @@ PhantomCenter(const GridGeometry & grid, bool useGridCenter, const Vec3 & center
 } // namespace
 
 PelvisPhantomParameters::PelvisPhantomParameters()
-  : grid(CenteredGrid({ { 160, 128, 64 } }, { { 1.25, 1.25, 2.5 } }))
+  : grid(AxisAlignedCenteredGrid({ { 160, 128, 64 } }, { { 1.25, 1.25, 2.5 } }))
 {}
 
 SpherePhantomParameters::SpherePhantomParameters()
-  : grid(CenteredGrid({ { 96, 96, 96 } }, { { 1.0, 1.0, 1.0 } }))
+  : grid(AxisAlignedCenteredGrid({ { 96, 96, 96 } }, { { 1.0, 1.0, 1.0 } }))
 {}
 
 std::array<double, 3>

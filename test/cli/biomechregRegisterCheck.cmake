@@ -1,6 +1,6 @@
 # Checks the outputs of `biomechreg register` on a pelvis phantom pair in DIR (DIR/reg):
 # - the recovered prostate modulus is within 10 % of the truth (truth.json), the issue's accuracy target.
-#   The fixed scan is made on a finer, independent mesh and voxelised at 1 mm, so the shape change that
+#   The fixed scan is made on a finer, independent mesh and voxelized at 1 mm, so the shape change that
 #   carries the modulus is seen through the label staircase; benchmarks/run_estimation_benchmark.sh
 #   measures the error over 50-350 kPa;
 # - the RMS distance of the deformed prostate surface nodes to the fixed prostate surface is below half

@@ -18,10 +18,10 @@
 // bmr::ElasticityEstimator with two unknown moduli, through itk::FEMElasticityOptimizer: two concentric-sphere
 // phantoms (dissertation 3.2.2) side by side, each a core (radius 14 mm) in a 10 kPa shell (to 20 mm; the
 // gauge), the cores of different moduli ("soft" at x = -24 mm, "stiff" at x = +24 mm). A thin hollow layer
-// around each ball carries its load: the ball's outer surface is pressed 2 mm towards its centre. The truth is
+// around each ball carries its load: the ball's outer surface is pressed 2 mm towards its center. The truth is
 // simulated on a finer, independent mesh of the same analytic geometry; the compressed balls stay spheres, so
 // the fixed surfaces are exact signed distance maps of spheres with the truth's deformed radii (no voxel
-// staircase: with voxelised labels the staircase, not the estimator, sets the error of such small organs).
+// staircase: with voxelized labels the staircase, not the estimator, sets the error of such small organs).
 // Both moduli must be recovered together within 10 %, identifiable, each with a finite uncertainty, after a
 // coordinate sweep of 6 samples per unknown.
 #include "bmrSimulation.h"
@@ -93,7 +93,7 @@ TwoBallScene(bool truth)
   return s;
 }
 
-/** Mean deformed distance [mm] of \a nodes from the centre (x0, 0, 0). */
+/** Mean deformed distance [mm] of \a nodes from the center (x0, 0, 0). */
 double
 DeformedRadius(const bmr::TetrahedralMesh &      mesh,
                const std::vector<double> &       u,

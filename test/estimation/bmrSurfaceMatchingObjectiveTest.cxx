@@ -50,10 +50,10 @@ SphereMap(const double c[3], double r)
   const double a = 0.3; // rotation about z: the sampler must honour direction cosines
   g.direction = { { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 } };
   g.origin = { { 0, 0, 0 } };
-  const auto centre = g.IndexToPoint({ { 23.5, 23.5, 23.5 } });
+  const auto center = g.IndexToPoint({ { 23.5, 23.5, 23.5 } });
   for (int d = 0; d < 3; ++d)
   {
-    g.origin[d] -= centre[d];
+    g.origin[d] -= center[d];
   }
   std::vector<float> v(g.GetNumberOfVoxels());
   for (std::size_t k = 0; k < g.size[2]; ++k)
@@ -192,7 +192,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     0.1);
 
   // 3. Walls move along their normals: with every parameter 1, each cavity wall node moves by 1 mm along the
-  // wall normal, which on this sphere points to the centre (out of the tissue). The normals average face
+  // wall normal, which on this sphere points to the center (out of the tissue). The normals average face
   // normals over 4 mm of a 3 mm mesh, so they deviate from the exact radial direction by a few degrees:
   // cos > 0.98 (11 degrees) allows for the facets' tilt and fails for any unaveraged or flipped normal.
   {

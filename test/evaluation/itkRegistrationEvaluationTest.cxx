@@ -19,7 +19,7 @@
 // - target registration error of a known translation field is exact (1e-12 mm: linear interpolation of a
 //   constant field is exact), and refuses landmarks outside the field or without a partner;
 // - implanted seeds are found in the pelvis phantom's CT (1.25 x 1.25 x 2.5 mm voxels, 10 HU noise) within
-//   0.5 mm of their true centres, in two seedings with 3 and 5 seeds, and paired with their partners after a
+//   0.5 mm of their true centers, in two seedings with 3 and 5 seeds, and paired with their partners after a
 //   translation;
 // - Dice, surface distances (mean, HD95, maximum) and the Jacobian determinant statistics on cases with known answers.
 #include "bmrPhantom.h"
@@ -141,13 +141,13 @@ itkRegistrationEvaluationTest(int, char *[])
     std::cout << numberOfSeeds << " seeds: largest centroid error " << worst << " mm (limit 0.5 mm)" << std::endl;
     ok &=
       Expect(worst <= 0.5,
-             ToString(numberOfSeeds) + " seeds found within 0.5 mm of their centres (got " + ToString(worst) + " mm)");
+             ToString(numberOfSeeds) + " seeds found within 0.5 mm of their centers (got " + ToString(worst) + " mm)");
     // The organ must exist.
     ITK_TRY_EXPECT_EXCEPTION(itk::DetectImplantedSeeds(ct.GetPointer(), labels.GetPointer(), 42));
   }
 
   // --- Dice and HD95: identical balls give 1 and 0; concentric balls of radius 8 and 11 voxels give a
-  // surface distance of 3 voxels everywhere, within +-1 voxel of voxelisation.
+  // surface distance of 3 voxels everywhere, within +-1 voxel of voxelization.
   {
     const auto ball = [](double radius) {
       auto image = LabelImageType::New();

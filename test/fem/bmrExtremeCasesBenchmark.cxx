@@ -39,7 +39,7 @@ struct Case
 {
   std::string group;
   double      h;
-  bool        optimise;
+  bool        optimize;
   double      ratio; // E_core / E_shell
   double      nu;    // both layers
   bool        averaged;
@@ -75,7 +75,7 @@ main(int argc, char * argv[])
 
   std::ofstream csv(argv[1]);
   csv << "# two-layer sphere, inner radius 5 mm, outer 10 mm, 1 kPa external pressure, shell E 10 kPa\n"
-      << "group,cell_size_mm,optimised,E_ratio,nu,formulation,tetrahedra,min_dihedral_deg,min_elements_across,"
+      << "group,cell_size_mm,optimized,E_ratio,nu,formulation,tetrahedra,min_dihedral_deg,min_elements_across,"
          "radial_error,relative_L2_error,residual,seconds,verdict,reason\n";
   std::cout << "| group | h [mm] | E ratio | nu | formulation | tets | min dihedral | elements across | radial error | "
                "residual | time [s] | verdict |\n"
@@ -91,10 +91,10 @@ main(int argc, char * argv[])
     double      across = 0.0;
     try
     {
-      const auto key = std::make_pair(c.h, c.optimise);
+      const auto key = std::make_pair(c.h, c.optimize);
       if (!meshes.count(key))
       {
-        meshes[key] = SphereMesh(c.h, c.optimise);
+        meshes[key] = SphereMesh(c.h, c.optimize);
       }
       const bmr::TetrahedralMesh & mesh = meshes[key];
       tets = mesh.GetNumberOfTetrahedra();
@@ -103,7 +103,7 @@ main(int argc, char * argv[])
       bmr::Scene scene;
       scene.labels = { { "shell", 1, bmr::LabelRole::Material, 10.0, c.nu },
                        { "core", 2, bmr::LabelRole::Material, 10.0 * c.ratio, c.nu } };
-      scene.nodalAveragedPressure = c.averaged;
+      scene.formulation = c.averaged ? bmr::ElementFormulationEnum::NodalAveragedPressure : bmr::ElementFormulationEnum::Standard;
       across = std::numeric_limits<double>::infinity();
       for (const bmr::LabelResolution & r : bmr::ComputeLabelResolution(mesh))
       {
@@ -139,7 +139,7 @@ main(int argc, char * argv[])
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const char * formulation = c.averaged ? "nodal_averaged_pressure" : "standard";
-    csv << c.group << "," << c.h << "," << c.optimise << "," << c.ratio << "," << c.nu << "," << formulation << ","
+    csv << c.group << "," << c.h << "," << c.optimize << "," << c.ratio << "," << c.nu << "," << formulation << ","
         << tets << "," << dihedral << "," << across << "," << e.nodalRadialRelative << "," << e.l2Relative << ","
         << e.residual << "," << seconds << "," << verdict << ",\"" << reason << "\"\n";
     std::cout << "| " << c.group << " | " << c.h << " | " << c.ratio << " | " << c.nu << " | " << formulation << " | "

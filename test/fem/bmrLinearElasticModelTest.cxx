@@ -16,7 +16,7 @@
  *
  *=========================================================================*/
 // Linear-elastic FEM core: patch test, scale invariance of u under E, F -> 10^k (E, F),
-// reaction forces in equilibrium, reuse of the factorisation, and every error path.
+// reaction forces in equilibrium, reuse of the factorization, and every error path.
 #include "bmrLinearElasticModel.h"
 #include "bmrTestUtilities.h"
 
@@ -124,13 +124,13 @@ bmrLinearElasticModelTest(int, char *[])
         std::cout << "force imbalance " << imbalance << std::endl;
         ok &= Expect(imbalance < 1e-10, // rounding only
                      "reactions balance the applied load to a relative 1e-10 (got " + ToString(imbalance) + ")");
-        // The cached factorisation: a second right-hand side reuses it and doubles u.
+        // The cached factorization: a second right-hand side reuses it and doubles u.
         std::vector<double> f2(f);
         for (double & v : f2)
         {
           v *= 2.0;
         }
-        const double        factoriseBefore = model.GetTimings().factorise;
+        const double        factorizeBefore = model.GetTimings().factorize;
         std::vector<double> u2 = model.Solve(f2);
         for (double & v : u2)
         {
@@ -139,13 +139,13 @@ bmrLinearElasticModelTest(int, char *[])
         const double doubled = RelativeDifference(u2, u);
         ok &=
           Expect(doubled < 1e-12, "twice the load gives twice u to a relative 1e-12 (got " + ToString(doubled) + ")");
-        ok &= Expect(model.GetTimings().factorise == factoriseBefore,
-                     "a second right-hand side reuses the factorisation (factorise time " + ToString(factoriseBefore) +
-                       " s -> " + ToString(model.GetTimings().factorise) + " s)");
+        ok &= Expect(model.GetTimings().factorize == factorizeBefore,
+                     "a second right-hand side reuses the factorization (factorize time " + ToString(factorizeBefore) +
+                       " s -> " + ToString(model.GetTimings().factorize) + " s)");
       }
     }
     std::cout << "scale invariance: worst relative difference over k = -6..6: " << worst << std::endl;
-    // 1e-10: exact in exact arithmetic; the factorisation's rounding is scale-free.
+    // 1e-10: exact in exact arithmetic; the factorization's rounding is scale-free.
     ok &= Expect(worst <= 1e-10,
                  "u invariant under (E, F) -> 10^k (E, F) to a relative 1e-10 (got " + ToString(worst) + ")");
   }

@@ -55,7 +55,7 @@ public:
   }
 
   /** Radial displacement [mm] at radius r [mm]; \a inCore selects the formula
-   * (lets a discretised interface be evaluated on its own side). */
+   * (lets a discretized interface be evaluated on its own side). */
   double
   RadialDisplacement(double r, bool inCore) const
   {
@@ -67,7 +67,7 @@ public:
     return RadialDisplacement(r, r < m_A);
   }
 
-  /** Displacement vector [mm] at a point relative to the centre. */
+  /** Displacement vector [mm] at a point relative to the center. */
   std::array<double, 3>
   Displacement(const std::array<double, 3> & x, bool inCore) const
   {

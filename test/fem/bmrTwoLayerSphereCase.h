@@ -35,10 +35,10 @@ constexpr double InnerRadius = 5.0;  // mm; a shell of half the radius keeps sev
 constexpr double OuterRadius = 10.0; // mm
 constexpr double Pressure = 1.0;     // kPa
 
-/** The two-layer sphere meshed with cell size \a h [mm]; \a optimise false skips CGAL's sliver
+/** The two-layer sphere meshed with cell size \a h [mm]; \a optimize false skips CGAL's sliver
  * perturbation and exudation (a mesh with slivers). */
 inline bmr::TetrahedralMesh
-SphereMesh(double h, bool optimise = true)
+SphereMesh(double h, bool optimize = true)
 {
   bmr::MeshingParameters p;
   p.cellSize = h;
@@ -46,8 +46,8 @@ SphereMesh(double h, bool optimise = true)
   // The sagitta of a chord of length h on the inner sphere: surface error of the order of the element error.
   p.facetDistance = h * h / (8.0 * InnerRadius);
   p.facetAngle = 25.0;
-  p.exude = optimise; // sliver exudation: perturbation alone can leave a flat element on the curved interface
-  p.optimize = optimise;
+  p.exude = optimize; // sliver exudation: perturbation alone can leave a flat element on the curved interface
+  p.optimize = optimize;
   auto label = [](double x, double y, double z) -> std::int32_t {
     const double r2 = x * x + y * y + z * z;
     return r2 < InnerRadius * InnerRadius ? 2 : (r2 < OuterRadius * OuterRadius ? 1 : 0);
@@ -74,7 +74,8 @@ Solve(const bmr::TetrahedralMesh & mesh, double E1, double nu1, double E2, doubl
                    { "shell", 1, bmr::LabelRole::Material, E2, nu2 },
                    { "core", 2, bmr::LabelRole::Material, E1, nu1 } };
   scene.loads = { { "outside", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, Pressure } };
-  scene.nodalAveragedPressure = averagedPressure;
+  scene.formulation =
+    averagedPressure ? bmr::ElementFormulationEnum::NodalAveragedPressure : bmr::ElementFormulationEnum::Standard;
   bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(scene, mesh);
 
   const std::array<std::array<double, 3>, 3> targets{ { { { 0, 0, 0 } }, { { 4, 0, 0 } }, { { 0, 4, 0 } } } };

@@ -68,7 +68,7 @@ itkImageWarperTest(int, char *[])
   warper->SetInput(image);
   warper->SetDisplacementField(field);
   warper->SetDefaultPixelValue(-1000.0f);
-  // Float images default to linear interpolation, integer (label) images to nearest neighbour.
+  // Float images default to linear interpolation, integer (label) images to nearest neighbor.
   ok &= Expect(warper->GetInterpolation() == WarperType::InterpolationEnum::Linear,
                "a float image defaults to linear interpolation (got mode " +
                  ToString(static_cast<int>(warper->GetInterpolation())) + ")");
@@ -93,7 +93,7 @@ itkImageWarperTest(int, char *[])
   ok &= Expect(inside > 1000, "more than 1000 voxels map inside the image (got " + ToString(inside) + ")");
   ok &= Expect(worst < 1e-3, "linear ramp through a translation exact to 1e-3 (got max error " + ToString(worst) + ")");
 
-  // Labels: nearest neighbour and label-Gaussian both return only input labels.
+  // Labels: nearest neighbor and label-Gaussian both return only input labels.
   for (auto mode : { itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::NearestNeighbor,
                      itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::LabelGaussian })
   {

@@ -168,7 +168,7 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   ok &= Expect(finite, "pull-back field finite everywhere");
 
   // 3. The fill: zero on the grid border and continuous at the mesh boundary. The largest jump between
-  // x-neighbours is compared with the same field without fill, whose step at the mesh boundary is the
+  // x-neighbors is compared with the same field without fill, whose step at the mesh boundary is the
   // field itself (|d| up to ~2 mm); a continuous fill leaves only the steep but smooth harmonic decay
   // near the cube's corners (measured 0.48, 0.25, 0.16 mm in consecutive voxels there).
   auto maxJump = [&size](const FieldType * f, double & border) {
@@ -191,7 +191,7 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   double       border = 0.0, unusedBorder = 0.0;
   const double jumpFilled = maxJump(pull1, border);
   const double jumpUnfilled = maxJump(Run(meshObject, reference, true, 2, false), unusedBorder);
-  std::cout << "fill: max |d| on the border " << border << " mm; largest jump between x-neighbours " << jumpFilled
+  std::cout << "fill: max |d| on the border " << border << " mm; largest jump between x-neighbors " << jumpFilled
             << " mm with the fill, " << jumpUnfilled << " mm without" << std::endl;
   ok &= Expect(border < 1e-12, "fill is zero on the grid border to 1e-12 mm (got " + ToString(border) + ")");
   ok &= Expect(jumpUnfilled > 1.5,

@@ -53,20 +53,20 @@ MakeImage(const std::array<double, 3> & C)
   Rx(2, 1) = std::sin(b);
   Rx(2, 2) = std::cos(b);
   image->SetDirection(Rz * Rx);
-  // Put the grid's centre on C.
+  // Put the grid's center on C.
   LabelImageType::PointType origin;
   for (unsigned int i = 0; i < 3; ++i)
   {
     origin[i] = 0.0;
   }
   image->SetOrigin(origin);
-  itk::ContinuousIndex<double, 3> centre;
+  itk::ContinuousIndex<double, 3> center;
   for (unsigned int i = 0; i < 3; ++i)
   {
-    centre[i] = 0.5 * (size[i] - 1);
+    center[i] = 0.5 * (size[i] - 1);
   }
   LabelImageType::PointType p;
-  image->TransformContinuousIndexToPhysicalPoint(centre, p);
+  image->TransformContinuousIndexToPhysicalPoint(center, p);
   for (unsigned int i = 0; i < 3; ++i)
   {
     origin[i] = C[i] - p[i];

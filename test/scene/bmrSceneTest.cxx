@@ -91,20 +91,20 @@ bmrSceneTest(int, char *[])
   const bmr::Scene again = bmr::ParseScene(bmr::SceneToJson(s), "roundtrip");
   ok &= Expect(bmr::SceneToJson(again) == bmr::SceneToJson(s), "SceneToJson o ParseScene o SceneToJson round trip");
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
-  // A tube load: the axis is normalised on reading and survives the round trip.
+  // A tube load: the axis is normalized on reading and survives the round trip.
   const std::string tube = Replace(ValidScene, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 2], \"magnitude_mm\": 6");
   const bmr::Scene  withAxis = bmr::ParseScene(tube, "tube.json");
   bool              axisOk = true;
   axisOk &= Expect(withAxis.loads[0].axis == std::array<double, 3>{ { 0, 0, 1 } },
-                   "load axis [0, 0, 2] normalised to exactly (0, 0, 1)");
+                   "load axis [0, 0, 2] normalized to exactly (0, 0, 1)");
   axisOk &= Expect(withAxis.loads[0].magnitude == 6,
                    "tube load magnitude 6 mm (got " + ToString(withAxis.loads[0].magnitude) + ")");
   axisOk &= Expect(bmr::ParseScene(bmr::SceneToJson(withAxis), "roundtrip").loads[0].axis == withAxis.loads[0].axis,
                    "load axis survives the round trip exactly");
   std::cout << "load axis: " << (axisOk ? "ok" : "FAIL") << std::endl;
   ok &= axisOk;
-  // The tube load moves wall nodes behind the centre radially from the axis, those beyond it from the centre:
-  // one tetrahedron whose face {1, 2, 3} is bladder wall; centre (0, 0, 15), axis +z, 6 mm.
+  // The tube load moves wall nodes behind the center radially from the axis, those beyond it from the center:
+  // one tetrahedron whose face {1, 2, 3} is bladder wall; center (0, 0, 15), axis +z, 6 mm.
   {
     bmr::Scene capsule = withAxis;
     capsule.loads[0].center = { { 0, 0, 15 } };
@@ -128,8 +128,8 @@ bmrSceneTest(int, char *[])
     // Exact up to rounding: the directions are unit vectors of axis-aligned differences.
     std::cout << "tube load directions: largest error " << worst << " mm" << std::endl;
     ok &= Expect(worst < 1e-12, "tube load directions exact to 1e-12 mm (got " + ToString(worst) + ")");
-    // An ellipsoid load (semi-axes 26, 13, 13 about the centre): the direction of node 1, (13, 0, -25)
-    // from the centre, is the ellipsoid's normal there, proportional to (13 / 26^2, 0, -25 / 13^2).
+    // An ellipsoid load (semi-axes 26, 13, 13 about the center): the direction of node 1, (13, 0, -25)
+    // from the center, is the ellipsoid's normal there, proportional to (13 / 26^2, 0, -25 / 13^2).
     bmr::Scene ellipsoid = capsule;
     ellipsoid.loads[0].axis = { { 0, 0, 0 } };
     ellipsoid.loads[0].semiAxes = { { 26, 13, 13 } };

@@ -15,7 +15,7 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-// ComputeSceneDistanceMaps on a voxelised ball: the sampled map's zero level lies on the ball's own surface to
+// ComputeSceneDistanceMaps on a voxelized ball: the sampled map's zero level lies on the ball's own surface to
 // well below the voxel staircase, only the objective labels are computed, and a missing label is refused.
 #include "bmrSignedDistanceSampler.h"
 #include "bmrTestUtilities.h"
@@ -65,7 +65,7 @@ itkSceneDistanceMapsTest(int, char *[])
   auto labels = LabelImageType::New();
   labels->SetRegions(itk::ImageRegion<3>(itk::Size<3>{ { 33, 32, 33 } }));
   labels->Allocate();
-  // A voxel belongs to the ball when its centre does: the label surface is a staircase of voxel faces.
+  // A voxel belongs to the ball when its center does: the label surface is a staircase of voxel faces.
   for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(labels, labels->GetBufferedRegion()); !it.IsAtEnd(); ++it)
   {
     double d2 = 0.0;
@@ -91,9 +91,9 @@ itkSceneDistanceMapsTest(int, char *[])
   SurfaceError(maps.at("ball"), rms, mean);
   std::cout << "phi on the analytic sphere: RMS " << rms << " mm, mean " << mean << " mm" << std::endl;
   // The label surface is a staircase of voxel faces. Read off that staircase, points of the smooth sphere
-  // would show its quantisation, 1/sqrt(12) = 0.29 mm RMS for a uniform offset. The averaged organ and
+  // would show its quantization, 1/sqrt(12) = 0.29 mm RMS for a uniform offset. The averaged organ and
   // complement maps, sampled as a cubic B-spline, must do much better: below half of it. The mean (the
-  // voxelised ball's volume error, about 0.03 mm here) must stay below a tenth of a voxel.
+  // voxelized ball's volume error, about 0.03 mm here) must stay below a tenth of a voxel.
   ok &= Expect(rms < 0.145, "RMS of phi on the analytic sphere below 0.145 mm (got " + ToString(rms) + ")");
   ok &= Expect(std::abs(mean) < 0.1, "|mean| of phi on the analytic sphere below 0.1 mm (got " + ToString(mean) + ")");
 

@@ -124,7 +124,7 @@ TestDefaultPelvis(Checker & checker)
   for (unsigned int a = 0; a < 3; ++a)
   {
     checker.Check(std::abs(center[a]) < 1e-9,
-                  std::string("default grid is centred on the origin: ") + axes[a] + " within 1e-9 mm (got " +
+                  std::string("default grid is centered on the origin: ") + axes[a] + " within 1e-9 mm (got " +
                     ToString(center[a]) + ")");
   }
 
@@ -133,7 +133,7 @@ TestDefaultPelvis(Checker & checker)
     checker.Check(CountLabel(volume, label) > 0, "default pelvis contains label " + std::to_string(label));
   }
 
-  // Tolerance 5 %: the 1.25 x 1.25 x 2.5 mm voxelisation of a 40 x 32 x 36 mm
+  // Tolerance 5 %: the 1.25 x 1.25 x 2.5 mm voxelization of a 40 x 32 x 36 mm
   // ellipsoid has a boundary error of a few tenths of a percent; 5 % catches a
   // wrong size or a missing organ while leaving room for label-priority changes.
   const double prostateVolume = CountLabel(volume, bmr::PelvisProstate) * VoxelVolume(grid);
@@ -147,20 +147,20 @@ TestDefaultPelvis(Checker & checker)
   {
     const bmr::Seed & seed = volume.seeds[s];
     const long long   offset = NearestOffset(grid, seed.center);
-    checker.Check(offset >= 0, "seed centre inside the grid");
+    checker.Check(offset >= 0, "seed center inside the grid");
     if (offset < 0)
     {
       continue;
     }
-    checker.Check(volume.labels[offset] == bmr::PelvisProstate, "seed centre labelled prostate");
+    checker.Check(volume.labels[offset] == bmr::PelvisProstate, "seed center labeled prostate");
     // Threshold 1000 HU: by partial volume a 1.5 mm seed gives ~740 HU (axis on
-    // a voxel corner) to ~2200 HU (axis through the voxel centre) in 1.25 mm
+    // a voxel corner) to ~2200 HU (axis through the voxel center) in 1.25 mm
     // voxels; the default seeds give 1100-1400 HU, 45 HU without a seed.
     const double seedCT = volume.ct[offset];
     std::cout << "seed " << s << " at (" << seed.center[0] << ", " << seed.center[1] << ", " << seed.center[2]
               << ") axis (" << seed.axis[0] << ", " << seed.axis[1] << ", " << seed.axis[2] << "): CT " << seedCT
               << " HU" << std::endl;
-    checker.Check(seedCT > 1000.0, "CT at the seed centre exceeds 1000 HU");
+    checker.Check(seedCT > 1000.0, "CT at the seed center exceeds 1000 HU");
     // 20 degrees is the documented maximum tilt of the seed axes from +z.
     checker.Check(seed.axis[2] >= std::cos(20.0 * Pi / 180.0) - 1e-12, "seed axis within 20 degrees of z");
     for (std::size_t t = s + 1; t < volume.seeds.size(); ++t)
@@ -170,12 +170,12 @@ TestDefaultPelvis(Checker & checker)
                                         (seed.center[1] - other[1]) * (seed.center[1] - other[1]) +
                                         (seed.center[2] - other[2]) * (seed.center[2] - other[2]));
       // 6 mm is the placement rule itself; no tolerance.
-      checker.Check(distance >= 6.0, "seed centres at least 6 mm apart");
+      checker.Check(distance >= 6.0, "seed centers at least 6 mm apart");
     }
   }
 
   // Seeds keep >= 2 mm from the prostate surface, so no bright voxel may carry
-  // another label (exact: partial volume only spreads a seed into neighbouring
+  // another label (exact: partial volume only spreads a seed into neighboring
   // prostate voxels).
   std::size_t brightOutside = 0;
   std::size_t bright = 0;
@@ -217,8 +217,8 @@ TestDefaultPelvis(Checker & checker)
 void
 TestObliquePelvis(Checker & checker)
 {
-  // Direction = Rz(30 deg) Rx(10 deg); the grid centre is moved off the origin
-  // so that the anatomy must follow the centre, not the origin.
+  // Direction = Rz(30 deg) Rx(10 deg); the grid center is moved off the origin
+  // so that the anatomy must follow the center, not the origin.
   const double cz = std::cos(30.0 * Pi / 180.0);
   const double sz = std::sin(30.0 * Pi / 180.0);
   const double cx = std::cos(10.0 * Pi / 180.0);
@@ -291,16 +291,16 @@ TestObliquePelvis(Checker & checker)
     }
     std::cout << "oblique prostate centroid error " << std::sqrt(distance2) << " mm" << std::endl;
     // Tolerance 1.5 mm: half the largest spacing; the symmetric ellipsoid's
-    // voxel centroid moves by far less, a mis-oriented anatomy by centimetres.
+    // voxel centroid moves by far less, a mis-oriented anatomy by centimeters.
     checker.Check(distance2 <= 1.5 * 1.5, "oblique prostate centroid within 1.5 mm of c + (0, 5, -15)");
   }
   for (const bmr::Seed & seed : volume.seeds)
   {
     const long long offset = NearestOffset(grid, seed.center);
-    if (checker.Check(offset >= 0, "oblique seed centre inside the grid"))
+    if (checker.Check(offset >= 0, "oblique seed center inside the grid"))
     {
       checker.Check(volume.labels[offset] == bmr::PelvisProstate,
-                    "oblique seed centre labelled prostate (got " + std::to_string(volume.labels[offset]) + ")");
+                    "oblique seed center labeled prostate (got " + std::to_string(volume.labels[offset]) + ")");
     }
   }
 }
@@ -323,7 +323,7 @@ TestDeterminism(Checker & checker)
     for (std::size_t s = 0; s < first.seeds.size(); ++s)
     {
       checker.Check(first.seeds[s].center == second.seeds[s].center,
-                    "two calls give seed " + ToString(s) + " the same centre");
+                    "two calls give seed " + ToString(s) + " the same center");
       checker.Check(first.seeds[s].axis == second.seeds[s].axis,
                     "two calls give seed " + ToString(s) + " the same axis");
     }
@@ -353,10 +353,10 @@ TestSphere(Checker & checker)
   checker.Check(std::abs(inner - analyticInner) <= 0.03 * analyticInner, "sphere core volume within 3 %");
   // Tolerance 5 % for the thin (7.5 mm) shell, whose relative staircase error is larger.
   checker.Check(std::abs(shell - analyticShell) <= 0.05 * analyticShell, "sphere shell volume within 5 %");
-  // Centre voxel value exact: 8 voxels around the centre are homogeneous core.
+  // Center voxel value exact: 8 voxels around the center are homogeneous core.
   const std::size_t centerOffset = 48 + 96 * (48 + 96 * 48);
   checker.Check(volume.ct[centerOffset] == 60.0f,
-                "sphere core exactly 60 HU at the centre (got " + ToString(volume.ct[centerOffset]) + ")");
+                "sphere core exactly 60 HU at the center (got " + ToString(volume.ct[centerOffset]) + ")");
   checker.Check(volume.ct[0] == -1000.0f, "corner voxel exactly -1000 HU, air (got " + ToString(volume.ct[0]) + ")");
 }
 

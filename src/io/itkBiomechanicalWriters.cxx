@@ -1,0 +1,124 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkBiomechanicalWriters.h"
+
+#include "bmrAtomicFile.h"
+#include "bmrError.h"
+#include "bmrVtuWriter.h"
+#include "itkBiomechanicalImageIO.h"
+#include "itkBiomechanicalReports.h"
+
+#include <chrono>
+#include <filesystem>
+
+namespace itk {
+
+void
+MakeOutputDirectory(const std::string & path)
+{
+  std::error_code error;
+  std::filesystem::create_directories(path, error);
+  if (error || !std::filesystem::is_directory(path))
+  {
+    bmr::Fail("MakeOutputDirectory", "cannot create output directory \"" + path + "\"");
+  }
+}
+
+void
+WriteSimulationMesh(const std::string & path, const SimulationResult & s)
+{
+  const std::vector<double> dirichlet(s.simulation.dirichlet.begin(), s.simulation.dirichlet.end());
+  const std::vector<double> labels(s.mesh.labels.begin(), s.mesh.labels.end());
+  bmr::WriteVtu(
+    path,
+    s.mesh,
+    { { "displacement", 3, s.mesh.displacement }, { "force", 3, s.mesh.force }, { "dirichlet", 1, dirichlet } },
+    { { "label", 1, labels },
+      { "youngs_modulus", 1, s.simulation.youngsModulus },
+      { "poisson_ratio", 1, s.simulation.poissonRatio },
+      { "von_mises", 1, s.simulation.vonMises } });
+}
+
+void
+WriteSimulationOutputs(const std::string &                 directory,
+                       const SimulationResult &            s,
+                       const BiomechanicalLabelImageType * warpedLabels,
+                       const BiomechanicalCTImageType *    warpedCT)
+{
+  MakeOutputDirectory(directory);
+  WriteSimulationMesh(directory + "/mesh.vtu", s);
+  WriteImageAtomically(s.pullBack.GetPointer(), directory + "/field.nrrd");
+  if (s.push)
+  {
+    WriteImageAtomically(s.push.GetPointer(), directory + "/forward_field.nrrd");
+  }
+  WriteImageAtomically(warpedLabels, directory + "/warped_labels.nrrd");
+  if (warpedCT)
+  {
+    WriteImageAtomically(warpedCT, directory + "/warped_ct.nrrd");
+  }
+}
+
+PipelineStage
+WriteRegistrationOutputs(const std::string &                directory,
+                         const RegistrationResult &         result,
+                         const RegistrationSettings &       settings,
+                         const std::vector<PipelineStage> & stages)
+{
+  const auto start = std::chrono::steady_clock::now();
+  WriteSimulationOutputs(directory, result.state, result.warpedLabels, result.warpedCT);
+  std::vector<std::string> unknownNames;
+  for (const auto & u : result.unknowns)
+  {
+    unknownNames.push_back(u.name);
+  }
+  auto history = result.estimation.history;
+  history.insert(history.end(), result.estimation.outerIterations.begin(), result.estimation.outerIterations.end());
+  bmr::WriteTextFileAtomically(directory + "/history.csv", IterationHistoryCsv(history, unknownNames));
+  if (!result.estimation.sweep.empty())
+  {
+    bmr::WriteTextFileAtomically(directory + "/sweep.csv", IterationHistoryCsv(result.estimation.sweep, unknownNames));
+  }
+  const PipelineStage        writing{ "write outputs",
+                               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() };
+  std::vector<PipelineStage> wallTimes = stages;
+  wallTimes.push_back(writing);
+  bmr::WriteTextFileAtomically(directory + "/report.json", RegistrationReportJson(result, settings, wallTimes));
+  return writing;
+}
+
+void
+WritePhantomPair(const std::string & directory, const PhantomPair & pair, const PhantomSettings & settings)
+{
+  MakeOutputDirectory(directory);
+  WriteImageAtomically(pair.movingCT.GetPointer(), directory + "/moving_ct.nrrd");
+  WriteImageAtomically(pair.movingLabels.GetPointer(), directory + "/moving_labels.nrrd");
+  WriteImageAtomically(pair.fixedCT.GetPointer(), directory + "/fixed_ct.nrrd");
+  WriteImageAtomically(pair.fixedLabels.GetPointer(), directory + "/fixed_labels.nrrd");
+  WriteImageAtomically(pair.truthField.GetPointer(), directory + "/truth_field.nrrd");
+  bmr::WriteTextFileAtomically(directory + "/scene.json", bmr::SceneToJson(pair.scene));
+  bmr::WriteTextFileAtomically(directory + "/truth_scene.json", bmr::SceneToJson(pair.truthScene));
+  if (!pair.movingLandmarks.empty())
+  {
+    bmr::WriteLandmarks(directory + "/" + pair.scene.movingLandmarks, pair.movingLandmarks);
+    bmr::WriteLandmarks(directory + "/" + pair.scene.fixedLandmarks, pair.fixedLandmarks);
+  }
+  bmr::WriteTextFileAtomically(directory + "/truth.json", PhantomTruthJson(pair, settings));
+}
+
+} // namespace itk
