@@ -64,7 +64,7 @@ ParsePhantomSettings(const Arguments & args)
 {
   itk::PhantomSettings o;
   const bool           pelvis = args.Choice("--scene", { "pelvis", "spheres" }) == "pelvis";
-  o.anatomy = pelvis ? itk::PhantomSettings::Anatomy::Pelvis : itk::PhantomSettings::Anatomy::Spheres;
+  o.anatomy = pelvis ? itk::PhantomSettings::AnatomyEnum::Pelvis : itk::PhantomSettings::AnatomyEnum::Spheres;
   o.grid = GridFromArguments(args, pelvis ? bmr::PelvisPhantomParameters().grid : bmr::SpherePhantomParameters().grid);
   o.prostateE = args.Number("--true-E-kPa", o.prostateE);
   o.prostateNu = args.Number("--true-nu", o.prostateNu);
@@ -107,7 +107,7 @@ PhantomCommand(const Arguments & args)
   args.CheckAllUsed();
   StageTimer timer;
   std::cout << "biomechreg phantom: "
-            << (settings.anatomy == itk::PhantomSettings::Anatomy::Pelvis ? "pelvis" : "spheres") << " -> " << out
+            << (settings.anatomy == itk::PhantomSettings::AnatomyEnum::Pelvis ? "pelvis" : "spheres") << " -> " << out
             << std::endl;
   const itk::PhantomPair pair = itk::MakePhantomPair(settings, &timer);
   WritePhantom(out, pair, settings, timer);

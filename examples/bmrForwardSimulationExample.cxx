@@ -36,7 +36,7 @@ main()
   const auto               labels = itk::MakeImageOnGrid<itk::BiomechanicalLabelImageType>(volume.grid, volume.labels);
 
   bmr::Scene scene = bmr::SpherePhantomScene(50.0, false);
-  scene.loads = { { "outside", bmr::SceneLoad::Type::RadialDisplacement, bmr::GridCenter(volume.grid), -1.5 } };
+  scene.loads = { { "outside", bmr::SceneLoad::TypeEnum::RadialDisplacement, bmr::GridCenter(volume.grid), -1.5 } };
 
   // Mesh (CGAL) -> FEM (CHOLMOD) -> pull-back field on the labels' grid; no push field.
   const itk::SimulationResult sim = itk::SimulateLabelImage(labels, scene, labels, nullptr, false);

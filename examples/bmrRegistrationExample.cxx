@@ -30,7 +30,7 @@ int
 main()
 {
   itk::PhantomSettings phantom;
-  phantom.anatomy = itk::PhantomSettings::Anatomy::Spheres;
+  phantom.anatomy = itk::PhantomSettings::AnatomyEnum::Spheres;
   phantom.grid = bmr::SpherePhantomParameters().grid; // 96^3 voxels of 1 mm: the shapes resolve the modulus
   phantom.prostateE = 80.0;                           // kPa, the core
   phantom.bladderMM = 1.5;                            // the outer surface moves inwards by 1.5 mm

@@ -21,6 +21,8 @@
 #include "bmrGridGeometry.h"
 #include "bmrTetrahedralMesh.h"
 
+#include <iosfwd>
+
 namespace bmr {
 
 /** Which map of the finite-element deformation a field represents.
@@ -31,11 +33,13 @@ namespace bmr {
  * ITK convention of DisplacementFieldTransform): x is located in the deformed
  * element, and its barycentric coordinates combine the undeformed positions,
  * which is the exact inverse of the piecewise-linear map. */
-enum class FieldKind
+enum class FieldKindEnum
 {
   Push,
   PullBack
 };
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, FieldKindEnum value);
 
 /** \brief Evaluates the FE displacement on the voxels of a grid covered by the mesh.
  *
@@ -54,7 +58,7 @@ public:
   DisplacementFieldRasterizer(const TetrahedralMesh &     mesh,
                               const std::vector<double> & displacement,
                               const GridGeometry &        grid,
-                              FieldKind                   kind);
+                              FieldKindEnum               kind);
 
   /** Writes the voxels of the region [start, start+size) of whole-grid buffers:
    * \a field (3 doubles per voxel, LPS mm) and \a inside (1 where covered, else
@@ -82,7 +86,7 @@ private:
   const TetrahedralMesh &     m_Mesh;
   const std::vector<double> & m_Displacement;
   GridGeometry                m_Grid;
-  FieldKind                   m_Kind;
+  FieldKindEnum               m_Kind;
   std::vector<Element>        m_Elements;
   std::size_t                 m_Inverted{ 0 };
 };

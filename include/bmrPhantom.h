@@ -21,6 +21,7 @@
 #include "bmrGridGeometry.h"
 #include "bmrScene.h"
 
+#include <iosfwd>
 #include <cstdint>
 #include <vector>
 
@@ -148,6 +149,9 @@ enum class WallFillingEnum : std::uint8_t
    * prostate by up to 0.8 |d| along its axis), motion that no segmentation shows. */
   FromPoint
 };
+
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, WallFillingEnum value);
 
 /** The truth's loads for a filling of the bladder by \a bladderMM and the rectum by \a rectumMM [mm]
  * (radial displacements about the phantom's own organ centers for \a parameters' grid). */

@@ -21,6 +21,7 @@
 #include "bmrLinearElasticModel.h"
 #include "bmrMesher.h"
 
+#include <iosfwd>
 #include <set>
 #include <string>
 #include <vector>
@@ -28,7 +29,7 @@
 namespace bmr {
 
 /** What a label of the moving label map is in the simulation. */
-enum class LabelRole
+enum class LabelRoleEnum
 {
   Material,        ///< simulated, known E [kPa] and nu
   UnknownMaterial, ///< simulated, E estimated within bounds [kPa], known nu
@@ -39,13 +40,13 @@ enum class LabelRole
 
 struct BiomechanicalRegistration_EXPORT SceneLabel
 {
-  std::string  name;
-  std::int32_t value{ 0 };
-  LabelRole    role{ LabelRole::Material };
-  double       youngsModulus{ 0.0 }; ///< kPa (initial value for an unknown material)
-  double       poissonRatio{ 0.0 };
-  double       lowerBound{ 0.0 }; ///< kPa, unknown materials only
-  double       upperBound{ 0.0 }; ///< kPa, unknown materials only
+  std::string   name;
+  std::int32_t  value{ 0 };
+  LabelRoleEnum role{ LabelRoleEnum::Material };
+  double        youngsModulus{ 0.0 }; ///< kPa (initial value for an unknown material)
+  double        poissonRatio{ 0.0 };
+  double        lowerBound{ 0.0 }; ///< kPa, unknown materials only
+  double        upperBound{ 0.0 }; ///< kPa, unknown materials only
 };
 
 struct BiomechanicalRegistration_EXPORT ObjectiveTerm
@@ -71,13 +72,13 @@ struct BiomechanicalRegistration_EXPORT ObjectiveTerm
  * lumped to nodal forces [mN] (one third of each face's area per node). */
 struct BiomechanicalRegistration_EXPORT SceneLoad
 {
-  enum class Type
+  enum class TypeEnum
   {
     RadialDisplacement,
     Pressure
   };
   std::string           surface;
-  Type                  type{ Type::RadialDisplacement };
+  TypeEnum              type{ TypeEnum::RadialDisplacement };
   std::array<double, 3> center{ { 0, 0, 0 } };
   double                magnitude{ 0.0 };        ///< mm for RadialDisplacement, kPa for Pressure
   std::array<double, 3> axis{ { 0, 0, 0 } };     ///< RadialDisplacement: unit vector, or zero (radial from center)
@@ -162,7 +163,11 @@ BiomechanicalRegistration_EXPORT std::string
                                  SceneToJson(const Scene & scene);
 
 BiomechanicalRegistration_EXPORT const char *
-LabelRoleName(LabelRole role);
+                                 LabelRoleName(LabelRoleEnum role);
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, LabelRoleEnum value);
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, SceneLoad::TypeEnum value);
 
 /** Comma-separated labels, by value or (with a scene) by name; "none" gives an empty list. Throws naming an
  * entry that is neither. */

@@ -25,15 +25,15 @@
 #include "itkImage.h"
 #include "itkVector.h"
 
+#include <iosfwd>
 #include <map>
 #include <string>
 #include <vector>
 
 namespace itk {
 
-/** \defgroup BiomechanicalRegistrationPipelines Pipelines
- * Whole jobs as one call, returning result structs: simulate a scene, register a pair, make a phantom pair.
- * biomechreg parses, calls these, prints and writes; nothing else. */
+// Whole jobs as one call, returning result structs (Doxygen group BiomechanicalRegistrationPipelines, docs/groups.dox):
+// biomechreg parses, calls these, prints and writes; nothing else.
 
 /** The image types of the pipelines: CT [HU], label maps, displacement fields [mm, LPS].
  * \ingroup BiomechanicalRegistrationPipelines */
@@ -140,12 +140,12 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
  * \ingroup BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT PhantomSettings
 {
-  enum class Anatomy : std::uint8_t
+  enum class AnatomyEnum : std::uint8_t
   {
     Pelvis,
     Spheres
   };
-  Anatomy              anatomy{ Anatomy::Pelvis };
+  AnatomyEnum          anatomy{ AnatomyEnum::Pelvis };
   bmr::GridGeometry    grid{ bmr::PelvisPhantomParameters().grid };
   double               prostateE{ 50.0 };  ///< kPa (the core of the spheres)
   double               prostateNu{ 0.40 }; ///< the estimation scene assumes 0.40
@@ -161,6 +161,9 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   unsigned int         numberOfSeeds{ 3 };
   double               truthRefinement{ 0.75 }; ///< the truth's mesh sizes relative to the scene's
 };
+
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, PhantomSettings::AnatomyEnum value);
 
 /** A moving/fixed pair with its ground truth. \ingroup BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT PhantomPair

@@ -18,6 +18,8 @@
 #ifndef itkDemonsBaselineRegistrationFilter_h
 #define itkDemonsBaselineRegistrationFilter_h
 
+#include <cstdint>
+#include <ostream>
 #include "itkImageToImageFilter.h"
 #include "itkVector.h"
 
@@ -25,6 +27,34 @@
 #include <vector>
 
 namespace itk {
+
+/** \class DemonsBaselineRegistrationFilterEnums
+ * \brief The enums of DemonsBaselineRegistrationFilter (ITK 5 style: outside the class template, with operator<<).
+ * \ingroup BiomechanicalRegistration
+ */
+class DemonsBaselineRegistrationFilterEnums
+{
+public:
+  /** Which ITK Demons filter runs at every level. */
+  enum class Variant : std::uint8_t
+  {
+    Diffeomorphic,
+    FastSymmetricForces,
+  };
+};
+/** Prints the enumerator's full name. */
+inline std::ostream &
+operator<<(std::ostream & out, const DemonsBaselineRegistrationFilterEnums::Variant value)
+{
+  switch (value)
+  {
+    case DemonsBaselineRegistrationFilterEnums::Variant::Diffeomorphic:
+      return out << "itk::DemonsBaselineRegistrationFilterEnums::Variant::Diffeomorphic";
+    case DemonsBaselineRegistrationFilterEnums::Variant::FastSymmetricForces:
+      return out << "itk::DemonsBaselineRegistrationFilterEnums::Variant::FastSymmetricForces";
+  }
+  return out << "INVALID VALUE FOR itk::DemonsBaselineRegistrationFilterEnums::Variant";
+}
 
 /** \class DemonsBaselineRegistrationFilter
  * \brief Intensity-based baseline for the physics-based registration: ITK's Demons in a multi-resolution
@@ -80,11 +110,7 @@ public:
   itkNewMacro(Self);
   itkTypeMacro(DemonsBaselineRegistrationFilter, ImageToImageFilter);
 
-  enum class VariantEnum
-  {
-    Diffeomorphic,
-    FastSymmetricForces
-  };
+  using VariantEnum = DemonsBaselineRegistrationFilterEnums::Variant;
 
   /** The fixed image defines the output grid. */
   void

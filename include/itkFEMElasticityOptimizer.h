@@ -32,91 +32,38 @@
 namespace itk {
 
 /** \class FEMElasticityOptimizer
- * \brief Joint estimation of boundary loads and Young's moduli by FEM simulation
- * (H.-P. Lee 2012, chapter 3).
+ * \brief Joint estimation of boundary loads and Young's moduli by FEM simulation (H.-P. Lee 2012, chapter 3):
+ * the ITK pipeline front door of bmr::ElasticityEstimator.
  *
- * The moving anatomy is the tetrahedral mesh (input "Mesh", from
- * LabelImageToTetrahedralMeshFilter with the same scene); the fixed anatomy is
- * given by one signed distance map [mm] per objective label of the scene
- * (SetDistanceMap(); negative inside, as SignedMaurerDistanceMapImageFilter
- * makes them, see ComputeSceneDistanceMaps()). The unknowns are the loads on the
- * scene's force surfaces (bladder and rectum walls) and the moduli of the
- * labels with the role unknown_material. The objective is
- * \f[ \Phi(E, F) = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l(E, F))^2 \f]
- * with K(E) u = F (linear elasticity, u = 0 on fixed walls).
+ * Inputs: the moving anatomy as a tetrahedral mesh (input "Mesh", from LabelImageToTetrahedralMeshFilter with
+ * the same scene), optionally a coarser mesh of it for the sweep of E ("CoarseMesh"), and one signed distance
+ * map [mm] per objective label of the scene (SetDistanceMap(); negative inside, as
+ * SignedMaurerDistanceMapImageFilter makes them, see ComputeSceneDistanceMaps()). The unknowns are the loads
+ * on the scene's force surfaces and the moduli of the labels with the role unknown_material (any number).
  *
- * Nested optimization:
- * - inner: \f$\Phi^*(E) = \min_F \Phi(E, F)\f$. The loads are parameterized
- *   by the wall displacements d they cause (F = S(E) d with S the Schur
- *   complement on the walls, an exact change of variables, so Phi* is
- *   unchanged), measured in mm, which makes the inner problem well conditioned
- *   and its gradient of the same size as the outer one. By default every wall
- *   node moves along its wall's normal, d_k = n_k s_k (WallMotionAlongNormals:
- *   the tangential part, invisible to the objective, would otherwise compete
- *   with E), with the E-independent regularizer WallRegularization/2 |s|^2, and
- *   the inner problem is solved by L-BFGS (itk::LBFGS2Optimizerv4, More-Thuente
- *   line search) with the adjoint gradient. With WallControlSpacing > 0 the wall
- *   motion is spanned by a smooth reduced basis (bmr::WallBasis) and solved by
- *   Levenberg-Marquardt (bmr::SurfaceMatchingObjective::SolveWalls);
- * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the scene's bounds by
- *   itk::LBFGSBOptimizerv4, with the envelope-theorem gradient
- *   \f$ d\Phi^{*} / d\log E_m = -E_m \lambda^T \hat K_m u \f$ at the inner optimum;
- * - initial loads by surface matching (dissertation 5.3.1.1); initial E from a
- *   sweep of Phi*(E) over the bounds (log-spaced) on the coarse mesh (input
- *   "CoarseMesh"; the fine mesh when none is given), each sample warm-started
- *   from the previous one; the minimum is bracketed by the sign change of
- *   dPhi* / dlog E and interpolated, then refined on the fine mesh.
+ * GenerateData() composes the scene's objective, bmr::SurfaceMatchingObjective, from its three parts:
+ * - forward model bmr::LinearForwardModel: \f$ K(E) u = f \f$, P1 tetrahedra, u = 0 on fixed walls;
+ * - loads bmr::WallLoads: the wall displacements they cause, along the walls' normals by default
+ *   (WallMotionAlongNormals), optionally in a smooth reduced basis (WallControlSpacing), with the
+ *   E-independent prior WallRegularization/2 |p|^2;
+ * - data bmr::SurfaceDistanceTerm:
+ *   \f$ \Phi = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l)^2 \f$;
+ * and runs bmr::ElasticityEstimator with this object's settings: the sweep of \f$\Phi^*(E) = \min_p \Phi(E,p)\f$
+ * on the coarse mesh (a coordinate sweep over the unknowns), the outer bounded L-BFGS-B over log E with the
+ * envelope gradient \f$ d\Phi^{*}/d\log E_m = -E_m \lambda^T \hat K_m u \f$, identifiability, and the
+ * uncertainty of log E from the curvature of \f$\Phi^*\f$ and the residual noise
+ * (\f$ \mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1} \f$). The estimator's documentation gives the
+ * stopping rules, the sweep and the uncertainty; docs/estimation.md the choices and why.
  *
- * Stopping rules (dissertation): inner when \f$\|\partial\Phi/\partial d\| \le
- * \epsilon_F \max(1, \|d\|)\f$ (InnerGradientTolerance, default 1e-5) or after
- * MaximumNumberOfInnerIterations; outer when the projected gradient in log E
- * falls below OuterGradientTolerance (default 1e-4) times Phi* at the start of
- * the fine stage, the relative decrease stalls, or after
- * MaximumNumberOfOuterIterations function evaluations. The envelope gradient
- * is only as accurate as the inner solve (about 1e-3 mm^2 on the pelvis), so a
- * tighter outer tolerance only makes L-BFGS-B repeat its line search at the
- * optimum; 1e-4 Phi* corresponds to well under 1 % in E there.
+ * Gauge: only ratios of moduli are identifiable without measured forces; the scene's gauge label keeps its
+ * modulus (GetGaugeLabel()). Step limit (LimitElementInversion, default off, one parameter per wall node
+ * only): inner trial points that invert more elements than the start are rejected.
  *
- * Gauge: only ratios of moduli are identifiable without measured forces; the
- * scene's gauge label keeps its modulus (GetGaugeLabel()).
- * Identifiability: the sweep Phi*(E) is reported (GetSweep()); when its
- * relative variation over the bounds is below FlatnessThreshold, or its
- * minimum lies on a bound, IsIdentifiable() is false with a message.
- *
- * Uncertainty (EstimateUncertainty, default on): how well the surfaces determine
- * log E. At the estimate the curvature \f$H = \partial^2\Phi^{*} / \partial(\log E)^2\f$
- * is taken from central differences of the envelope gradient at
- * \f$\log E \pm \delta\f$ (UncertaintyStep, default 0.05; two inner solves per
- * unknown), and the residual variance of the objective nodes from the fit,
- * \f$s^2 = \sum_s w_s \sum_{l \in s}\phi_s^2 / \sum_s w_s n_s\f$ [mm^2].
- * Treating the residuals as independent noise of variance s^2 (the voxel
- * staircase of the fixed labels is about h/\sqrt{12} per node), the
- * linearized least-squares estimate has
- * \f$\mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1}\f$ with
- * \f$w_{\mathrm{eff}} = \sum_s w_s^2 n_s / \sum_s w_s n_s\f$ (exact for equal
- * weights; invariant under scaling all weights), and
- * GetModulusUncertainty() returns its standard deviations: E is known to a
- * factor \f$e^{\pm\sigma}\f$. Not computed when the estimate lies on a bound;
- * infinite when H is not positive definite.
- *
- * Step limit (LimitElementInversion, default off): linear elasticity lets an
- * element turn inside out when the walls move far. With the limit on, every
- * trial point of the inner L-BFGS line search that inverts more elements than
- * the inner solve's start point is answered with a value above Phi(start), so
- * the line search shortens the step and the walls stop where the mesh would
- * invert. The inner result is then the best fit without new inversions, not a
- * stationary point, and the envelope gradient there is approximate; the count
- * of rejected trial points is GetNumberOfRejectedSteps(). Only with one
- * parameter per wall node (the reduced-basis solver evaluates the objective
- * nodes only).
- *
- * Output: the mesh with nodal displacement [mm] and the estimated wall forces
- * [mN]; the estimated moduli [kPa]; every fine-mesh inner solve (GetHistory())
- * and the accepted outer iterates (GetOuterIterations()); the surface
- * distances [mm]. An IterationEvent is invoked after every inner
- * solve (GetCurrentValue(), GetCurrentYoungsModuli()).
- * Deterministic: sequential, no random numbers.
- * \ingroup BiomechanicalRegistration
+ * Output: the mesh with nodal displacement [mm] and the estimated wall forces [mN]; the estimated moduli
+ * [kPa]; every fine-mesh inner solve (GetHistory()), the accepted outer iterates (GetOuterIterations()), the
+ * surface distances [mm] and everything else in GetResult(). An IterationEvent is invoked after every inner
+ * solve (GetCurrentRecord()). Deterministic: sequential, no random numbers.
+ * \ingroup BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT FEMElasticityOptimizer : public ProcessObject
 {
@@ -173,10 +120,10 @@ public:
   /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node. */
   itkSetMacro(WallControlSpacing, double);
   itkGetConstMacro(WallControlSpacing, double);
-  /** Weight of the E-independent regularizer alpha/2 |p|^2 on the wall parameters (bmr::SurfaceMatchingObjective). */
+  /** Weight of the E-independent prior alpha/2 |p|^2 on the wall parameters (bmr::WallLoads::SetRegularization()). */
   itkSetMacro(WallRegularization, double);
   itkGetConstMacro(WallRegularization, double);
-  /** Walls move along their normals (default on; bmr::SurfaceMatchingObjective::SetWallMotionAlongNormals). */
+  /** Walls move along their normals (default on; bmr::WallLoads::SetMotion()). */
   itkSetMacro(WallMotionAlongNormals, bool);
   itkGetConstMacro(WallMotionAlongNormals, bool);
   itkBooleanMacro(WallMotionAlongNormals);

@@ -18,10 +18,46 @@
 #ifndef itkImageWarper_h
 #define itkImageWarper_h
 
+#include <cstdint>
+#include <ostream>
 #include "itkImageToImageFilter.h"
 #include "itkVector.h"
 
 namespace itk {
+
+/** \class ImageWarperEnums
+ * \brief The enums of ImageWarper (ITK 5 style: outside the class template, with operator<<).
+ * \ingroup BiomechanicalRegistration
+ */
+class ImageWarperEnums
+{
+public:
+  /** How the input is sampled at x + d(x). */
+  enum class Interpolation : std::uint8_t
+  {
+    Linear,
+    NearestNeighbor,
+    LabelGaussian,
+    BSpline,
+  };
+};
+/** Prints the enumerator's full name. */
+inline std::ostream &
+operator<<(std::ostream & out, const ImageWarperEnums::Interpolation value)
+{
+  switch (value)
+  {
+    case ImageWarperEnums::Interpolation::Linear:
+      return out << "itk::ImageWarperEnums::Interpolation::Linear";
+    case ImageWarperEnums::Interpolation::NearestNeighbor:
+      return out << "itk::ImageWarperEnums::Interpolation::NearestNeighbor";
+    case ImageWarperEnums::Interpolation::LabelGaussian:
+      return out << "itk::ImageWarperEnums::Interpolation::LabelGaussian";
+    case ImageWarperEnums::Interpolation::BSpline:
+      return out << "itk::ImageWarperEnums::Interpolation::BSpline";
+  }
+  return out << "INVALID VALUE FOR itk::ImageWarperEnums::Interpolation";
+}
 
 /** \class ImageWarper
  * \brief Warps an image through a displacement field: a composite of
@@ -54,13 +90,7 @@ public:
   itkNewMacro(Self);
   itkTypeMacro(ImageWarper, ImageToImageFilter);
 
-  enum class InterpolationEnum
-  {
-    Linear,
-    NearestNeighbor,
-    LabelGaussian,
-    BSpline
-  };
+  using InterpolationEnum = ImageWarperEnums::Interpolation;
 
   /** The fixed -> moving displacement field; its grid is the output grid. */
   void
@@ -94,7 +124,7 @@ private:
 /** \a image warped through the fixed -> moving \a field with one call: nearest neighbor for a label map
  * (\a labels true), linear otherwise; points mapped outside take \a outside.
  * \ingroup BiomechanicalRegistration */
-template <typename TImage, typename TDisplacementField>
+template<typename TImage, typename TDisplacementField>
 typename TImage::Pointer
 WarpImage(const TImage * image, const TDisplacementField * field, bool labels, typename TImage::PixelType outside)
 {

@@ -18,10 +18,40 @@
 #ifndef itkPhysicsDeformationFieldSource_h
 #define itkPhysicsDeformationFieldSource_h
 
+#include <cstdint>
+#include <ostream>
 #include "itkImageSource.h"
 #include "itkTetrahedralMeshObject.h"
 
 namespace itk {
+
+/** \class PhysicsDeformationFieldSourceEnums
+ * \brief The enums of PhysicsDeformationFieldSource (ITK 5 style: outside the class template, with operator<<).
+ * \ingroup BiomechanicalRegistration
+ */
+class PhysicsDeformationFieldSourceEnums
+{
+public:
+  /** Which field: fixed -> moving (the exact pull-back, default) or moving -> fixed (the push). */
+  enum class FieldDirection : std::uint8_t
+  {
+    FixedToMoving,
+    MovingToFixed,
+  };
+};
+/** Prints the enumerator's full name. */
+inline std::ostream &
+operator<<(std::ostream & out, const PhysicsDeformationFieldSourceEnums::FieldDirection value)
+{
+  switch (value)
+  {
+    case PhysicsDeformationFieldSourceEnums::FieldDirection::FixedToMoving:
+      return out << "itk::PhysicsDeformationFieldSourceEnums::FieldDirection::FixedToMoving";
+    case PhysicsDeformationFieldSourceEnums::FieldDirection::MovingToFixed:
+      return out << "itk::PhysicsDeformationFieldSourceEnums::FieldDirection::MovingToFixed";
+  }
+  return out << "INVALID VALUE FOR itk::PhysicsDeformationFieldSourceEnums::FieldDirection";
+}
 
 /** \class PhysicsDeformationFieldSource
  * \brief Turns the nodal displacements of a finite-element simulation into a displacement field image.
@@ -74,11 +104,7 @@ public:
   itkNewMacro(Self);
   itkTypeMacro(PhysicsDeformationFieldSource, ImageSource);
 
-  enum class FieldDirectionEnum
-  {
-    FixedToMoving,
-    MovingToFixed
-  };
+  using FieldDirectionEnum = PhysicsDeformationFieldSourceEnums::FieldDirection;
 
   /** The simulated mesh; must carry a nodal displacement [mm]. */
   void

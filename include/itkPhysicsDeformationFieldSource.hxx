@@ -107,8 +107,8 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
 
   const bmr::TetrahedralMesh & mesh = this->GetMesh()->Get();
   const bmr::GridGeometry      grid = GridGeometryOf(output);
-  const bmr::FieldKind         kind =
-    m_FieldDirection == FieldDirectionEnum::FixedToMoving ? bmr::FieldKind::PullBack : bmr::FieldKind::Push;
+  const bmr::FieldKindEnum     kind =
+    m_FieldDirection == FieldDirectionEnum::FixedToMoving ? bmr::FieldKindEnum::PullBack : bmr::FieldKindEnum::Push;
   const bmr::DisplacementFieldRasterizer rasterizer(mesh, mesh.displacement, grid, kind);
   m_NumberOfInvertedElements = rasterizer.GetNumberOfInvertedElements();
   if (m_NumberOfInvertedElements > 0)

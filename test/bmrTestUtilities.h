@@ -21,7 +21,11 @@
 #include "bmrMesher.h"
 #include "bmrScene.h"
 #include "bmrTetrahedralMesh.h"
+#include "itkImage.h"
+#include "itkImageRegionIteratorWithIndex.h"
 #include "itkMacro.h"
+
+#include <array>
 
 #include <cmath>
 #include <functional>
@@ -96,7 +100,7 @@ CavityInclusionBall(double h)
 inline Scene
 CavityInclusionScene(bool unknown)
 {
-  using R = LabelRole;
+  using R = LabelRoleEnum;
   Scene      s;
   SceneLabel inclusion{ "inclusion", 2, unknown ? R::UnknownMaterial : R::Material, 40.0, 0.4 };
   inclusion.lowerBound = 10;
@@ -134,6 +138,37 @@ ToString(const T & value)
   std::ostringstream text;
   text << std::setprecision(15) << value;
   return text.str();
+}
+
+/** Signed distance [mm] to the sphere (\a center, \a radius), negative inside (\a sign 1) or outside (\a sign -1),
+ * sampled on a grid of 1 mm voxels of \a size starting at \a origin: the exact distance maps of the estimation
+ * tests' analytic geometries. */
+inline itk::Image<float, 3>::Pointer
+SphereDistanceMap(const std::array<double, 3> &       center,
+                  double                              radius,
+                  double                              sign,
+                  const std::array<double, 3> &       origin,
+                  const std::array<unsigned int, 3> & size)
+{
+  using MapType = itk::Image<float, 3>;
+  auto                map = MapType::New();
+  MapType::RegionType region({ { 0, 0, 0 } }, { { size[0], size[1], size[2] } });
+  MapType::PointType  start;
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    start[a] = origin[a];
+  }
+  map->SetRegions(region);
+  map->SetOrigin(start);
+  map->SetSpacing(MapType::SpacingType(1.0));
+  map->Allocate();
+  for (itk::ImageRegionIteratorWithIndex<MapType> it(map, region); !it.IsAtEnd(); ++it)
+  {
+    MapType::PointType p;
+    map->TransformIndexToPhysicalPoint(it.GetIndex(), p);
+    it.Set(static_cast<float>(sign * (std::hypot(p[0] - center[0], p[1] - center[1], p[2] - center[2]) - radius)));
+  }
+  return map;
 }
 
 /** Runs \a f and checks that it throws an itk::ExceptionObject whose description contains \a expected. */

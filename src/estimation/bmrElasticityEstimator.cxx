@@ -18,6 +18,7 @@
 #include "bmrElasticityEstimator.h"
 
 #include "bmrError.h"
+#include "bmrStopwatch.h"
 #include "bmrInnerSolve.h"
 
 #include "itkLBFGSBOptimizerv4.h"
@@ -32,12 +33,7 @@
 
 namespace bmr {
 namespace {
-using Clock = std::chrono::steady_clock;
-double
-Seconds(Clock::time_point start)
-{
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using Clock = SteadyClock;
 
 double
 Norm(const std::vector<double> & v)
@@ -264,7 +260,7 @@ ElasticityEstimator::Stages::Sweep()
       const LoadSolution s = Solve(objective, E, start);
       start = s.parameters;
       const unsigned int index = static_cast<unsigned int>(k * n + i);
-      samples.push_back(MakeRecord("sweep", index, E, s, Seconds(ts)));
+      samples.push_back(MakeRecord("sweep", index, E, s, SecondsSince(ts)));
       Record(samples.back(), result.sweep, 0.5 * double(index + 1) / total);
     }
     status[k] = Analyzesweep(samples, k, unknown, settings.flatnessThreshold);
@@ -286,7 +282,7 @@ ElasticityEstimator::Stages::Fine()
     const auto ts = Clock::now();
     last = Solve(fine, E, loads);
     loads = last.parameters;
-    Record(MakeRecord("fine", evaluation, E, last, Seconds(ts)),
+    Record(MakeRecord("fine", evaluation, E, last, SecondsSince(ts)),
            result.history,
            std::min(0.99, 0.5 + 0.02 * double(evaluation + 1)));
     ++evaluation;
@@ -429,7 +425,7 @@ ElasticityEstimator::Stages::Uncertainty(const std::vector<double> & estimate,
       E[k] *= std::exp(side == 0 ? delta : -delta);
       const LoadSolution s = Solve(estimator.m_Fine, E, estimateLoads);
       gradient[side] = s.logModulusGradient;
-      Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, Seconds(ts)), result.history, progress);
+      Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, SecondsSince(ts)), result.history, progress);
     }
     for (Eigen::Index i = 0; i < m; ++i)
     {
@@ -483,16 +479,16 @@ ElasticityEstimator::Run()
   {
     run.Sweep();
   }
-  run.result.timings["sweep"] = Seconds(t0);
+  run.result.timings["sweep"] = SecondsSince(t0);
 
   t0 = Clock::now();
   run.loads = m_Fine.EstimateInitialParameters();
-  run.result.timings["initial loads"] = Seconds(t0);
+  run.result.timings["initial loads"] = SecondsSince(t0);
 
   t0 = Clock::now();
   run.Fine();
   run.JudgeIdentifiability(run.moduli);
-  run.result.timings["fine"] = Seconds(t0);
+  run.result.timings["fine"] = SecondsSince(t0);
 
   const std::vector<double> estimate = run.moduli, estimateLoads = run.loads;
   run.Outputs(estimate, estimateLoads);
@@ -505,7 +501,7 @@ ElasticityEstimator::Run()
   {
     t0 = Clock::now();
     run.Uncertainty(estimate, estimateLoads);
-    run.result.timings["uncertainty"] = Seconds(t0);
+    run.result.timings["uncertainty"] = SecondsSince(t0);
   }
   return run.result;
 }

@@ -27,12 +27,12 @@ namespace {
 std::vector<std::int32_t>
 SurfaceNodes(const TetrahedralMesh & mesh, const SceneLabel & label)
 {
-  const bool simulated = label.role == LabelRole::Material || label.role == LabelRole::UnknownMaterial;
+  const bool simulated = label.role == LabelRoleEnum::Material || label.role == LabelRoleEnum::UnknownMaterial;
   if (simulated)
   {
     return NodesOnLabelSurface(mesh, label.value);
   }
-  return NodesOnBoundary(mesh, label.role == LabelRole::Outside ? 0 : label.value);
+  return NodesOnBoundary(mesh, label.role == LabelRoleEnum::Outside ? 0 : label.value);
 }
 
 std::vector<std::int32_t>
@@ -97,7 +97,7 @@ SceneLoadedWalls(const Scene & scene, const TetrahedralMesh & mesh)
     {
       Fail("SceneLoadedWalls", "force surface \"" + name + "\" is not defined in the scene");
     }
-    walls.push_back({ name, SurfaceNodes(mesh, *label), label->role == LabelRole::Outside ? 0 : label->value });
+    walls.push_back({ name, SurfaceNodes(mesh, *label), label->role == LabelRoleEnum::Outside ? 0 : label->value });
   }
   return walls;
 }

@@ -20,6 +20,7 @@
 #include "bmrLinearElasticModel.h"
 
 #include "bmrError.h"
+#include "bmrStopwatch.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
@@ -37,12 +38,7 @@
 
 namespace bmr {
 namespace {
-using Clock = std::chrono::steady_clock;
-double
-Seconds(Clock::time_point start)
-{
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using Clock = SteadyClock;
 
 /** Gradients of the four barycentric coordinates of element e and its volume. */
 double
@@ -608,7 +604,7 @@ LinearElasticModel::LinearElasticModel(const TetrahedralMesh &                  
   m_Impl->BuildPattern();
   m_Impl->constrained.assign(m_Impl->ndof, 0);
   m_Impl->prescribed.assign(m_Impl->ndof, 0.0);
-  m_Impl->timings.assemble = Seconds(t0);
+  m_Impl->timings.assemble = SecondsSince(t0);
 }
 
 LinearElasticModel::~LinearElasticModel() = default;
@@ -710,7 +706,7 @@ LinearElasticModel::Factorize()
   if (d.nfree == 0)
   {
     d.factorized = true;
-    d.timings.assemble += Seconds(t0);
+    d.timings.assemble += SecondsSince(t0);
     return;
   }
   std::vector<Eigen::Triplet<double>> triplets;
@@ -733,17 +729,17 @@ LinearElasticModel::Factorize()
   }
   d.Kff.resize(static_cast<Eigen::Index>(d.nfree), static_cast<Eigen::Index>(d.nfree));
   d.Kff.setFromTriplets(triplets.begin(), triplets.end());
-  d.timings.assemble += Seconds(t0);
+  d.timings.assemble += SecondsSince(t0);
   if (!d.analyzed)
   {
     t0 = Clock::now();
     d.solver.analyzePattern(d.Kff);
     d.analyzed = true;
-    d.timings.analyze = Seconds(t0);
+    d.timings.analyze = SecondsSince(t0);
   }
   t0 = Clock::now();
   d.solver.factorize(d.Kff);
-  d.timings.factorize = Seconds(t0);
+  d.timings.factorize = SecondsSince(t0);
   if (d.solver.info() != Eigen::Success)
   {
     Fail("LinearElasticModel::Factorize",
@@ -824,7 +820,7 @@ LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<
       }
     }
   }
-  d.timings.solve = Seconds(t0);
+  d.timings.solve = SecondsSince(t0);
   return u;
 }
 

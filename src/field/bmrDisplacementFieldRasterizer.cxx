@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "bmrDisplacementFieldRasterizer.h"
 
+#include <ostream>
+
 #include "bmrError.h"
 
 #include <algorithm>
@@ -50,7 +52,7 @@ constexpr double InsideTolerance = 1e-10;
 DisplacementFieldRasterizer::DisplacementFieldRasterizer(const TetrahedralMesh &     mesh,
                                                          const std::vector<double> & displacement,
                                                          const GridGeometry &        grid,
-                                                         FieldKind                   kind)
+                                                         FieldKindEnum               kind)
   : m_Mesh(mesh)
   , m_Displacement(displacement)
   , m_Grid(grid)
@@ -82,8 +84,8 @@ DisplacementFieldRasterizer::DisplacementFieldRasterizer(const TetrahedralMesh &
       std::array<double, 3> x;
       for (int i = 0; i < 3; ++i)
       {
-        x[i] =
-          mesh.points[3 * el.nodes[a] + i] + (kind == FieldKind::PullBack ? displacement[3 * el.nodes[a] + i] : 0.0);
+        x[i] = mesh.points[3 * el.nodes[a] + i] +
+               (kind == FieldKindEnum::PullBack ? displacement[3 * el.nodes[a] + i] : 0.0);
       }
       const std::array<double, 3> idx = grid.PointToIndex(x);
       std::copy(idx.begin(), idx.end(), v[a]);
@@ -172,7 +174,7 @@ DisplacementFieldRasterizer::RasterizeRegion(const std::array<std::size_t, 3> & 
             continue;
           }
           double * out = field + 3 * off;
-          if (m_Kind == FieldKind::Push)
+          if (m_Kind == FieldKindEnum::Push)
           {
             for (int c = 0; c < 3; ++c)
             {
@@ -732,6 +734,12 @@ InterpolateDisplacement(const PointLocator &          undeformedLocator,
     }
   }
   return true;
+}
+
+std::ostream &
+operator<<(std::ostream & os, FieldKindEnum value)
+{
+  return os << (value == FieldKindEnum::Push ? "bmr::FieldKindEnum::Push" : "bmr::FieldKindEnum::PullBack");
 }
 
 } // namespace bmr

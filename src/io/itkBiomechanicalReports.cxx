@@ -141,7 +141,7 @@ namespace {
 Json
 LoadJson(const bmr::SceneLoad & l)
 {
-  if (l.type == bmr::SceneLoad::Type::Pressure)
+  if (l.type == bmr::SceneLoad::TypeEnum::Pressure)
   {
     return { { "surface", l.surface }, { "type", "pressure" }, { "pressure_kPa", l.magnitude } };
   }
@@ -162,11 +162,11 @@ LoadJson(const bmr::SceneLoad & l)
 std::string
 PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
 {
-  const bool pelvis = settings.anatomy == PhantomSettings::Anatomy::Pelvis;
+  const bool pelvis = settings.anatomy == PhantomSettings::AnatomyEnum::Pelvis;
   Json       moduli = Json::object(), ratios = Json::object(), loads = Json::array(), landmarks = Json::array();
   for (const auto & l : pair.truthScene.labels)
   {
-    if (l.role == bmr::LabelRole::Material)
+    if (l.role == bmr::LabelRoleEnum::Material)
     {
       moduli[l.name] = Compact(l.youngsModulus);
       ratios[l.name] = Compact(l.poissonRatio);

@@ -19,6 +19,7 @@
 
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
+#include "bmrStopwatch.h"
 #include "bmrVtuWriter.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkBiomechanicalReports.h"
@@ -80,7 +81,7 @@ WriteRegistrationOutputs(const std::string &                directory,
                          const RegistrationSettings &       settings,
                          const std::vector<PipelineStage> & stages)
 {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = bmr::SteadyClock::now();
   WriteSimulationOutputs(directory, result.state, result.warpedLabels, result.warpedCT);
   std::vector<std::string> unknownNames;
   for (const auto & u : result.unknowns)
@@ -94,8 +95,7 @@ WriteRegistrationOutputs(const std::string &                directory,
   {
     bmr::WriteTextFileAtomically(directory + "/sweep.csv", IterationHistoryCsv(result.estimation.sweep, unknownNames));
   }
-  const PipelineStage        writing{ "write outputs",
-                               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() };
+  const PipelineStage        writing{ "write outputs", bmr::SecondsSince(start) };
   std::vector<PipelineStage> wallTimes = stages;
   wallTimes.push_back(writing);
   bmr::WriteTextFileAtomically(directory + "/report.json", RegistrationReportJson(result, settings, wallTimes));

@@ -23,6 +23,7 @@
 #include "itkGridGeometryConversion.h"
 
 #include <cmath>
+#include <ostream>
 #include <random>
 
 namespace itk {
@@ -33,7 +34,7 @@ constexpr std::int32_t PelvisTumour = 6;
 bool
 IsPelvis(const PhantomSettings & s)
 {
-  return s.anatomy == PhantomSettings::Anatomy::Pelvis;
+  return s.anatomy == PhantomSettings::AnatomyEnum::Pelvis;
 }
 
 bmr::PelvisPhantomParameters
@@ -73,8 +74,8 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
   if (IsPelvis(s) && (s.bladderKPa > 0.0 || s.rectumKPa > 0.0))
   {
     // Pressure in the lumens: the walls move as the tissue lets them (no wall is driven into the prostate).
-    truth.loads = { { "bladder", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, s.bladderKPa },
-                    { "rectum", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, s.rectumKPa } };
+    truth.loads = { { "bladder", bmr::SceneLoad::TypeEnum::Pressure, { { 0, 0, 0 } }, s.bladderKPa },
+                    { "rectum", bmr::SceneLoad::TypeEnum::Pressure, { { 0, 0, 0 } }, s.rectumKPa } };
   }
   else if (IsPelvis(s))
   {
@@ -82,7 +83,7 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
   }
   else
   {
-    truth.loads = { { "outside", bmr::SceneLoad::Type::RadialDisplacement, bmr::GridCenter(grid), -s.bladderMM } };
+    truth.loads = { { "outside", bmr::SceneLoad::TypeEnum::RadialDisplacement, bmr::GridCenter(grid), -s.bladderMM } };
   }
   truth.Validate();
   return truth;
@@ -126,7 +127,7 @@ WithTumour(std::vector<std::int32_t> labels, const bmr::GridGeometry & g, const 
       labels[v] = PelvisTumour;
     }
   }
-  truth.labels.push_back({ "tumour", PelvisTumour, bmr::LabelRole::Material, s.tumourE, s.prostateNu });
+  truth.labels.push_back({ "tumour", PelvisTumour, bmr::LabelRoleEnum::Material, s.tumourE, s.prostateNu });
   truth.mesh.cellSizePerLabel[PelvisTumour] = truth.mesh.cellSizePerLabel[bmr::PelvisProstate];
   return labels;
 }
@@ -250,6 +251,13 @@ DrawPhantomSet(unsigned int count, std::uint64_t seed)
     set[k].seed = seed * 1000 + k + 1;
   }
   return set;
+}
+
+std::ostream &
+operator<<(std::ostream & os, PhantomSettings::AnatomyEnum value)
+{
+  return os << (value == PhantomSettings::AnatomyEnum::Pelvis ? "itk::PhantomSettings::AnatomyEnum::Pelvis"
+                                                              : "itk::PhantomSettings::AnatomyEnum::Spheres");
 }
 
 } // namespace itk

@@ -22,7 +22,7 @@
 #include "itkBiomechanicalPipelines.h"
 #include "itkImageWarper.h"
 
-#include <chrono>
+#include "bmrStopwatch.h"
 
 namespace itk {
 namespace pipeline {
@@ -53,10 +53,10 @@ public:
   }
 
 private:
-  PipelineObserver *                    m_Observer;
-  std::vector<PipelineStage> &          m_Stages;
-  std::string                           m_Current;
-  std::chrono::steady_clock::time_point m_Start;
+  PipelineObserver *           m_Observer;
+  std::vector<PipelineStage> & m_Stages;
+  std::string                  m_Current;
+  bmr::SteadyClock::time_point m_Start;
 };
 
 /** Meshes the labels for the scene (CGAL Mesh_3), as one stage. */

@@ -219,7 +219,7 @@ Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLa
 {
   for (const auto & l : scene.labels)
   {
-    if (l.role == bmr::LabelRole::Outside)
+    if (l.role == bmr::LabelRoleEnum::Outside)
     {
       continue;
     }

@@ -36,13 +36,13 @@ StageClock::Begin(const std::string & name)
   {
     m_Observer->StageBegin(name);
   }
-  m_Start = std::chrono::steady_clock::now();
+  m_Start = bmr::SteadyClock::now();
 }
 
 void
 StageClock::End(const std::string & detail)
 {
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_Start).count();
+  const double seconds = bmr::SecondsSince(m_Start);
   m_Stages.push_back({ m_Current, seconds });
   if (m_Observer)
   {

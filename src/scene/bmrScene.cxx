@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <ostream>
 #include <sstream>
 
 namespace bmr {
@@ -113,37 +114,37 @@ GetPoint(const Json & object, const std::string & key, const std::string & sourc
   return p;
 }
 
-LabelRole
+LabelRoleEnum
 ParseRole(const std::string & s, const std::string & source, const std::string & entry)
 {
   if (s == "material")
-    return LabelRole::Material;
+    return LabelRoleEnum::Material;
   if (s == "unknown_material")
-    return LabelRole::UnknownMaterial;
+    return LabelRoleEnum::UnknownMaterial;
   if (s == "fixed")
-    return LabelRole::Fixed;
+    return LabelRoleEnum::Fixed;
   if (s == "hollow")
-    return LabelRole::Hollow;
+    return LabelRoleEnum::Hollow;
   if (s == "outside")
-    return LabelRole::Outside;
+    return LabelRoleEnum::Outside;
   SceneError(source, entry + ".role", "\"" + s + "\" is not one of material, unknown_material, fixed, hollow, outside");
 }
 } // namespace
 
 const char *
-LabelRoleName(LabelRole role)
+LabelRoleName(LabelRoleEnum role)
 {
   switch (role)
   {
-    case LabelRole::Material:
+    case LabelRoleEnum::Material:
       return "material";
-    case LabelRole::UnknownMaterial:
+    case LabelRoleEnum::UnknownMaterial:
       return "unknown_material";
-    case LabelRole::Fixed:
+    case LabelRoleEnum::Fixed:
       return "fixed";
-    case LabelRole::Hollow:
+    case LabelRoleEnum::Hollow:
       return "hollow";
-    case LabelRole::Outside:
+    case LabelRoleEnum::Outside:
       return "outside";
   }
   return "?";
@@ -155,7 +156,7 @@ Scene::UnknownLabels() const
   std::vector<const SceneLabel *> unknown;
   for (const SceneLabel & l : labels)
   {
-    if (l.role == LabelRole::UnknownMaterial)
+    if (l.role == LabelRoleEnum::UnknownMaterial)
     {
       unknown.push_back(&l);
     }
@@ -172,7 +173,7 @@ Scene::GaugeLabel() const
   }
   for (const SceneLabel & l : labels)
   {
-    if (l.role == LabelRole::Material)
+    if (l.role == LabelRoleEnum::Material)
     {
       return &l;
     }
@@ -212,7 +213,7 @@ Scene::ExcludedLabels() const
   std::vector<std::int32_t> v;
   for (const auto & l : labels)
   {
-    if (l.role == LabelRole::Fixed || l.role == LabelRole::Hollow || l.role == LabelRole::Outside)
+    if (l.role == LabelRoleEnum::Fixed || l.role == LabelRoleEnum::Hollow || l.role == LabelRoleEnum::Outside)
     {
       v.push_back(l.value);
     }
@@ -226,7 +227,7 @@ Scene::OutsideLabels() const
   std::vector<std::int32_t> v;
   for (const auto & l : labels)
   {
-    if (l.role == LabelRole::Outside)
+    if (l.role == LabelRoleEnum::Outside)
     {
       v.push_back(l.value);
     }
@@ -244,7 +245,7 @@ Scene::Warnings() const
   }
   for (const SceneLabel & l : labels)
   {
-    if ((l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial) && l.poissonRatio > 0.45)
+    if ((l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial) && l.poissonRatio > 0.45)
     {
       std::ostringstream os;
       os << "label \"" << l.name << "\" has nu = " << l.poissonRatio
@@ -261,7 +262,7 @@ Scene::EstimationWarnings(double finestVoxel, double coarsestVoxel) const
 {
   std::vector<std::string> warnings;
   if (std::none_of(
-        labels.begin(), labels.end(), [](const SceneLabel & l) { return l.role == LabelRole::UnknownMaterial; }))
+        labels.begin(), labels.end(), [](const SceneLabel & l) { return l.role == LabelRoleEnum::UnknownMaterial; }))
   {
     return warnings;
   }
@@ -309,7 +310,7 @@ CheckSceneLabels(const std::vector<SceneLabel> & labels, const std::string & src
     {
       SceneError(src, entry + ".value", "label value " + std::to_string(l.value) + " is used twice");
     }
-    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    if (l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial)
     {
       simulated = true;
       if (l.value == 0)
@@ -328,12 +329,12 @@ CheckSceneLabels(const std::vector<SceneLabel> & labels, const std::string & src
                      std::to_string(l.poissonRatio));
       }
     }
-    if (l.role == LabelRole::UnknownMaterial &&
+    if (l.role == LabelRoleEnum::UnknownMaterial &&
         !(l.lowerBound > 0.0 && l.lowerBound <= l.youngsModulus && l.youngsModulus <= l.upperBound))
     {
       SceneError(src, entry + ".bounds_kPa", "must satisfy 0 < lower <= youngs_modulus_kPa <= upper");
     }
-    fixedLabel = fixedLabel || l.role == LabelRole::Fixed;
+    fixedLabel = fixedLabel || l.role == LabelRoleEnum::Fixed;
   }
   if (!simulated)
   {
@@ -350,7 +351,7 @@ CheckLoadSurface(const Scene & scene, const std::string & src, const std::string
   {
     SceneError(src, entry, "\"" + surface + "\" is not a label of the scene");
   }
-  if (l->role != LabelRole::Hollow && l->role != LabelRole::Outside && l->role != LabelRole::Fixed)
+  if (l->role != LabelRoleEnum::Hollow && l->role != LabelRoleEnum::Outside && l->role != LabelRoleEnum::Fixed)
   {
     SceneError(
       src, entry, "\"" + surface + "\" must be a hollow, fixed or outside label (its wall is a mesh boundary)");
@@ -371,7 +372,7 @@ CheckForceSurfacesAndLoads(const Scene & scene, const std::string & src)
   {
     const std::string entry = "loads[" + std::to_string(i) + "]";
     CheckLoadSurface(scene, src, scene.loads[i].surface, entry + ".surface");
-    displacementLoad = displacementLoad || scene.loads[i].type == SceneLoad::Type::RadialDisplacement;
+    displacementLoad = displacementLoad || scene.loads[i].type == SceneLoad::TypeEnum::RadialDisplacement;
   }
   return displacementLoad;
 }
@@ -428,7 +429,7 @@ Scene::Validate() const
   if (!gauge.empty())
   {
     const SceneLabel * g = FindLabel(gauge);
-    if (!g || g->role != LabelRole::Material)
+    if (!g || g->role != LabelRoleEnum::Material)
     {
       SceneError(src, "gauge", "\"" + gauge + "\" must name a label with the role material (known modulus)");
     }
@@ -469,7 +470,7 @@ Scene::ValidateAgainstLabels(const std::set<std::int32_t> & present, const std::
   };
   for (const auto & l : labels)
   {
-    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    if (l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial)
     {
       requirePresent(l.name, "labels[" + l.name + "]");
     }
@@ -524,7 +525,7 @@ ParseLabel(const Json & j, const std::string & source, const std::string & entry
   }
   l.value = j["value"].get<std::int32_t>();
   l.role = ParseRole(GetString(j, "role", source, entry), source, entry);
-  const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
+  const bool simulated = l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial;
   if (simulated)
   {
     if (!j.contains("youngs_modulus_kPa") || !j.contains("poisson_ratio"))
@@ -540,7 +541,7 @@ ParseLabel(const Json & j, const std::string & source, const std::string & entry
   }
   if (j.contains("bounds_kPa"))
   {
-    if (l.role != LabelRole::UnknownMaterial)
+    if (l.role != LabelRoleEnum::UnknownMaterial)
     {
       SceneError(source, "labels[" + l.name + "].bounds_kPa", "only an unknown_material takes bounds");
     }
@@ -552,7 +553,7 @@ ParseLabel(const Json & j, const std::string & source, const std::string & entry
     l.lowerBound = b[0].get<double>();
     l.upperBound = b[1].get<double>();
   }
-  else if (l.role == LabelRole::UnknownMaterial)
+  else if (l.role == LabelRoleEnum::UnknownMaterial)
   {
     SceneError(source, "labels[" + l.name + "]", "an unknown_material needs bounds_kPa");
   }
@@ -681,12 +682,12 @@ ParseLoad(const Json & j, const std::string & source, const std::string & entry)
   const std::string type = GetString(j, "type", source, entry);
   if (type == "radial_displacement")
   {
-    load.type = SceneLoad::Type::RadialDisplacement;
+    load.type = SceneLoad::TypeEnum::RadialDisplacement;
     ParseRadialDisplacement(j, source, entry, load);
   }
   else if (type == "pressure")
   {
-    load.type = SceneLoad::Type::Pressure;
+    load.type = SceneLoad::TypeEnum::Pressure;
     if (!j.contains("pressure_kPa"))
     {
       SceneError(source, entry, "a pressure load needs pressure_kPa");
@@ -909,12 +910,12 @@ SceneToJson(const Scene & scene)
   for (const auto & l : scene.labels)
   {
     Json j = { { "name", l.name }, { "value", l.value }, { "role", LabelRoleName(l.role) } };
-    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    if (l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial)
     {
       j["youngs_modulus_kPa"] = l.youngsModulus;
       j["poisson_ratio"] = l.poissonRatio;
     }
-    if (l.role == LabelRole::UnknownMaterial)
+    if (l.role == LabelRoleEnum::UnknownMaterial)
     {
       j["bounds_kPa"] = { l.lowerBound, l.upperBound };
     }
@@ -939,7 +940,7 @@ SceneToJson(const Scene & scene)
     Json loads = Json::array();
     for (const auto & l : scene.loads)
     {
-      if (l.type == SceneLoad::Type::RadialDisplacement)
+      if (l.type == SceneLoad::TypeEnum::RadialDisplacement)
       {
         Json load = { { "surface", l.surface },
                       { "type", "radial_displacement" },
@@ -1025,6 +1026,25 @@ ParseLabelList(const std::string & text, const Scene * scene)
     labels.push_back(static_cast<std::int32_t>(v));
   }
   return labels;
+}
+
+std::ostream &
+operator<<(std::ostream & os, LabelRoleEnum value)
+{
+  return os << "bmr::LabelRoleEnum::" << LabelRoleName(value);
+}
+
+std::ostream &
+operator<<(std::ostream & os, SceneLoad::TypeEnum value)
+{
+  switch (value)
+  {
+    case SceneLoad::TypeEnum::RadialDisplacement:
+      return os << "bmr::SceneLoad::TypeEnum::RadialDisplacement";
+    case SceneLoad::TypeEnum::Pressure:
+      return os << "bmr::SceneLoad::TypeEnum::Pressure";
+  }
+  return os << "INVALID VALUE FOR bmr::SceneLoad::TypeEnum";
 }
 
 } // namespace bmr

@@ -35,7 +35,7 @@ MeshResolutionWarnings(const Scene & scene, const TetrahedralMesh & mesh)
   for (const LabelResolution & r : ComputeLabelResolution(mesh))
   {
     const SceneLabel * l = scene.FindLabelValue(r.label);
-    const bool         simulated = l && (l->role == LabelRole::Material || l->role == LabelRole::UnknownMaterial);
+    const bool simulated = l && (l->role == LabelRoleEnum::Material || l->role == LabelRoleEnum::UnknownMaterial);
     if (simulated && r.elementsAcross < MinimumElementsAcross)
     {
       std::ostringstream os;
@@ -56,7 +56,7 @@ SceneMaterials(const Scene & scene)
   std::map<std::int32_t, MaterialParameters> materials;
   for (const auto & l : scene.labels)
   {
-    if (l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial)
+    if (l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial)
     {
       materials[l.value] = MaterialParameters{ l.youngsModulus, l.poissonRatio, scene.formulation };
     }
@@ -87,7 +87,7 @@ RegionOfInterestLabels(const Scene & scene)
   std::set<std::int32_t> roiLabels;
   for (const auto & l : scene.labels)
   {
-    if (l.role != LabelRole::Material && l.role != LabelRole::Outside)
+    if (l.role != LabelRoleEnum::Material && l.role != LabelRoleEnum::Outside)
     {
       roiLabels.insert(l.value);
     }
@@ -211,7 +211,7 @@ CheckPresentLabelsMeshed(const Scene & scene, const std::set<std::int32_t> & pre
     {
       continue;
     }
-    const bool simulated = l.role == LabelRole::Material || l.role == LabelRole::UnknownMaterial;
+    const bool simulated = l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial;
     if (simulated && meshed.count(l.value) == 0)
     {
       Fail("MeshSceneLabels",
@@ -219,7 +219,7 @@ CheckPresentLabelsMeshed(const Scene & scene, const std::set<std::int32_t> & pre
              "\" is in the image but has no element after meshing (too small "
              "for mesh.cell_size_mm / facet_size_mm?)");
     }
-    if ((l.role == LabelRole::Fixed || l.role == LabelRole::Hollow) && walls.count(l.value) == 0)
+    if ((l.role == LabelRoleEnum::Fixed || l.role == LabelRoleEnum::Hollow) && walls.count(l.value) == 0)
     {
       Fail("MeshSceneLabels",
            "the wall of label \"" + l.name +
@@ -274,7 +274,7 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
   for (const auto & load : scene.loads)
   {
     const std::int32_t label = scene.FindLabel(load.surface)->value;
-    if (load.type == SceneLoad::Type::RadialDisplacement)
+    if (load.type == SceneLoad::TypeEnum::RadialDisplacement)
     {
       for (std::int32_t node : NodesOnBoundary(mesh, label))
       {
@@ -337,7 +337,7 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
   std::vector<std::int32_t> fixedWalls;
   for (const auto & l : scene.labels)
   {
-    if (l.role == LabelRole::Fixed)
+    if (l.role == LabelRoleEnum::Fixed)
     {
       fixedWalls.push_back(l.value);
     }

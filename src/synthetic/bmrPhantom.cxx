@@ -880,15 +880,18 @@ AddGaussianNoise(std::vector<float> & values, double sigma, std::uint64_t seed)
 }
 
 std::vector<SceneLoad>
-PelvisFillingLoads(const PelvisPhantomParameters & parameters, double bladderMM, double rectumMM, WallFillingEnum filling)
+PelvisFillingLoads(const PelvisPhantomParameters & parameters,
+                   double                          bladderMM,
+                   double                          rectumMM,
+                   WallFillingEnum                 filling)
 {
   const Vec3 c = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, "PelvisFillingLoads");
   const auto at = [&c](const Vec3 & offset) {
     return Vec3{ { c[0] + offset[0], c[1] + offset[1], c[2] + offset[2] } };
   };
   std::vector<SceneLoad> loads = {
-    { "bladder", SceneLoad::Type::RadialDisplacement, at(BladderCenter), bladderMM },
-    { "rectum", SceneLoad::Type::RadialDisplacement, at({ { 0.0, RectumAxisY, 0.0 } }), rectumMM }
+    { "bladder", SceneLoad::TypeEnum::RadialDisplacement, at(BladderCenter), bladderMM },
+    { "rectum", SceneLoad::TypeEnum::RadialDisplacement, at({ { 0.0, RectumAxisY, 0.0 } }), rectumMM }
   };
   if (filling == WallFillingEnum::AlongNormals)
   {

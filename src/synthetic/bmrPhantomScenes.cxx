@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "bmrPhantom.h"
 
+#include <ostream>
+
 namespace bmr {
 
 Scene
@@ -24,7 +26,7 @@ PelvisPhantomScene(double prostateE, bool unknown, double prostateNu)
 {
   Scene s;
   s.name = "pelvis phantom";
-  using R = LabelRole;
+  using R = LabelRoleEnum;
   SceneLabel prostate{ "prostate", PelvisProstate, unknown ? R::UnknownMaterial : R::Material, prostateE, prostateNu };
   if (unknown)
   {
@@ -53,7 +55,7 @@ SpherePhantomScene(double innerE, bool unknown)
 {
   Scene s;
   s.name = "concentric spheres";
-  using R = LabelRole;
+  using R = LabelRoleEnum;
   SceneLabel inner{ "inner", SphereInnerCore, unknown ? R::UnknownMaterial : R::Material, innerE, 0.40 };
   if (unknown)
   {
@@ -70,6 +72,13 @@ SpherePhantomScene(double innerE, bool unknown)
   s.mesh.facetSize = 3.0;
   s.mesh.facetDistance = 0.5;
   return s;
+}
+
+std::ostream &
+operator<<(std::ostream & os, WallFillingEnum value)
+{
+  return os << (value == WallFillingEnum::AlongNormals ? "bmr::WallFillingEnum::AlongNormals"
+                                                       : "bmr::WallFillingEnum::FromPoint");
 }
 
 } // namespace bmr

@@ -26,7 +26,7 @@
 // coordinate sweep of 6 samples per unknown.
 #include "bmrSimulation.h"
 #include "itkFEMElasticityOptimizer.h"
-#include "itkImageRegionIteratorWithIndex.h"
+#include "bmrTestUtilities.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -66,7 +66,7 @@ TwoBalls(double h, int seed)
 bmr::Scene
 TwoBallScene(bool truth)
 {
-  using R = bmr::LabelRole;
+  using R = bmr::LabelRoleEnum;
   bmr::Scene      s;
   bmr::SceneLabel soft{ "soft", Soft, truth ? R::Material : R::UnknownMaterial, truth ? TrueSoftE : 50.0, 0.4 };
   bmr::SceneLabel stiff{ "stiff", Stiff, truth ? R::Material : R::UnknownMaterial, truth ? TrueStiffE : 50.0, 0.4 };
@@ -87,8 +87,8 @@ TwoBallScene(bool truth)
   if (truth)
   {
     using L = bmr::SceneLoad;
-    s.loads = { { "around_soft", L::Type::RadialDisplacement, { { -BallX, 0, 0 } }, -2.0 },
-                { "around_stiff", L::Type::RadialDisplacement, { { BallX, 0, 0 } }, -2.0 } };
+    s.loads = { { "around_soft", L::TypeEnum::RadialDisplacement, { { -BallX, 0, 0 } }, -2.0 },
+                { "around_stiff", L::TypeEnum::RadialDisplacement, { { BallX, 0, 0 } }, -2.0 } };
   }
   return s;
 }
@@ -111,28 +111,12 @@ DeformedRadius(const bmr::TetrahedralMesh &      mesh,
   return sum / double(nodes.size());
 }
 
-/** Signed distance [mm] to the sphere (x0, 0, 0; r) on a 1 mm grid, negative inside (\a sign 1) or outside
- * (\a sign -1: the hollow layer's own inside). */
+/** Signed distance [mm] to the sphere (x0, 0, 0; r) on a 1 mm grid over both balls, negative inside (\a sign 1)
+ * or outside (\a sign -1: the hollow layer's own inside). */
 MapType::Pointer
 SphereMap(double x0, double r, double sign)
 {
-  auto                 map = MapType::New();
-  MapType::RegionType  region({ { 0, 0, 0 } }, { { 101, 53, 53 } });
-  MapType::PointType   origin;
-  MapType::SpacingType spacing(1.0);
-  origin[0] = -50.0;
-  origin[1] = origin[2] = -26.0;
-  map->SetRegions(region);
-  map->SetOrigin(origin);
-  map->SetSpacing(spacing);
-  map->Allocate();
-  for (itk::ImageRegionIteratorWithIndex<MapType> it(map, region); !it.IsAtEnd(); ++it)
-  {
-    MapType::PointType p;
-    map->TransformIndexToPhysicalPoint(it.GetIndex(), p);
-    it.Set(static_cast<float>(sign * (std::sqrt((p[0] - x0) * (p[0] - x0) + p[1] * p[1] + p[2] * p[2]) - r)));
-  }
-  return map;
+  return bmr::test::SphereDistanceMap({ { x0, 0.0, 0.0 } }, r, sign, { { -50.0, -26.0, -26.0 } }, { { 101, 53, 53 } });
 }
 } // namespace
 

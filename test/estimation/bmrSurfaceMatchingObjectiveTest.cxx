@@ -245,7 +245,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     "inclusion");
   bmr::Scene nothing = scene;
   nothing.forceSurfaces.clear();
-  nothing.labels[2].role = bmr::LabelRole::Material;
+  nothing.labels[2].role = bmr::LabelRoleEnum::Material;
   ok &= bmr::test::ExpectException(
     "nothing to estimate",
     [&] { bmr::SurfaceMatchingObjective o(mesh, nothing, bmr::SceneObjectiveSurfaces(nothing, mesh, maps)); },

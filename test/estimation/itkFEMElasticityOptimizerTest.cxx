@@ -42,22 +42,7 @@ using MapType = itk::FEMElasticityOptimizer::DistanceMapType;
 MapType::Pointer
 SphereMap(double cx, double r)
 {
-  auto                 map = MapType::New();
-  MapType::RegionType  region({ { 0, 0, 0 } }, { { 50, 50, 50 } });
-  MapType::PointType   origin;
-  MapType::SpacingType spacing(1.0);
-  origin.Fill(-24.5);
-  map->SetRegions(region);
-  map->SetOrigin(origin);
-  map->SetSpacing(spacing);
-  map->Allocate();
-  for (itk::ImageRegionIteratorWithIndex<MapType> it(map, region); !it.IsAtEnd(); ++it)
-  {
-    MapType::PointType p;
-    map->TransformIndexToPhysicalPoint(it.GetIndex(), p);
-    it.Set(static_cast<float>(std::hypot(p[0] - cx, p[1], p[2]) - r));
-  }
-  return map;
+  return bmr::test::SphereDistanceMap({ { cx, 0.0, 0.0 } }, r, 1.0, { { -24.5, -24.5, -24.5 } }, { { 50, 50, 50 } });
 }
 
 /** At an interior minimum: the curvature of Phi* from the envelope gradient (GetModulusCurvature()) must

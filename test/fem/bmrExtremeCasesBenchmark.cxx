@@ -101,9 +101,10 @@ main(int argc, char * argv[])
       dihedral = bmr::ComputeMeshQuality(mesh).minimumDihedralAngleDegrees;
       e = Solve(mesh, 10.0 * c.ratio, c.nu, 10.0, c.nu, c.averaged);
       bmr::Scene scene;
-      scene.labels = { { "shell", 1, bmr::LabelRole::Material, 10.0, c.nu },
-                       { "core", 2, bmr::LabelRole::Material, 10.0 * c.ratio, c.nu } };
-      scene.formulation = c.averaged ? bmr::ElementFormulationEnum::NodalAveragedPressure : bmr::ElementFormulationEnum::Standard;
+      scene.labels = { { "shell", 1, bmr::LabelRoleEnum::Material, 10.0, c.nu },
+                       { "core", 2, bmr::LabelRoleEnum::Material, 10.0 * c.ratio, c.nu } };
+      scene.formulation =
+        c.averaged ? bmr::ElementFormulationEnum::NodalAveragedPressure : bmr::ElementFormulationEnum::Standard;
       across = std::numeric_limits<double>::infinity();
       for (const bmr::LabelResolution & r : bmr::ComputeLabelResolution(mesh))
       {

@@ -70,10 +70,10 @@ Solve(const bmr::TetrahedralMesh & mesh, double E1, double nu1, double E2, doubl
 {
   const bmr::TwoLayerSphereSolution exact(InnerRadius, OuterRadius, E1, nu1, E2, nu2, Pressure);
   bmr::Scene                        scene;
-  scene.labels = { { "outside", 0, bmr::LabelRole::Outside },
-                   { "shell", 1, bmr::LabelRole::Material, E2, nu2 },
-                   { "core", 2, bmr::LabelRole::Material, E1, nu1 } };
-  scene.loads = { { "outside", bmr::SceneLoad::Type::Pressure, { { 0, 0, 0 } }, Pressure } };
+  scene.labels = { { "outside", 0, bmr::LabelRoleEnum::Outside },
+                   { "shell", 1, bmr::LabelRoleEnum::Material, E2, nu2 },
+                   { "core", 2, bmr::LabelRoleEnum::Material, E1, nu1 } };
+  scene.loads = { { "outside", bmr::SceneLoad::TypeEnum::Pressure, { { 0, 0, 0 } }, Pressure } };
   scene.formulation =
     averagedPressure ? bmr::ElementFormulationEnum::NodalAveragedPressure : bmr::ElementFormulationEnum::Standard;
   bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(scene, mesh);

@@ -67,7 +67,7 @@ bmrSceneTest(int, char *[])
   const bmr::SceneLabel * prostate = s.FindLabel("prostate");
   if (Expect(prostate != nullptr, "valid scene: a label named \"prostate\""))
   {
-    ok &= Expect(prostate->role == bmr::LabelRole::UnknownMaterial, "valid scene: prostate is an unknown material");
+    ok &= Expect(prostate->role == bmr::LabelRoleEnum::UnknownMaterial, "valid scene: prostate is an unknown material");
     ok &= Expect(prostate->upperBound == 300,
                  "valid scene: prostate upper bound 300 kPa (got " + ToString(prostate->upperBound) + ")");
   }
@@ -158,7 +158,7 @@ bmrSceneTest(int, char *[])
     const auto facet = s.EstimationWarnings(1.5, 1.5);
     const auto slices = s.EstimationWarnings(1.0, 3.0);
     bmr::Scene known = s;
-    known.labels[2].role = bmr::LabelRole::Material;
+    known.labels[2].role = bmr::LabelRoleEnum::Material;
     bmr::Scene half = s; // both limits reached, neither exceeded
     half.mesh.facetDistance = 0.5;
     const auto known13 = known.EstimationWarnings(1.0, 3.0);
@@ -203,7 +203,7 @@ bmrSceneTest(int, char *[])
     bmr::Scene   material = s;
     material.labels[1].value = 1; // soft_tissue
     bmr::Scene hollow = material;
-    hollow.labels[1].role = bmr::LabelRole::Hollow;
+    hollow.labels[1].role = bmr::LabelRoleEnum::Hollow;
     const auto warnings = bmr::MeshResolutionWarnings(material, cube);
     bool       resolutionOk = true;
     if (Expect(resolution.size() == 1, "resolution of one label (got " + ToString(resolution.size()) + ")"))

@@ -76,8 +76,8 @@ itkSceneDistanceMapsTest(int, char *[])
     it.Set(d2 <= Radius * Radius ? 2 : 1);
   }
   bmr::Scene scene;
-  scene.labels = { { "tissue", 1, bmr::LabelRole::Material, 10.0, 0.35 },
-                   { "ball", 2, bmr::LabelRole::Material, 50.0, 0.4 } };
+  scene.labels = { { "tissue", 1, bmr::LabelRoleEnum::Material, 10.0, 0.35 },
+                   { "ball", 2, bmr::LabelRoleEnum::Material, 50.0, 0.4 } };
   scene.objective = { { "ball", 1.0 } };
 
   const auto maps = itk::ComputeSceneDistanceMaps(labels.GetPointer(), scene);
@@ -98,7 +98,7 @@ itkSceneDistanceMapsTest(int, char *[])
   ok &= Expect(std::abs(mean) < 0.1, "|mean| of phi on the analytic sphere below 0.1 mm (got " + ToString(mean) + ")");
 
   bmr::Scene missing = scene;
-  missing.labels.push_back({ "absent", 7, bmr::LabelRole::Material, 10.0, 0.35 });
+  missing.labels.push_back({ "absent", 7, bmr::LabelRoleEnum::Material, 10.0, 0.35 });
   missing.objective = { { "absent", 1.0 } };
   ITK_TRY_EXPECT_EXCEPTION(itk::ComputeSceneDistanceMaps(labels.GetPointer(), missing));
 
