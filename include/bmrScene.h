@@ -118,9 +118,9 @@ struct BiomechanicalRegistration_EXPORT Scene
   /** Warnings about estimating a modulus from label images whose voxels are \a finestVoxel ..
    * \a coarsestVoxel mm (the smallest and largest spacing of the moving and fixed label images); none
    * when no label has the role unknown_material. The modulus rests on sub-voxel changes of the organs'
-   * shapes (benchmarks/run_extreme_cases.py): voxels coarser than 1.5 mm (1 x 1 x 3 mm: -13 to -73 %),
-   * and a mesh whose surfaces may leave the labels' by more than half the finest voxel
-   * (mesh.facet_distance_mm; at 1 mm voxels 0.75 mm gave +29 %, 1.25 mm -76 %, 0.5 mm -1 %). */
+   * shapes: it warns about voxels coarser than 1.5 mm and about a mesh whose surfaces may leave the labels'
+   * by more than half the finest voxel (mesh.facet_distance_mm). The errors behind both limits are measured
+   * in docs/benchmarks.md ("Extreme cases"). */
   std::vector<std::string>
   EstimationWarnings(double finestVoxel, double coarsestVoxel) const;
 

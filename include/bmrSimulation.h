@@ -41,10 +41,8 @@ constexpr double MinimumElementsAcross = 2.0;
 
 /** Warnings, one per simulated label (material or unknown material) of \a scene that \a mesh resolves
  * with fewer than MinimumElementsAcross elements across (bmr::ComputeLabelResolution), naming the label:
- * linear tetrahedra cannot bend through a layer one element thick, and the solution stiffens. Measured on
- * the two-layer sphere (benchmarks/run_extreme_cases.py; 5 mm core, 5 mm shell): cell size 2.5 mm, 1.2
- * elements across the core and 1.6 across the shell, 2.5 % radial error; 1 mm, 2.8 across, 0.45 %;
- * 0.5 mm, 5.4 across, 0.12 %. */
+ * linear tetrahedra cannot bend through a layer one element thick, and the solution stiffens (the errors
+ * on the two-layer sphere behind the limit: docs/benchmarks.md, "Extreme cases"). */
 BiomechanicalRegistration_EXPORT std::vector<std::string>
                                  MeshResolutionWarnings(const Scene & scene, const TetrahedralMesh & mesh);
 
