@@ -21,6 +21,7 @@
 #include "bmrStatistics.h"
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkDisplacementFieldJacobianDeterminantFilter.h"
+#include "itkLabelOverlapMeasuresImageFilter.h"
 #include "itkImageRegionConstIterator.h"
 #include "itkImageRegionConstIteratorWithIndex.h"
 #include "itkSignedMaurerDistanceMapImageFilter.h"
@@ -41,8 +42,9 @@ struct LabelOverlap
   double      dice{ 0.0 };
 };
 
-/** Overlap of \a label in \a a and \a b (same grid; throws otherwise).
- * \ingroup BiomechanicalRegistration */
+/** Overlap of \a label in \a a and \a b (same grid; throws otherwise), counted by ITK's
+ * LabelOverlapMeasuresImageFilter (a = source, b = target).
+ * \ingroup BiomechanicalRegistrationEvaluation */
 template<typename TLabelImage>
 LabelOverlap
 ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
@@ -51,16 +53,18 @@ ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabe
   {
     itkGenericExceptionMacro(<< "ComputeLabelOverlap: the two label images differ in size");
   }
-  LabelOverlap                          o;
-  ImageRegionConstIterator<TLabelImage> ia(a, a->GetLargestPossibleRegion());
-  ImageRegionConstIterator<TLabelImage> ib(b, b->GetLargestPossibleRegion());
-  for (; !ia.IsAtEnd(); ++ia, ++ib)
+  auto overlap = LabelOverlapMeasuresImageFilter<TLabelImage>::New();
+  overlap->SetSourceImage(a);
+  overlap->SetTargetImage(b);
+  overlap->Update();
+  LabelOverlap o;
+  const auto   measures = overlap->GetLabelSetMeasures();
+  const auto   found = measures.find(label);
+  if (found != measures.end())
   {
-    const bool x = ia.Get() == label;
-    const bool y = ib.Get() == label;
-    o.inA += x;
-    o.inB += y;
-    o.inBoth += x && y;
+    o.inA = found->second.m_Source;
+    o.inB = found->second.m_Target;
+    o.inBoth = found->second.m_Intersection;
   }
   o.dice = o.inA + o.inB > 0 ? 2.0 * double(o.inBoth) / double(o.inA + o.inB) : 0.0;
   return o;
@@ -82,7 +86,10 @@ struct SurfaceDistanceStatistics
  * same from B to A. Of the pooled distances the result gives the mean, the 95th percentile (linear
  * interpolation) — the "HD95" of segmentation papers, robust to a few outlying voxels — and the maximum.
  * Throws when the label is absent from either image or the grids differ.
- * \ingroup BiomechanicalRegistration
+ * Not ITK's HausdorffDistanceImageFilter: it gives the maximum and the mean distance over every voxel of each
+ * object (interior voxels included, at distance 0 inside the other), not the distances of the surfaces, and
+ * no percentile; HD95 needs the pooled surface distances.
+ * \ingroup BiomechanicalRegistrationEvaluation
  */
 template<typename TLabelImage>
 SurfaceDistanceStatistics
