@@ -62,13 +62,13 @@ GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults)
 itk::PhantomSettings
 ParsePhantomSettings(const Arguments & args)
 {
-  itk::PhantomSettings o;
   const bool           pelvis = args.Choice("--scene", { "pelvis", "spheres" }) == "pelvis";
-  o.anatomy = pelvis ? itk::PhantomSettings::AnatomyEnum::Pelvis : itk::PhantomSettings::AnatomyEnum::Spheres;
-  o.grid = GridFromArguments(args, pelvis ? bmr::PelvisPhantomParameters().grid : bmr::SpherePhantomParameters().grid);
+  itk::PhantomSettings o = itk::PhantomSettings::Defaults(pelvis ? itk::PhantomSettings::AnatomyEnum::Pelvis
+                                                                 : itk::PhantomSettings::AnatomyEnum::Spheres);
+  o.grid = GridFromArguments(args, o.grid);
   o.prostateE = args.Number("--true-E-kPa", o.prostateE);
   o.prostateNu = args.Number("--true-nu", o.prostateNu);
-  o.bladderMM = args.Number("--bladder-mm", pelvis ? o.bladderMM : 1.5);
+  o.bladderMM = args.Number("--bladder-mm", o.bladderMM);
   o.rectumMM = args.Number("--rectum-mm", o.rectumMM);
   o.truthRefinement = args.Number("--truth-mesh-scale", o.truthRefinement);
   if (!(o.truthRefinement >= 0.3 && o.truthRefinement <= 2.0))

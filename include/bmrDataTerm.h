@@ -48,7 +48,7 @@ struct BiomechanicalRegistration_EXPORT ResidualJacobian
 
 /** \brief A term of the estimation objective: weighted residuals of the deformed moving anatomy,
  * \f$ \Phi_d(u) = \tfrac12 |r(u)|^2 \f$, and their derivatives with respect to the nodal displacement u.
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT DataTerm
 {
@@ -91,7 +91,7 @@ struct BiomechanicalRegistration_EXPORT ObjectiveSurface
  * along \f$-\phi\nabla\phi\f$ while springs to its neighbors on the same surface keep the displacement
  * smooth, \f$ v \leftarrow v - \alpha \phi\nabla\phi + \beta(\bar v_{nb} - v) \f$, alpha = 0.5,
  * beta = 0.25, for SetMatchingIterations() steps (default 200).
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT SurfaceDistanceTerm : public DataTerm
 {

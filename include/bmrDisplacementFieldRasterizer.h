@@ -49,7 +49,7 @@ BiomechanicalRegistration_EXPORT std::ostream &
  * index, so a region gives the same values whatever the split of the grid into
  * regions (threads). Elements inverted by the deformation have no unique
  * inverse and are skipped for PullBack (counted in GetNumberOfInvertedElements()).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationField
  */
 class BiomechanicalRegistration_EXPORT DisplacementFieldRasterizer
 {

@@ -113,7 +113,7 @@ struct BiomechanicalRegistration_EXPORT EstimationResult
  *   \f$ \mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1} \f$; not computed when an estimate lies on a
  *   bound, infinite when H is not positive definite.
  * Deterministic: sequential, no random numbers.
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT ElasticityEstimator
 {

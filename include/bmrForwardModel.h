@@ -37,7 +37,7 @@ namespace bmr {
  *     \frac{\partial\Phi}{\partial E_m} = -\lambda^T \frac{\partial f_{int}}{\partial E_m} \f]
  * for the forces f, the prescribed displacements \f$\bar u\f$ and the moduli E_m.
  * Units: u in mm, f in mN, E in kPa.
- * \ingroup BiomechanicalRegistrationFEM
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationFEM
  */
 class BiomechanicalRegistration_EXPORT ForwardModel
 {
@@ -82,7 +82,7 @@ public:
  * material (bmr::LinearElasticModel), \f$ f_{int} = K(E) u = \sum_m E_m \hat K_m u \f$, so
  * \f$K_T = K\f$ and \f$\partial f_{int}/\partial E_m = \hat K_m u\f$. One sparse Cholesky factorization
  * per value of the moduli serves every state and adjoint solve.
- * \ingroup BiomechanicalRegistrationFEM
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationFEM
  */
 class BiomechanicalRegistration_EXPORT LinearForwardModel : public ForwardModel
 {

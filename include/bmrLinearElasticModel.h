@@ -90,7 +90,7 @@ struct BiomechanicalRegistration_EXPORT SolverTimings
  * not finite, nu outside (-1, 0.5), a degenerate or inverted element (named),
  * a connected component of the mesh that no Dirichlet condition holds against
  * rigid-body motion (named by its labels), and a factorization that fails.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationFEM
  */
 class BiomechanicalRegistration_EXPORT LinearElasticModel
 {

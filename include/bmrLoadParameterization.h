@@ -41,7 +41,7 @@ struct BiomechanicalRegistration_EXPORT BoundaryLoad
  * factorization is reused over every p. The estimator minimizes
  * \f$ \Phi(u(p)) + R(p) \f$ with the parameterization's prior R (EvaluatePrior()); the chain rule
  * through the boundary conditions is PullBackGradient().
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT LoadParameterization
 {
@@ -134,7 +134,7 @@ struct BiomechanicalRegistration_EXPORT LoadedWall
  * Held nodes (u = 0 on fixed walls, and the prescribed values of the scene's own loads) keep their
  * values; a wall node that is also held is not a control node. Forces (the scene's pressure loads) do
  * not depend on p.
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT WallLoads : public LoadParameterization
 {

@@ -36,7 +36,7 @@ namespace bmr {
  * cellSizePerLabel overrides cellSize inside given labels. optimize runs CGAL's
  * sliver perturbation, exude additionally its (slower) sliver exudation; both
  * without time limit, so that the result does not depend on the machine's load.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationMesh
  */
 struct BiomechanicalRegistration_EXPORT MeshingParameters
 {

@@ -91,7 +91,7 @@ struct BiomechanicalRegistration_EXPORT SceneLoad
  * key, a wrong type, nu >= 0.5, E <= 0, a reference to an undefined label, or a
  * scene with nothing to hold it against rigid-body motion is rejected with an
  * itk::ExceptionObject naming the entry.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationScene
  */
 struct BiomechanicalRegistration_EXPORT Scene
 {

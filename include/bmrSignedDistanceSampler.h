@@ -39,7 +39,7 @@ namespace bmr {
  * of the registration objective and its finite-difference check need.
  * Outside the grid the continuous index is clamped to the border (value of the
  * border, zero gradient along the clamped axes).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT SignedDistanceSampler
 {

@@ -50,7 +50,7 @@ struct BiomechanicalRegistration_EXPORT LoadSolution
  *     \partial\Phi/\partial \log E_m = -E_m\, \lambda^T \partial f_{int}/\partial E_m. \f]
  * The parts are referenced, not owned; they must outlive the objective.
  * Units: u in mm; E in kPa; Phi in mm^2.
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT EstimationObjective
 {
@@ -153,7 +153,7 @@ struct BiomechanicalRegistration_EXPORT SceneObjectiveParts
  * the scene's materials (LinearForwardModel), the wall displacements of its force surfaces as the unknown
  * loads (WallLoads; u = 0 on fixed walls) and the surface distance of its objective surfaces
  * (SurfaceDistanceTerm), composed by EstimationObjective.
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT SurfaceMatchingObjective
   : private detail::SceneObjectiveParts

@@ -31,7 +31,7 @@
  * Nothing in these headers exposes Eigen or CGAL types; the ITK classes in
  * this module are thin pipeline wrappers around these functions.
  * Units everywhere: millimeters (LPS physical space), kPa, mN (= kPa mm^2).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationMesh
  */
 namespace bmr {
 
@@ -45,7 +45,7 @@ namespace bmr {
  * of an excluded region (a hollow organ or a fixed bone whose interior was left
  * out of the mesh). Optional per-node fields are empty or 3N long:
  * \c displacement [mm] and \c force [mN].
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationMesh
  */
 struct BiomechanicalRegistration_EXPORT TetrahedralMesh
 {

@@ -47,7 +47,7 @@ namespace bmr {
  * Cholesky factor of the Gram matrix: the columns of W L^{-T} are orthonormal,
  * so overlapping Gaussians do not make the optimization ill-conditioned.
  * Deterministic.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT WallBasis
 {

@@ -39,11 +39,11 @@
 namespace itk {
 
 /** Largest image ReadBiomechanicalImage() reads: 2^31 voxels (a declared size beyond is a corrupt or absurd
- * header). \ingroup BiomechanicalRegistrationIO */
+ * header). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 constexpr double BiomechanicalMaximumNumberOfVoxels = 2147483648.0;
 
 /** Throws naming the first voxel of \a image that is NaN or infinite (floating-point pixels and vectors of
- * them); \a what names the image. \ingroup BiomechanicalRegistrationIO */
+ * them); \a what names the image. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 template<typename TImage>
 void
 CheckImageIsFinite(const TImage * image, const std::string & what)
@@ -147,7 +147,7 @@ ReadImageFile(const std::string & path, const std::string & what)
 /** Reads a 3-D image from any file ITK reads, or a DICOM series directory (GDCM). Refuses, with an
  * itk::ExceptionObject whose description names \a what and \a path in one line, images that cannot be
  * read, are not 3-D, declare more than 2^31 voxels, have a zero, negative or non-finite spacing, or hold a
- * non-finite voxel. \ingroup BiomechanicalRegistrationIO */
+ * non-finite voxel. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 template<typename TImage>
 typename TImage::Pointer
 ReadBiomechanicalImage(const std::string & path, const std::string & what)
@@ -182,7 +182,7 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
 }
 
 /** Writes \a image to \a path (format by the extension, compressed when \a compress) through a temporary
- * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistrationIO */
+ * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 template<typename TImage>
 void
 WriteImageAtomically(const TImage * image, const std::string & path, bool compress = true)

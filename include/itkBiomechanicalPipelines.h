@@ -36,13 +36,13 @@ namespace itk {
 // biomechreg parses, calls these, prints and writes; nothing else.
 
 /** The image types of the pipelines: CT [HU], label maps, displacement fields [mm, LPS].
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 using BiomechanicalCTImageType = Image<float, 3>;
 using BiomechanicalLabelImageType = Image<std::int32_t, 3>;
 using BiomechanicalFieldType = Image<Vector<double, 3>, 3>;
 
 /** Receives what a pipeline is doing; every method does nothing by default.
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 class BiomechanicalRegistration_EXPORT PipelineObserver
 {
 public:
@@ -70,7 +70,7 @@ struct BiomechanicalRegistration_EXPORT PipelineStage
   double      seconds{ 0.0 };
 };
 
-/** What SimulateLabelImage() made. \ingroup BiomechanicalRegistrationPipelines */
+/** What SimulateLabelImage() made. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT SimulationResult
 {
   bmr::TetrahedralMesh            mesh;                  ///< with displacement [mm] and force [mN]
@@ -84,7 +84,7 @@ struct BiomechanicalRegistration_EXPORT SimulationResult
 
 /** Meshes \a movingLabels for \a scene (CGAL Mesh_3), solves the scene's forward problem and computes the
  * pull-back field on \a reference's grid (and the push field on the moving grid when \a pushField).
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT SimulationResult
 SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
                    const bmr::Scene &                  scene,
@@ -93,7 +93,7 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
                    bool                                pushField = true);
 
 /** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationSettings
 {
   bmr::EstimatorSettings estimator;
@@ -102,7 +102,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
 };
 
-/** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistrationPipelines */
+/** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationResult
 {
   SimulationResult                     state;              ///< the estimated state: mesh, fields, stress
@@ -127,7 +127,7 @@ constexpr double BiomechanicalUncertaintyWarningLogSigma = 0.1;
  * checked; distance maps of the fixed labels; the moving labels meshed (and a coarse mesh for the sweep
  * when a modulus is unknown); FEMElasticityOptimizer; the pull-back and push fields; the moving labels (and
  * CT, when given) warped; Dice per organ and the Jacobian of the pull-back field; warnings. \a movingCT may
- * be null. \ingroup BiomechanicalRegistrationPipelines */
+ * be null. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT RegistrationResult
 RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       const BiomechanicalLabelImageType * fixedLabels,
@@ -137,7 +137,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       PipelineObserver *                  observer = nullptr);
 
 /** Settings of a phantom pair; the defaults are biomechreg phantom's.
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT PhantomSettings
 {
   enum class AnatomyEnum : std::uint8_t
@@ -160,12 +160,17 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   std::uint64_t        seed{ 1 };
   unsigned int         numberOfSeeds{ 3 };
   double               truthRefinement{ 0.75 }; ///< the truth's mesh sizes relative to the scene's
+
+  /** The defaults of an anatomy: the pelvis as above; the spheres on their own 96^3 grid of 1 mm, the outer
+   * surface pressed 1.5 mm inwards (bladderMM). */
+  static PhantomSettings
+  Defaults(AnatomyEnum anatomy);
 };
 
 BiomechanicalRegistration_EXPORT std::ostream &
                                  operator<<(std::ostream & os, PhantomSettings::AnatomyEnum value);
 
-/** A moving/fixed pair with its ground truth. \ingroup BiomechanicalRegistrationPipelines */
+/** A moving/fixed pair with its ground truth. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT PhantomPair
 {
   BiomechanicalCTImageType::Pointer    movingCT, fixedCT;
@@ -181,7 +186,7 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
 /** Makes a pair: the fixed images are the moving ones warped by a forward simulation with known moduli on
  * a finer, independently meshed model (another random seed of the mesher), the fixed labels voxelized once
  * from the deformed analytic anatomy (pelvis), the fixed CT with its own noise; the seeds moved with the
- * simulated displacement. \ingroup BiomechanicalRegistrationPipelines */
+ * simulated displacement. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT PhantomPair
 MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = nullptr);
 
@@ -193,7 +198,7 @@ BiomechanicalRegistration_EXPORT std::vector<PhantomSettings>
                                  DrawPhantomSet(unsigned int count, std::uint64_t seed);
 
 /** Settings of the Demons baseline (itk::DemonsBaselineRegistrationFilter); the defaults are biomechreg's.
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT DemonsSettings
 {
   std::string  variant{ "diffeomorphic" }; ///< or "symmetric" (fast symmetric forces)
@@ -205,7 +210,7 @@ struct BiomechanicalRegistration_EXPORT DemonsSettings
 
 /** Demons of the moving CT onto the fixed CT; returns the fixed -> moving field [mm]. The label images are used
  * only when \a flatten names organs to flatten (each replaced by its mean in its own image).
- * \ingroup BiomechanicalRegistrationPipelines */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT BiomechanicalFieldType::Pointer
                                  RunDemonsBaseline(const BiomechanicalCTImageType *    fixedCT,
                                                    const BiomechanicalCTImageType *    movingCT,

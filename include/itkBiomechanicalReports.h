@@ -26,35 +26,35 @@ namespace itk {
  * uncertainty and one-sigma interval, the gauge, identifiability, residuals and surface distances, Dice,
  * the Jacobian of the pull-back field, inverted elements, the step limit, warnings, the mesh, the number
  * of iterations and the wall time of each stage in \a wallTimes (and their total).
- * \ingroup BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  RegistrationReportJson(const RegistrationResult &         result,
                                                         const RegistrationSettings &       settings,
                                                         const std::vector<PipelineStage> & wallTimes);
 
 /** The inner solves \a records as CSV, one row each (E [kPa] per unknown in \a unknownNames, Phi* [mm^2],
- * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistrationIO
+ * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO
  */
 BiomechanicalRegistration_EXPORT std::string
 IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames);
 
 /** One line for a console per inner solve: stage, iteration, E [kPa], Phi* [mm^2], dPhi* / dlogE [mm^2],
- * |dPhi/dp|, inner iterations, wall time [s]. \ingroup BiomechanicalRegistrationIO */
+ * |dPhi/dp|, inner iterations, wall time [s]. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  FormatIterationRecord(const bmr::IterationRecord & record);
 
-/** The stages' wall times [s] as a table, with their total. \ingroup BiomechanicalRegistrationIO */
+/** The stages' wall times [s] as a table, with their total. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  StageTable(const std::vector<PipelineStage> & stages);
 
 /** " (uncertainty x/ exp(s), i.e. +-N %, one standard deviation)" for an unknown modulus \a label whose
- * uncertainty was computed, a note when it is not determined, else empty. \ingroup BiomechanicalRegistrationIO */
+ * uncertainty was computed, a note when it is not determined, else empty. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  UncertaintyText(const RegistrationResult & result, const std::string & label);
 
 /** truth.json of a phantom pair (JSON; mm, kPa, mN): the true moduli and Poisson's ratios, the tumour
  * fraction, the wall loads, the truth's mesh, the CT noise and the seed landmarks (moving and fixed).
- * \ingroup BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings);
 

@@ -23,18 +23,18 @@
 namespace itk {
 
 /** Creates \a path and its missing parents (like mkdir -p); throws naming it when it cannot.
- * \ingroup BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT void
 MakeOutputDirectory(const std::string & path);
 
 /** mesh.vtu of a simulated or estimated state: displacement [mm], force [mN], Dirichlet flags per node;
- * label, E [kPa], nu, von Mises stress [kPa] per element (ParaView). \ingroup BiomechanicalRegistrationIO */
+ * label, E [kPa], nu, von Mises stress [kPa] per element (ParaView). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT void
 WriteSimulationMesh(const std::string & path, const SimulationResult & result);
 
 /** Writes into \a directory (created when missing): mesh.vtu, field.nrrd (fixed -> moving [mm]),
  * forward_field.nrrd (when computed), warped_labels.nrrd and warped_ct.nrrd (when given); every file through
- * a temporary name. \ingroup BiomechanicalRegistrationIO */
+ * a temporary name. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT void
 WriteSimulationOutputs(const std::string &                 directory,
                        const SimulationResult &            result,
@@ -43,7 +43,7 @@ WriteSimulationOutputs(const std::string &                 directory,
 
 /** Writes a registration into \a directory: WriteSimulationOutputs(), history.csv (every fine-mesh inner solve,
  * then the accepted outer iterates), sweep.csv and report.json, whose wall times are \a stages and the
- * writing itself. Returns the writing's stage ("write outputs"). \ingroup BiomechanicalRegistrationIO */
+ * writing itself. Returns the writing's stage ("write outputs"). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT PipelineStage
 WriteRegistrationOutputs(const std::string &                directory,
                          const RegistrationResult &         result,
@@ -51,7 +51,7 @@ WriteRegistrationOutputs(const std::string &                directory,
                          const std::vector<PipelineStage> & stages);
 
 /** Writes a phantom pair into \a directory: moving and fixed CT and labels, truth_field.nrrd, scene.json (what
- * the estimator sees), truth_scene.json, truth.json and the seed landmarks. \ingroup BiomechanicalRegistrationIO */
+ * the estimator sees), truth_scene.json, truth.json and the seed landmarks. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT void
 WritePhantomPair(const std::string & directory, const PhantomPair & pair, const PhantomSettings & settings);
 

@@ -30,7 +30,7 @@ namespace itk {
 
 /** \class DemonsBaselineRegistrationFilterEnums
  * \brief The enums of DemonsBaselineRegistrationFilter (ITK 5 style: outside the class template, with operator<<).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation
  */
 class DemonsBaselineRegistrationFilterEnums
 {
@@ -86,7 +86,7 @@ operator<<(std::ostream & out, const DemonsBaselineRegistrationFilterEnums::Vari
  * histogram matching with 1024 levels and 7 match points. With 3 levels at 128×128×64 this takes about
  * 15 s on two cores.
  *
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation
  */
 template<typename TImage,
          typename TDisplacementField = Image<Vector<double, TImage::ImageDimension>, TImage::ImageDimension>,

@@ -63,7 +63,7 @@ namespace itk {
  * [kPa]; every fine-mesh inner solve (GetHistory()), the accepted outer iterates (GetOuterIterations()), the
  * surface distances [mm] and everything else in GetResult(). An IterationEvent is invoked after every inner
  * solve (GetCurrentRecord()). Deterministic: sequential, no random numbers.
- * \ingroup BiomechanicalRegistrationEstimation
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */
 class BiomechanicalRegistration_EXPORT FEMElasticityOptimizer : public ProcessObject
 {

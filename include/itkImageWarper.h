@@ -27,7 +27,7 @@ namespace itk {
 
 /** \class ImageWarperEnums
  * \brief The enums of ImageWarper (ITK 5 style: outside the class template, with operator<<).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationField
  */
 class ImageWarperEnums
 {
@@ -70,7 +70,7 @@ operator<<(std::ostream & out, const ImageWarperEnums::Interpolation value)
  * voting) for label maps, BSpline (cubic) for smooth intensities. Points
  * mapped outside the input take DefaultPixelValue (e.g. -1000 HU for CT, 0
  * for labels). Units: mm.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationField
  */
 template<typename TImage, typename TDisplacementField = Image<Vector<double, 3>, 3>>
 class ITK_TEMPLATE_EXPORT ImageWarper : public ImageToImageFilter<TImage, TImage>

@@ -56,7 +56,7 @@ struct ImplantedSeedDetectionParameters
  *
  * \a labels must share \a ct's grid. Throws itk::ExceptionObject when the grids differ or the organ is
  * absent. Use bmr::MatchLandmarks() to pair the seeds found in two scans.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation
  */
 template<typename TImage, typename TLabelImage>
 std::vector<bmr::Landmark>

@@ -47,7 +47,7 @@ namespace itk {
  * ratio of the result.
  *
  * Input: a 3-D integer label image. Output: itk::TetrahedralMeshObject.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationMesh
  */
 template<typename TInputImage>
 class ITK_TEMPLATE_EXPORT LabelImageToTetrahedralMeshFilter : public ProcessObject

@@ -36,7 +36,7 @@ namespace itk {
  * every registration should beat. Landmarks are paired by id; the result follows the order of \a fixed.
  * Throws itk::ExceptionObject naming the landmark when an id has no partner or a fixed landmark lies
  * outside the field's grid (between the outermost voxel centers).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation
  */
 template<typename TDisplacementField>
 std::vector<double>

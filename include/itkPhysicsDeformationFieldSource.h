@@ -27,7 +27,7 @@ namespace itk {
 
 /** \class PhysicsDeformationFieldSourceEnums
  * \brief The enums of PhysicsDeformationFieldSource (ITK 5 style: outside the class template, with operator<<).
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationField
  */
 class PhysicsDeformationFieldSourceEnums
 {
@@ -80,7 +80,7 @@ operator<<(std::ostream & out, const PhysicsDeformationFieldSourceEnums::FieldDi
  * Threaded over z-slabs; a voxel on a shared face belongs to the element of
  * lowest index, so the output is identical for any number of threads.
  * Units: mm (LPS). Input: an itk::TetrahedralMeshObject with nodal displacement.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationField
  */
 template<typename TOutputImage>
 class ITK_TEMPLATE_EXPORT PhysicsDeformationFieldSource : public ImageSource<TOutputImage>

@@ -30,7 +30,7 @@
 namespace itk {
 
 /** One line of a pair list: a name and its files (column -> path, relative paths resolved against the
- * list's directory, "" when absent). \ingroup BiomechanicalRegistrationEvaluation */
+ * list's directory, "" when absent). \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation */
 struct BiomechanicalRegistration_EXPORT ImagePairEntry
 {
   std::string                        name;
@@ -46,7 +46,7 @@ BiomechanicalRegistration_EXPORT std::vector<ImagePairEntry>
 
 /** How one fixed -> moving field scores on a pair: TRE [mm] per landmark (in the fixed landmarks' order),
  * overlap and symmetric surface distances [mm] of the scene's objective organs after warping the moving
- * labels, and the field's Jacobian determinant. \ingroup BiomechanicalRegistrationEvaluation */
+ * labels, and the field's Jacobian determinant. \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation */
 struct BiomechanicalRegistration_EXPORT FieldEvaluation
 {
   std::vector<double>                              tre;
@@ -89,7 +89,7 @@ WriteCheckerboardPNG(const BiomechanicalCTImageType * fixed,
  * Add() one row per pair and method; the tables are CSV (per landmark, per pair, per organ, t-tests) and a
  * markdown summary with paired two-tailed t-tests of FEM against every other method, over every seed and
  * over the pairs' means. Lengths in mm, times in s (compute only).
- * \ingroup BiomechanicalRegistrationEvaluation */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation */
 class BiomechanicalRegistration_EXPORT ComparisonTables
 {
 public:

@@ -44,7 +44,7 @@ namespace itk {
  *
  * Throws itk::ExceptionObject naming the label when an objective label does not
  * occur in \a labels, and when the image is empty.
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationScene
  */
 template<typename TLabelImage>
 std::map<std::string, typename Image<float, 3>::Pointer>

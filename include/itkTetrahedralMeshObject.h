@@ -52,7 +52,7 @@ namespace itk {
 /** \brief Pipeline data object holding a labeled tetrahedral mesh (bmr::TetrahedralMesh).
  *
  * Coordinates in LPS mm; optional nodal displacement [mm] and force [mN].
- * \ingroup BiomechanicalRegistration
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationMesh
  */
 using TetrahedralMeshObject = SimpleDataObjectDecorator<bmr::TetrahedralMesh>;
 

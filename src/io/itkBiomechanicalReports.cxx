@@ -109,7 +109,7 @@ std::string
 IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames)
 {
   std::ostringstream o;
-  o << "# Phi* [mm^2] at the inner optimum; |dPhi/dd| [mm]; dPhi/dlogE [mm^2]; E [kPa]\nstage,iteration";
+  o << "# Phi* [mm^2] at the inner optimum; |dPhi/dp| [mm] (p: the load parameters); dPhi/dlogE [mm^2]; E [kPa]\nstage,iteration";
   for (const auto & n : unknownNames)
   {
     o << ",E_" << n << "_kPa";
@@ -211,7 +211,7 @@ FormatIterationRecord(const bmr::IterationRecord & r)
   {
     o << "  dPhi/dlogE " << std::setprecision(2) << std::setw(9) << g;
   }
-  o << "  |dPhi/dd| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4) << r.innerIterations
+  o << "  |dPhi/dp| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4) << r.innerIterations
     << "  " << std::fixed << std::setprecision(2) << r.seconds << " s";
   return o.str();
 }

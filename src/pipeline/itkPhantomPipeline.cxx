@@ -233,6 +233,19 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
   return pair;
 }
 
+PhantomSettings
+PhantomSettings::Defaults(AnatomyEnum anatomy)
+{
+  PhantomSettings s;
+  s.anatomy = anatomy;
+  if (anatomy == AnatomyEnum::Spheres)
+  {
+    s.grid = bmr::SpherePhantomParameters().grid;
+    s.bladderMM = 1.5;
+  }
+  return s;
+}
+
 std::vector<PhantomSettings>
 DrawPhantomSet(unsigned int count, std::uint64_t seed)
 {
