@@ -18,112 +18,12 @@
 #ifndef bmrSurfaceMatchingObjective_h
 #define bmrSurfaceMatchingObjective_h
 
-#include "bmrDataTerm.h"
-#include "bmrForwardModel.h"
-#include "bmrLoadParameterization.h"
+#include "bmrEstimationObjective.h"
 #include "bmrScene.h"
 
 #include <memory>
 
 namespace bmr {
-
-/** Result of an inner solve at fixed E: the loads' optimum. */
-struct BiomechanicalRegistration_EXPORT LoadSolution
-{
-  std::vector<double> parameters;         ///< p (mm for wall loads)
-  double              value{ 0.0 };       ///< Phi* [mm^2]
-  std::vector<double> gradient;           ///< dPhi/dp at the optimum
-  std::vector<double> logModulusGradient; ///< dPhi*/dlog E (envelope theorem) [mm^2]
-  unsigned int        iterations{ 0 };
-  std::string         stop;
-};
-
-/** \brief The estimation objective composed of a forward model, a load parameterization and data terms,
- * with its adjoint gradients.
- *
- * \f[ \Phi(E, p) = \sum_t \Phi_t(u) + R(p), \qquad f_{int}(u; E) = f(p) \text{ on free dofs},\ u = \bar u(p)
- *     \text{ on constrained dofs}, \f]
- * with \f$g = \partial\sum_t\Phi_t/\partial u\f$. Adjoint (one solve with the cached factorization):
- * \f$K_T\lambda = g\f$ on the free dofs, \f$\lambda = 0\f$ on the constrained ones; then
- * \f[ \partial\Phi/\partial p = \Big(\frac{\partial\bar u}{\partial p}\Big)^T (g - K_T\lambda)_c
- *     + \Big(\frac{\partial f}{\partial p}\Big)^T \lambda + \nabla R, \qquad
- *     \partial\Phi/\partial \log E_m = -E_m\, \lambda^T \partial f_{int}/\partial E_m. \f]
- * The parts are referenced, not owned; they must outlive the objective.
- * Units: u in mm; E in kPa; Phi in mm^2.
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
- */
-class BiomechanicalRegistration_EXPORT EstimationObjective
-{
-public:
-  /** \a unknownLabels: the labels whose modulus is estimated. Throws when there is nothing to estimate
-   * (no load parameter and no unknown modulus) or no data term. */
-  EstimationObjective(ForwardModel &                model,
-                      LoadParameterization &        loads,
-                      std::vector<const DataTerm *> terms,
-                      std::vector<std::int32_t>     unknownLabels);
-  virtual ~EstimationObjective();
-  EstimationObjective(const EstimationObjective &) = delete;
-  EstimationObjective &
-  operator=(const EstimationObjective &) = delete;
-
-  std::size_t
-  GetNumberOfParameters() const;
-  /** Labels whose modulus is estimated. */
-  const std::vector<std::int32_t> &
-  GetUnknownLabels() const;
-  /** Moduli [kPa] of the unknown labels (in GetUnknownLabels() order). */
-  void
-  SetYoungsModuli(const std::vector<double> & moduli);
-
-  /** Phi(E, p) [mm^2]; fills the gradients when not null (with respect to p, and one per unknown label
-   * [mm^2 per unit log E]). */
-  double
-  Evaluate(const std::vector<double> & p, std::vector<double> * gradientP, std::vector<double> * gradientLogE);
-  /** Nodal displacement [mm] (3N) for the load parameters \a p. */
-  std::vector<double>
-  ComputeDisplacement(const std::vector<double> & p);
-  /** Elements turned inside out (deformed volume <= 0) by the displacement of the last Evaluate(). */
-  std::size_t
-  GetNumberOfInvertedElements() const;
-  /** The loads [mN] (3N) the boundary exerts on the tissue in the state \a u. */
-  std::vector<double>
-  ComputeBoundaryForces(const std::vector<double> & u) const;
-  /** Residual statistics of every data term in the state \a u [mm]. */
-  std::vector<ResidualStatistics>
-  ComputeStatistics(const std::vector<double> & u) const;
-  /** Initial load parameters: the data terms' model-free displacement (held nodes kept), fitted by the
-   * load parameterization. */
-  std::vector<double>
-  EstimateInitialParameters() const;
-
-  /** min_p Phi(E, p) at the current E by Levenberg-Marquardt, for an affine parameterization of a linear
-   * model: u = u0 + A p, so A (3 rows per data node, one column per parameter) is computed once with one
-   * solve per parameter on the cached factorization; every iteration then only evaluates the residuals:
-   * \f$ (J^TJ + \mu\,\mathrm{diag}(J^TJ))\,\delta = -J^T r - \nabla R \f$ with \f$ J = \partial r/\partial u\, A \f$.
-   * Stops when \f$\|J^T r + \nabla R\| \le\f$ tolerance max(1, |p|), when Phi no longer decreases
-   * (relative 1e-10), or after maximumIterations. Meant for reduced bases (tens to hundreds of parameters).
-   * The prior must be alpha/2 |p|^2 (its Hessian is taken as alpha I). */
-  LoadSolution
-  SolveLoadsGaussNewton(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
-
-  ForwardModel &
-  GetForwardModel()
-  {
-    return m_Model;
-  }
-  const LoadParameterization &
-  GetLoads() const
-  {
-    return m_Loads;
-  }
-
-private:
-  ForwardModel &                m_Model;
-  LoadParameterization &        m_Loads;
-  std::vector<const DataTerm *> m_Terms;
-  std::vector<std::int32_t>     m_UnknownLabels;
-  std::size_t                   m_Inverted{ 0 };
-};
 
 /** The objective surfaces of \a scene on \a mesh: for a simulated organ the nodes of its label surface,
  * for a hollow, fixed or outside label the nodes of its wall. \a maps gives the distance map of every

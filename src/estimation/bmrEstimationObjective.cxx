@@ -15,7 +15,7 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-#include "bmrSurfaceMatchingObjective.h"
+#include "bmrEstimationObjective.h"
 
 #include "bmrError.h"
 
