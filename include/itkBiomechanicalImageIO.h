@@ -182,7 +182,8 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
 }
 
 /** Writes \a image to \a path (format by the extension, compressed when \a compress) through a temporary
- * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO */
 template<typename TImage>
 void
 WriteImageAtomically(const TImage * image, const std::string & path, bool compress = true)

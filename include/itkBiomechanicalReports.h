@@ -33,7 +33,8 @@ BiomechanicalRegistration_EXPORT std::string
                                                         const std::vector<PipelineStage> & wallTimes);
 
 /** The inner solves \a records as CSV, one row each (E [kPa] per unknown in \a unknownNames, Phi* [mm^2],
- * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO
+ * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO
  */
 BiomechanicalRegistration_EXPORT std::string
 IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames);
@@ -43,12 +44,14 @@ IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std
 BiomechanicalRegistration_EXPORT std::string
                                  FormatIterationRecord(const bmr::IterationRecord & record);
 
-/** The stages' wall times [s] as a table, with their total. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+/** The stages' wall times [s] as a table, with their total. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  StageTable(const std::vector<PipelineStage> & stages);
 
 /** " (uncertainty x/ exp(s), i.e. +-N %, one standard deviation)" for an unknown modulus \a label whose
- * uncertainty was computed, a note when it is not determined, else empty. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * uncertainty was computed, a note when it is not determined, else empty. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  UncertaintyText(const RegistrationResult & result, const std::string & label);
 

@@ -28,7 +28,8 @@ BiomechanicalRegistration_EXPORT void
 MakeOutputDirectory(const std::string & path);
 
 /** mesh.vtu of a simulated or estimated state: displacement [mm], force [mN], Dirichlet flags per node;
- * label, E [kPa], nu, von Mises stress [kPa] per element (ParaView). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * label, E [kPa], nu, von Mises stress [kPa] per element (ParaView). \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT void
 WriteSimulationMesh(const std::string & path, const SimulationResult & result);
 
@@ -43,7 +44,8 @@ WriteSimulationOutputs(const std::string &                 directory,
 
 /** Writes a registration into \a directory: WriteSimulationOutputs(), history.csv (every fine-mesh inner solve,
  * then the accepted outer iterates), sweep.csv and report.json, whose wall times are \a stages and the
- * writing itself. Returns the writing's stage ("write outputs"). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * writing itself. Returns the writing's stage ("write outputs"). \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT PipelineStage
 WriteRegistrationOutputs(const std::string &                directory,
                          const RegistrationResult &         result,
@@ -51,7 +53,8 @@ WriteRegistrationOutputs(const std::string &                directory,
                          const std::vector<PipelineStage> & stages);
 
 /** Writes a phantom pair into \a directory: moving and fixed CT and labels, truth_field.nrrd, scene.json (what
- * the estimator sees), truth_scene.json, truth.json and the seed landmarks. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * the estimator sees), truth_scene.json, truth.json and the seed landmarks. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT void
 WritePhantomPair(const std::string & directory, const PhantomPair & pair, const PhantomSettings & settings);
 

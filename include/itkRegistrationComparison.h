@@ -46,7 +46,8 @@ BiomechanicalRegistration_EXPORT std::vector<ImagePairEntry>
 
 /** How one fixed -> moving field scores on a pair: TRE [mm] per landmark (in the fixed landmarks' order),
  * overlap and symmetric surface distances [mm] of the scene's objective organs after warping the moving
- * labels, and the field's Jacobian determinant. \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation */
+ * labels, and the field's Jacobian determinant. \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation
+ */
 struct BiomechanicalRegistration_EXPORT FieldEvaluation
 {
   std::vector<double>                              tre;

@@ -109,7 +109,8 @@ std::string
 IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std::vector<std::string> & unknownNames)
 {
   std::ostringstream o;
-  o << "# Phi* [mm^2] at the inner optimum; |dPhi/dp| [mm] (p: the load parameters); dPhi/dlogE [mm^2]; E [kPa]\nstage,iteration";
+  o << "# Phi* [mm^2] at the inner optimum; |dPhi/dp| [mm] (p: the load parameters); dPhi/dlogE [mm^2]; E "
+       "[kPa]\nstage,iteration";
   for (const auto & n : unknownNames)
   {
     o << ",E_" << n << "_kPa";
