@@ -31,8 +31,10 @@ StageTimer::StageBegin(const std::string & name)
 void
 StageTimer::StageEnd(const std::string &, double seconds, const std::string & detail)
 {
-  std::cout << std::fixed << std::setprecision(2) << std::setw(7) << seconds << " s" << (detail.empty() ? "" : "  ")
-            << detail << std::endl;
+  // Formatted apart, so that std::cout's own flags (and what later lines print) stay as they were.
+  std::ostringstream time;
+  time << std::fixed << std::setprecision(2) << std::setw(7) << seconds << " s";
+  std::cout << time.str() << (detail.empty() ? "" : "  ") << detail << std::endl;
 }
 
 void

@@ -258,8 +258,8 @@ PhantomSetCommand(const Arguments & args)
     const itk::PhantomSettings & o = set[k];
     const std::string            name = "pair" + std::to_string(k + 1);
     std::cout << "\n"
-              << std::defaultfloat << std::setprecision(6) << name << ": prostate " << o.prostateE << " kPa, bladder +"
-              << o.bladderMM << " mm, rectum +" << o.rectumMM << " mm, seed " << o.seed << std::endl;
+              << name << ": prostate " << o.prostateE << " kPa, bladder +" << o.bladderMM << " mm, rectum +"
+              << o.rectumMM << " mm, seed " << o.seed << std::endl;
     StageTimer timer;
     WritePhantom(out + "/" + name, itk::MakePhantomPair(o, &timer), o, timer);
     list << name << "," << name << "/moving_ct.nrrd," << name << "/moving_labels.nrrd," << name << "/fixed_ct.nrrd,"

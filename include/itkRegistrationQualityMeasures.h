@@ -28,6 +28,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <vector>
 
 namespace itk {
@@ -42,12 +43,12 @@ struct LabelOverlap
   double      dice{ 0.0 };
 };
 
-/** Overlap of \a label in \a a and \a b (same grid; throws otherwise), counted by ITK's
- * LabelOverlapMeasuresImageFilter (a = source, b = target).
- * \ingroup BiomechanicalRegistrationEvaluation */
+/** Overlap of every label of \a a and \a b (same grid; throws otherwise), counted in one pass by ITK's
+ * LabelOverlapMeasuresImageFilter (a = source, b = target); a label absent from both has no entry.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation */
 template<typename TLabelImage>
-LabelOverlap
-ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
+std::map<typename TLabelImage::PixelType, LabelOverlap>
+ComputeLabelOverlaps(const TLabelImage * a, const TLabelImage * b)
 {
   if (a->GetLargestPossibleRegion() != b->GetLargestPossibleRegion())
   {
@@ -57,17 +58,27 @@ ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabe
   overlap->SetSourceImage(a);
   overlap->SetTargetImage(b);
   overlap->Update();
-  LabelOverlap o;
-  const auto   measures = overlap->GetLabelSetMeasures();
-  const auto   found = measures.find(label);
-  if (found != measures.end())
+  std::map<typename TLabelImage::PixelType, LabelOverlap> overlaps;
+  for (const auto & kv : overlap->GetLabelSetMeasures())
   {
-    o.inA = found->second.m_Source;
-    o.inB = found->second.m_Target;
-    o.inBoth = found->second.m_Intersection;
+    LabelOverlap & o = overlaps[kv.first];
+    o.inA = kv.second.m_Source;
+    o.inB = kv.second.m_Target;
+    o.inBoth = kv.second.m_Intersection;
+    o.dice = o.inA + o.inB > 0 ? 2.0 * double(o.inBoth) / double(o.inA + o.inB) : 0.0;
   }
-  o.dice = o.inA + o.inB > 0 ? 2.0 * double(o.inBoth) / double(o.inA + o.inB) : 0.0;
-  return o;
+  return overlaps;
+}
+
+/** Overlap of one \a label in \a a and \a b (ComputeLabelOverlaps(); zero counts when absent from both).
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation */
+template<typename TLabelImage>
+LabelOverlap
+ComputeLabelOverlap(const TLabelImage * a, const TLabelImage * b, typename TLabelImage::PixelType label)
+{
+  const auto overlaps = ComputeLabelOverlaps(a, b);
+  const auto found = overlaps.find(label);
+  return found == overlaps.end() ? LabelOverlap() : found->second;
 }
 
 /** Symmetric surface distances [mm] between one label in two label maps: mean, 95th percentile ("HD95")

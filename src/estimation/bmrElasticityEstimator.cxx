@@ -132,11 +132,18 @@ Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const Un
   return a;
 }
 
-/** Residual noise of the data at the estimate: s^2 = sum_s w_s n_s rms_s^2 / sum_s w_s n_s [mm^2], and the
- * effective weight w_eff = sum_s w_s^2 n_s / sum_s w_s n_s, with which Cov(log E) = s^2 w_eff H^-1 holds
+/** Residual noise of the data at the estimate: the weighted mean square
+ * s^2 = sum_s w_s n_s rms_s^2 / sum_s w_s n_s [mm^2], and the effective weight
+ * w_eff = sum_s w_s^2 n_s / sum_s w_s n_s, with which Cov(log E) = s^2 w_eff H^-1 holds
  * exactly for equal weights (H grows with the weights, the noise of a residual does not). */
-double
-ResidualVarianceTimesWeight(const std::vector<ResidualStatistics> & residuals, double & variance)
+struct ResidualNoise
+{
+  double variance{ 0.0 };
+  double weight{ 1.0 };
+};
+
+ResidualNoise
+EstimateResidualNoise(const std::vector<ResidualStatistics> & residuals)
 {
   double squares = 0.0, weightedCount = 0.0, squaredWeights = 0.0;
   for (const auto & s : residuals)
@@ -145,8 +152,13 @@ ResidualVarianceTimesWeight(const std::vector<ResidualStatistics> & residuals, d
     weightedCount += s.weight * double(s.count);
     squaredWeights += s.weight * s.weight * double(s.count);
   }
-  variance = weightedCount > 0.0 ? squares / weightedCount : 0.0;
-  return variance * (weightedCount > 0.0 ? squaredWeights / weightedCount : 1.0);
+  ResidualNoise noise;
+  if (weightedCount > 0.0)
+  {
+    noise.variance = squares / weightedCount;
+    noise.weight = squaredWeights / weightedCount;
+  }
+  return noise;
 }
 
 /** Standard deviations of log E, sqrt(diag(v H^-1)) with v = s^2 w_eff [mm^2], from the symmetrized
@@ -401,9 +413,7 @@ ElasticityEstimator::Stages::Outputs(const std::vector<double> & estimate, const
   result.boundaryForces = fine.ComputeBoundaryForces(result.displacement);
   result.invertedElements = CountInvertedElements(fine.GetForwardModel().GetMesh(), result.displacement);
   result.residuals = fine.ComputeStatistics(result.displacement);
-  double variance = 0.0;
-  ResidualVarianceTimesWeight(result.residuals, variance);
-  result.residualStandardDeviation = std::sqrt(variance);
+  result.residualStandardDeviation = std::sqrt(EstimateResidualNoise(result.residuals).variance);
 }
 
 void
@@ -433,9 +443,8 @@ ElasticityEstimator::Stages::Uncertainty(const std::vector<double> & estimate,
     }
   }
   result.curvature.assign(hessian.data(), hessian.data() + hessian.size());
-  double       variance = 0.0;
-  const double scaled = ResidualVarianceTimesWeight(result.residuals, variance);
-  result.logModulusSigma = LogModulusStandardDeviations(hessian, scaled);
+  const ResidualNoise noise = EstimateResidualNoise(result.residuals);
+  result.logModulusSigma = LogModulusStandardDeviations(hessian, noise.variance * noise.weight);
 }
 
 ElasticityEstimator::ElasticityEstimator(EstimationObjective &       fine,

@@ -236,10 +236,12 @@ EvaluateField(const BiomechanicalFieldType *      field,
   FieldEvaluation r;
   r.tre = ComputeTargetRegistrationErrors(field, fixedLandmarks, movingLandmarks);
   const auto warped = WarpImage(movingLabels, field, true, 0);
+  const auto overlaps = ComputeLabelOverlaps<BiomechanicalLabelImageType>(warped, fixedLabels);
   for (const auto & term : scene.objective)
   {
     const bmr::SceneLabel * l = scene.FindLabel(term.label);
-    r.overlap[l->name] = ComputeLabelOverlap<BiomechanicalLabelImageType>(warped, fixedLabels, l->value);
+    const auto              found = overlaps.find(l->value);
+    r.overlap[l->name] = found == overlaps.end() ? LabelOverlap() : found->second;
     if (r.overlap[l->name].inA > 0 && r.overlap[l->name].inB > 0)
     {
       r.surface[l->name] = ComputeSurfaceDistances<BiomechanicalLabelImageType>(warped, fixedLabels, l->value);

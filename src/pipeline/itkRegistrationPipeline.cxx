@@ -217,16 +217,13 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene)
 void
 Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLabelImageType * fixedLabels)
 {
+  const auto overlaps = ComputeLabelOverlaps<BiomechanicalLabelImageType>(r.warpedLabels, fixedLabels);
   for (const auto & l : scene.labels)
   {
-    if (l.role == bmr::LabelRoleEnum::Outside)
+    const auto found = overlaps.find(l.value);
+    if (l.role != bmr::LabelRoleEnum::Outside && found != overlaps.end() && found->second.inA + found->second.inB > 0)
     {
-      continue;
-    }
-    const LabelOverlap overlap = ComputeLabelOverlap<BiomechanicalLabelImageType>(r.warpedLabels, fixedLabels, l.value);
-    if (overlap.inA + overlap.inB > 0)
-    {
-      r.dice[l.name] = overlap.dice;
+      r.dice[l.name] = found->second.dice;
     }
   }
   const auto jacobian = ComputeJacobianDeterminantStatistics(r.state.pullBack.GetPointer());
