@@ -54,7 +54,13 @@ ParseCompareOptions(const Arguments & args)
   o.seedOrgan = args.Get("--seed-organ");
   o.flatten = args.Get("--flatten");
   o.demons = ParseDemonsSettings(args);
+  const bool uncertaintyAsked = args.Has("--uncertainty");
   o.fem = ParseRegistrationSettings(args);
+  if (!uncertaintyAsked)
+  {
+    // compare scores fields, not moduli: no resamples unless asked for.
+    o.fem.uncertainty.method = itk::UncertaintyMethodEnum::None;
+  }
   return o;
 }
 

@@ -24,6 +24,19 @@
 
 namespace bmrcli {
 
+/** --uncertainty bootstrap|curvature|none, --resamples N, --uncertainty-seed S, --uncertainty-threads T. */
+void
+ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
+{
+  const std::string method = args.Choice("--uncertainty", { "bootstrap", "curvature", "none" });
+  u.method = method == "bootstrap"   ? itk::UncertaintyMethodEnum::Bootstrap
+             : method == "curvature" ? itk::UncertaintyMethodEnum::Curvature
+                                     : itk::UncertaintyMethodEnum::None;
+  u.resamples = args.Count("--resamples", u.resamples, 3, 1000);
+  u.seed = args.Count("--uncertainty-seed", static_cast<unsigned int>(u.seed), 0, 4000000000u);
+  u.threads = args.Count("--uncertainty-threads", u.threads, 1, 64);
+}
+
 itk::RegistrationSettings
 ParseRegistrationSettings(const Arguments & args)
 {
@@ -58,6 +71,7 @@ ParseRegistrationSettings(const Arguments & args)
   {
     throw UsageError("--mesh-scale must lie in [0.25, 4] (mesh sizes relative to the scene's)");
   }
+  ParseUncertaintySettings(args, s.uncertainty);
   e.maximumOuterIterations = args.Count("--max-outer-iterations", e.maximumOuterIterations, 1, 1000);
   e.outerGradientTolerance = args.Number("--outer-tolerance", e.outerGradientTolerance);
   if (!(e.outerGradientTolerance > 0.0 && e.outerGradientTolerance < 1.0))

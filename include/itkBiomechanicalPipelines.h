@@ -25,6 +25,8 @@
 #include "itkImage.h"
 #include "itkVector.h"
 
+#include <array>
+#include <cstdint>
 #include <iosfwd>
 #include <map>
 #include <string>
@@ -92,6 +94,54 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
                    PipelineObserver *                  observer = nullptr,
                    bool                                pushField = true);
 
+/** How RegisterSegmentedPair() states the uncertainty of the estimated moduli.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+enum class UncertaintyMethodEnum : std::uint8_t
+{
+  None,      ///< no interval
+  Curvature, ///< the residual and the curvature of Phi* (fast; treats node residuals as independent noise)
+  Bootstrap  ///< parametric bootstrap: resimulate, revoxelize and re-estimate (default)
+};
+
+/** Settings of the modulus uncertainty (the parametric bootstrap, ModulusInterval).
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT UncertaintySettings
+{
+  UncertaintyMethodEnum method{ UncertaintyMethodEnum::Bootstrap };
+  unsigned int          resamples{ 8 };                ///< re-estimations (bootstrap)
+  std::uint64_t         seed{ 1 };                     ///< the resamples' random numbers: same seed, same interval
+  unsigned int          threads{ 2 };                  ///< resamples run at once
+  double                simulationMeshScale{ 0.8 };    ///< resimulation mesh sizes relative to the estimation's
+  double                meshJitter{ 0.15 };            ///< each resample re-meshes at the sizes x U(1 - this, 1 + this)
+  double                shiftVoxels{ 0.5 };            ///< sub-voxel shift of the revoxelized grid, uniform in +-
+  double                rotationDegrees{ 2.0 };        ///< its rotation, uniform in [0, this] about a random axis
+  double                tangentialWallFraction{ 0.3 }; ///< tangential wall motion / the wall's own motion
+};
+
+/** The interval of one estimated modulus [kPa]. A parametric bootstrap (dissertation's generative model run
+ * forward from the estimate): the fixed anatomy is resimulated from the estimate on a finer, independent mesh
+ * with the estimated wall motion plus a smooth random tangential part (what walls along normals cannot see),
+ * revoxelized on the fixed grid shifted by a random sub-voxel offset and rotated by a small random angle, and
+ * re-estimated as the data were, on the moving labels meshed again at randomly scaled sizes (the estimate
+ * depends on the mesh by several per cent, not monotonically: that is part of its uncertainty). With \f$ \ell_k = \log
+ * E^*_k \f$ of the resamples: \f[ b = \mathrm{median}_k \ell_k - \log \hat E, \quad \log \tilde E = \log \hat E - b,
+ * \quad s = \mathrm{SD}_k \ell_k, \quad I_{1-\alpha} = \tilde E \exp(\pm t_{1-\alpha/2,n-1} s \sqrt{1+1/n}) \f]
+ * (bias-corrected, Student's t for the few resamples). An interval end beyond the scene's bounds is not
+ * determined by the images: the modulus is then reported as a bound ("E >= lower end"). */
+struct BiomechanicalRegistration_EXPORT ModulusInterval
+{
+  double                fit{ 0.0 };                 ///< kPa: the estimate of the fit (the state and fields use it)
+  double                estimate{ 0.0 };            ///< kPa: bias-corrected (bootstrap) or the fit
+  double                logBias{ 0.0 };             ///< b
+  double                logSigma{ 0.0 };            ///< s (bootstrap) or the curvature's sigma
+  std::array<double, 2> interval68{ { 0.0, 0.0 } }; ///< kPa
+  std::array<double, 2> interval95{ { 0.0, 0.0 } }; ///< kPa
+  bool                  lowerDetermined{ true };    ///< false: the images do not bound E from below
+  bool                  upperDetermined{ true };    ///< false: only "at least interval95[0]"
+  std::vector<double>   resampleModuli;             ///< kPa, in resample order
+  std::string           method;                     ///< "bootstrap", "curvature"
+};
+
 /** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationSettings
@@ -100,23 +150,25 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   bmr::WallLoadSettings  walls;
   double                 coarseFactor{ 1.6 }; ///< coarse (sweep) mesh sizes = scene's x this; <= 1: no coarse mesh
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
+  UncertaintySettings    uncertainty;
 };
 
 /** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationResult
 {
-  SimulationResult                     state;              ///< the estimated state: mesh, fields, stress
-  bmr::EstimationResult                estimation;         ///< moduli, loads, history, identifiability, uncertainty
-  std::vector<bmr::UnknownModulus>     unknowns;           ///< in the order of estimation.youngsModuli
-  std::map<std::string, double>        youngsModulus;      ///< kPa, by unknown label name
-  std::map<std::string, double>        modulusUncertainty; ///< standard deviation of log E, by name
-  std::string                          gaugeLabel;
-  double                               gaugeModulus{ 0.0 }; ///< kPa
-  BiomechanicalLabelImageType::Pointer warpedLabels;        ///< nearest neighbor
-  BiomechanicalCTImageType::Pointer    warpedCT;            ///< linear; null without a moving CT
-  std::map<std::string, double>        dice;                ///< warped against fixed labels, by name
-  double                               jacobianMinimum{ 0.0 };
-  double                               jacobianNonPositiveFraction{ 0.0 };
+  SimulationResult                       state;              ///< the estimated state: mesh, fields, stress
+  bmr::EstimationResult                  estimation;         ///< moduli, loads, history, identifiability, uncertainty
+  std::vector<bmr::UnknownModulus>       unknowns;           ///< in the order of estimation.youngsModuli
+  std::map<std::string, double>          youngsModulus;      ///< kPa, by unknown label name
+  std::map<std::string, double>          modulusUncertainty; ///< standard deviation of log E (curvature), by name
+  std::map<std::string, ModulusInterval> modulusInterval;    ///< the stated interval, by name (method not None)
+  std::string                            gaugeLabel;
+  double                                 gaugeModulus{ 0.0 }; ///< kPa
+  BiomechanicalLabelImageType::Pointer   warpedLabels;        ///< nearest neighbor
+  BiomechanicalCTImageType::Pointer      warpedCT;            ///< linear; null without a moving CT
+  std::map<std::string, double>          dice;                ///< warped against fixed labels, by name
+  double                                 jacobianMinimum{ 0.0 };
+  double                                 jacobianNonPositiveFraction{ 0.0 };
 };
 
 /** Standard deviation of log E above which RegisterSegmentedPair() warns: one sigma beyond the 10 % the
@@ -159,7 +211,7 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   double               noiseHU{ 10.0 };
   std::uint64_t        seed{ 1 };
   unsigned int         numberOfSeeds{ 3 };
-  double               truthRefinement{ 0.75 }; ///< the truth's mesh sizes relative to the scene's
+  double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
 
   /** The defaults of an anatomy: the pelvis as above; the spheres on their own 96^3 grid of 1 mm, the outer
    * surface pressed 1.5 mm inwards (bladderMM). */

@@ -32,6 +32,13 @@ BiomechanicalRegistration_EXPORT std::string
                                                         const RegistrationSettings &       settings,
                                                         const std::vector<PipelineStage> & wallTimes);
 
+/** One line stating the modulus of \a name: "E = 92.1 kPa (68 %: 80.3-105.6 kPa, 95 %: ...)" when both ends are
+ * determined, "E >= 220 kPa (95 %), the upper end not determined by the images" when the interval reaches the
+ * upper search bound (likewise "E <= " for the lower one), "not determined by the images" when both.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT std::string
+                                 ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
+
 /** The inner solves \a records as CSV, one row each (E [kPa] per unknown in \a unknownNames, Phi* [mm^2],
  * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO
@@ -49,8 +56,9 @@ BiomechanicalRegistration_EXPORT std::string
 BiomechanicalRegistration_EXPORT std::string
                                  StageTable(const std::vector<PipelineStage> & stages);
 
-/** " (uncertainty x/ exp(s), i.e. +-N %, one standard deviation)" for an unknown modulus \a label whose
- * uncertainty was computed, a note when it is not determined, else empty. \ingroup BiomechanicalRegistration
+/** " (fit); stated: <ModulusIntervalText>" for an unknown modulus \a label with a stated interval; else
+ * " (uncertainty x/ exp(s), i.e. +-N %, one standard deviation)" when the curvature's uncertainty was computed, a
+ * note when it is not determined, or empty. \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
                                  UncertaintyText(const RegistrationResult & result, const std::string & label);

@@ -111,6 +111,11 @@ protected:
   GenerateOutputInformation() override;
   void
   GenerateInputRequestedRegion() override;
+  /** The input and the field need not share a grid: the field defines the output grid and the input is
+   * sampled at x + d(x) in physical space wherever it lies (ImageToImageFilter would demand one grid). */
+  void
+  VerifyInputInformation() ITKv5_CONST override
+  {}
   void
   GenerateData() override;
   void

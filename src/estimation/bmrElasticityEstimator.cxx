@@ -29,10 +29,20 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <sstream>
 
 namespace bmr {
 namespace {
+/** vnl's L-BFGS-B (under itk::LBFGSBOptimizerv4) keeps its iteration state in function-local static variables
+ * (ITK issue #230): two outer searches running at once in one process corrupt each other. The outer search is
+ * therefore serialized; everything else of an estimation (sweep, inner solves outside it) runs concurrently. */
+std::mutex &
+OuterSearchMutex()
+{
+  static std::mutex m;
+  return m;
+}
 using Clock = SteadyClock;
 
 double
@@ -364,7 +374,10 @@ ElasticityEstimator::Stages::Fine()
       }
       result.outerIterations.push_back(r);
     });
-    optimizer->StartOptimization();
+    {
+      const std::lock_guard<std::mutex> serialized(OuterSearchMutex());
+      optimizer->StartOptimization();
+    }
     result.outerStopCondition = optimizer->GetStopConditionDescription();
   }
   // The best point visited (L-BFGS-B may end on a trial point).

@@ -64,6 +64,28 @@ ModulusSection(const RegistrationResult & r)
   j["identifiable"] = r.estimation.identifiable;
   j["identifiability"] = r.estimation.identifiabilityMessage;
   j["youngs_modulus_uncertainty"] = uncertainty;
+  Json intervals = Json::object();
+  for (const auto & kv : r.modulusInterval)
+  {
+    const ModulusInterval & i = kv.second;
+    std::vector<Json>       resamples;
+    for (double E : i.resampleModuli)
+    {
+      resamples.push_back(Number(E));
+    }
+    intervals[kv.first] = { { "method", i.method },
+                            { "estimate_kPa", Number(i.estimate) },
+                            { "fit_kPa", Number(i.fit) },
+                            { "log_bias", Number(i.logBias) },
+                            { "sigma_log_E", Number(i.logSigma) },
+                            { "interval_68_kPa", { Number(i.interval68[0]), Number(i.interval68[1]) } },
+                            { "interval_95_kPa", { Number(i.interval95[0]), Number(i.interval95[1]) } },
+                            { "lower_end_determined", i.lowerDetermined },
+                            { "upper_end_determined", i.upperDetermined },
+                            { "statement", ModulusIntervalText(kv.first, i) },
+                            { "resamples_kPa", resamples } };
+  }
+  j["youngs_modulus_interval"] = intervals;
   return j;
 }
 } // namespace
@@ -236,6 +258,11 @@ StageTable(const std::vector<PipelineStage> & stages)
 std::string
 UncertaintyText(const RegistrationResult & result, const std::string & label)
 {
+  const auto interval = result.modulusInterval.find(label);
+  if (interval != result.modulusInterval.end())
+  {
+    return " (fit); stated: " + ModulusIntervalText(label, interval->second);
+  }
   const auto it = result.modulusUncertainty.find(label);
   if (it == result.modulusUncertainty.end())
   {
@@ -248,6 +275,35 @@ UncertaintyText(const RegistrationResult & result, const std::string & label)
   std::ostringstream os;
   os << " (uncertainty x/ exp(" << std::setprecision(3) << it->second << "), i.e. +-" << std::setprecision(2)
      << 100.0 * it->second << " %, one standard deviation)";
+  return os.str();
+}
+
+std::string
+ModulusIntervalText(const std::string & name, const ModulusInterval & i)
+{
+  std::ostringstream os;
+  os << std::setprecision(3) << name;
+  const std::string source = i.method == "bootstrap" ? std::to_string(i.resampleModuli.size()) + " bootstrap resamples"
+                                                     : std::string("curvature of Phi*");
+  if (!i.lowerDetermined && !i.upperDetermined)
+  {
+    os << " E not determined by the images within the search range " << i.interval95[0] << " to " << i.interval95[1]
+       << " kPa (" << source << ")";
+  }
+  else if (!i.upperDetermined)
+  {
+    os << " E >= " << i.interval95[0] << " kPa (95 %), the upper end not determined by the images (" << source << ")";
+  }
+  else if (!i.lowerDetermined)
+  {
+    os << " E <= " << i.interval95[1] << " kPa (95 %), the lower end not determined by the images (" << source << ")";
+  }
+  else
+  {
+    os << " E = " << i.estimate << " kPa (68 %: " << i.interval68[0] << " to " << i.interval68[1]
+       << " kPa, 95 %: " << i.interval95[0] << " to " << i.interval95[1] << " kPa; " << source << ", fit " << i.fit
+       << " kPa)";
+  }
   return os.str();
 }
 

@@ -71,6 +71,9 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
                                                  : bmr::SpherePhantomScene(s.prostateE, false),
                                      s.truthRefinement);
   truth.mesh.randomSeed = 12345;
+  // The surfaces a further 0.8 x closer to the labels than the cells' scale: no uniform mesh scale of the
+  // estimation scene (register --mesh-scale) can reproduce the truth's mesh.
+  truth.mesh.facetDistance *= 0.8;
   if (IsPelvis(s) && (s.bladderKPa > 0.0 || s.rectumKPa > 0.0))
   {
     // Pressure in the lumens: the walls move as the tissue lets them (no wall is driven into the prostate).

@@ -20,6 +20,7 @@
 
 // Stages shared by the pipelines (private to src/pipeline).
 #include "itkBiomechanicalPipelines.h"
+#include "itkFEMElasticityOptimizer.h"
 #include "itkImageWarper.h"
 
 #include "bmrStopwatch.h"
@@ -74,6 +75,40 @@ ComputeFields(SimulationResult &   result,
               const ImageBase<3> * movingReference,
               bool                 pushField,
               StageClock &         clock);
+
+/** What an estimation runs on: the fine mesh (and a coarse one for the sweep, or null), the scene and the settings. */
+struct EstimationSetup
+{
+  const bmr::TetrahedralMesh * fine{ nullptr };
+  const bmr::TetrahedralMesh * coarse{ nullptr };
+  const bmr::Scene *           scene{ nullptr };
+  const RegistrationSettings * settings{ nullptr };
+};
+
+/** FEMElasticityOptimizer on \a setup with the distance maps \a maps; the curvature uncertainty only when
+ * \a curvature; the observer (may be null) sees the inner solves. */
+FEMElasticityOptimizer::Pointer
+RunEstimation(const EstimationSetup &                                 setup,
+              const std::map<std::string, Image<float, 3>::Pointer> & maps,
+              bool                                                    curvature,
+              PipelineObserver *                                      observer);
+
+/** The parametric bootstrap of every unknown modulus (ModulusInterval); failed resamples become warnings. */
+std::map<std::string, ModulusInterval>
+BootstrapModuli(const EstimationSetup &             setup,
+                RegistrationResult &                r,
+                const BiomechanicalLabelImageType * movingLabels,
+                const BiomechanicalLabelImageType * fixedLabels,
+                StageClock &                        clock);
+
+/** The bias-corrected interval of \a resamples [kPa] around \a fit (ModulusInterval); fewer than 3 resamples
+ * leave the whole search range. */
+ModulusInterval
+BootstrapInterval(double fit, const std::vector<double> & resamples, const bmr::UnknownModulus & unknown);
+
+/** The interval fit x exp(+-z sigma) of the curvature's \a logSigma (infinite: the whole search range). */
+ModulusInterval
+CurvatureInterval(double fit, double logSigma, const bmr::UnknownModulus & unknown);
 
 } // namespace pipeline
 } // namespace itk

@@ -19,6 +19,7 @@
 #include "itkPipelineStages.h"
 
 #include "bmrError.h"
+#include "itkBiomechanicalReports.h"
 #include "itkFEMElasticityOptimizer.h"
 #include "itkRegistrationQualityMeasures.h"
 #include "itkSceneDistanceMaps.h"
@@ -94,27 +95,25 @@ VoxelWarnings(const bmr::Scene & scene, const ImageBase<3> * moving, const Image
   return scene.EstimationWarnings(finest, coarsest);
 }
 
-/** Warnings about uncertainties the surfaces leave (one sigma above 10 %, or no curvature at all). */
+/** Warnings about what the images leave open: an end of the interval at a search bound, a 68 % interval wider
+ * than exp(+-0.1), or (curvature) no positive curvature at all. */
 std::vector<std::string>
 UncertaintyWarnings(const RegistrationResult & r)
 {
   std::vector<std::string> warnings;
-  for (const auto & kv : r.modulusUncertainty)
+  for (const auto & kv : r.modulusInterval)
   {
-    if (!std::isfinite(kv.second))
+    const ModulusInterval & i = kv.second;
+    const double            halfWidth = 0.5 * std::log(i.interval68[1] / i.interval68[0]);
+    if (!i.lowerDetermined || !i.upperDetermined)
     {
-      warnings.push_back("Phi* has no positive curvature in the modulus of \"" + kv.first +
-                         "\" at the estimate: the surfaces do not determine it");
+      warnings.push_back("the images do not determine the modulus of \"" + kv.first +
+                         "\": " + ModulusIntervalText(kv.first, i));
     }
-    else if (kv.second > BiomechanicalUncertaintyWarningLogSigma)
+    else if (halfWidth > BiomechanicalUncertaintyWarningLogSigma)
     {
-      const double       E = r.youngsModulus.at(kv.first);
-      std::ostringstream os;
-      os << "the surfaces determine the modulus of \"" << kv.first << "\" only to a factor exp(+-"
-         << std::setprecision(3) << kv.second << ") (one standard deviation from the residual "
-         << r.estimation.residualStandardDeviation << " mm and the curvature of Phi*): treat it as "
-         << E * std::exp(-kv.second) << " to " << E * std::exp(kv.second) << " kPa";
-      warnings.push_back(os.str());
+      warnings.push_back("the images determine the modulus of \"" + kv.first + "\" only to a factor exp(+-" +
+                         std::to_string(halfWidth).substr(0, 5) + ") (68 %): " + ModulusIntervalText(kv.first, i));
     }
   }
   return warnings;
@@ -133,56 +132,44 @@ ObserveIterations(FEMElasticityOptimizer * optimizer, PipelineObserver * observe
   });
 }
 
-/** Runs FEMElasticityOptimizer on the fine mesh (and a coarse one for the sweep) and keeps its outputs. */
+/** The stated interval of every unknown modulus, by the chosen method, and what it leaves undetermined in the
+ * identifiability verdict. */
 void
-Estimate(RegistrationResult &                                    r,
-         const bmr::Scene &                                      scene,
-         const std::map<std::string, Image<float, 3>::Pointer> & maps,
-         const BiomechanicalLabelImageType *                     movingLabels,
-         const RegistrationSettings &                            settings,
-         pipeline::StageClock &                                  clock)
+StateIntervals(RegistrationResult &                r,
+               const pipeline::EstimationSetup &   setup,
+               const BiomechanicalLabelImageType * movingLabels,
+               const BiomechanicalLabelImageType * fixedLabels,
+               pipeline::StageClock &              clock)
 {
-  auto optimizer = FEMElasticityOptimizer::New();
-  auto fine = TetrahedralMeshObject::New();
-  fine->Set(r.state.mesh);
-  optimizer->SetMesh(fine);
-  // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
-  if (!scene.UnknownLabels().empty() && settings.coarseFactor > 1.0)
+  const UncertaintyMethodEnum method = setup.settings->uncertainty.method;
+  if (method == UncertaintyMethodEnum::None || r.unknowns.empty())
   {
-    auto coarse = TetrahedralMeshObject::New();
-    coarse->Set(pipeline::MeshLabelImage(
-      movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)"));
-    optimizer->SetCoarseMesh(coarse);
+    return;
   }
-  optimizer->SetScene(scene);
-  for (const auto & kv : maps)
+  if (method == UncertaintyMethodEnum::Bootstrap && setup.settings->uncertainty.resamples > 0)
   {
-    optimizer->SetDistanceMap(kv.first, kv.second);
+    r.modulusInterval = pipeline::BootstrapModuli(setup, r, movingLabels, fixedLabels, clock);
   }
-  const bmr::EstimatorSettings & e = settings.estimator;
-  optimizer->SetNumberOfSweepSamples(e.numberOfSweepSamples);
-  optimizer->SetMaximumNumberOfInnerIterations(e.maximumInnerIterations);
-  optimizer->SetMaximumNumberOfOuterIterations(e.maximumOuterIterations);
-  optimizer->SetInnerGradientTolerance(e.innerGradientTolerance);
-  optimizer->SetOuterGradientTolerance(e.outerGradientTolerance);
-  optimizer->SetFlatnessThreshold(e.flatnessThreshold);
-  optimizer->SetEstimateUncertainty(e.estimateUncertainty);
-  optimizer->SetUncertaintyStep(e.uncertaintyStep);
-  optimizer->SetLimitElementInversion(e.limitElementInversion);
-  optimizer->SetWallControlSpacing(settings.walls.controlSpacing);
-  optimizer->SetWallRegularization(settings.walls.regularization);
-  optimizer->SetWallMotionAlongNormals(settings.walls.motion == bmr::WallMotionEnum::AlongNormals);
-  ObserveIterations(optimizer, clock.GetObserver());
-  optimizer->Update();
-  for (const auto & kv : optimizer->GetTimings())
+  else
   {
-    clock.Add("estimation: " + kv.first, kv.second);
+    for (const bmr::UnknownModulus & u : r.unknowns)
+    {
+      const auto sigma = r.modulusUncertainty.find(u.name);
+      r.modulusInterval[u.name] = pipeline::CurvatureInterval(
+        r.youngsModulus.at(u.name),
+        sigma == r.modulusUncertainty.end() ? std::numeric_limits<double>::infinity() : sigma->second,
+        u);
+    }
   }
-  r.estimation = optimizer->GetResult();
-  r.youngsModulus = optimizer->GetEstimatedYoungsModuli();
-  r.modulusUncertainty = optimizer->GetModulusUncertainty();
-  r.gaugeLabel = optimizer->GetGaugeLabel();
-  r.state.mesh = optimizer->GetOutput()->Get();
+  for (const auto & kv : r.modulusInterval)
+  {
+    if (!kv.second.lowerDetermined || !kv.second.upperDetermined)
+    {
+      r.estimation.identifiable = false;
+      r.estimation.identifiabilityMessage +=
+        (r.estimation.identifiabilityMessage.empty() ? "" : "; ") + ModulusIntervalText(kv.first, kv.second);
+    }
+  }
 }
 
 /** Per-element moduli, stress and the Dirichlet flags of the estimated state (for mesh.vtu). */
@@ -232,6 +219,48 @@ Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLa
 }
 } // namespace
 
+namespace pipeline {
+FEMElasticityOptimizer::Pointer
+RunEstimation(const EstimationSetup &                                 setup,
+              const std::map<std::string, Image<float, 3>::Pointer> & maps,
+              bool                                                    curvature,
+              PipelineObserver *                                      observer)
+{
+  auto optimizer = FEMElasticityOptimizer::New();
+  auto fine = TetrahedralMeshObject::New();
+  fine->Set(*setup.fine);
+  optimizer->SetMesh(fine);
+  if (setup.coarse)
+  {
+    auto coarse = TetrahedralMeshObject::New();
+    coarse->Set(*setup.coarse);
+    optimizer->SetCoarseMesh(coarse);
+  }
+  optimizer->SetScene(*setup.scene);
+  for (const auto & kv : maps)
+  {
+    optimizer->SetDistanceMap(kv.first, kv.second);
+  }
+  const bmr::EstimatorSettings & e = setup.settings->estimator;
+  optimizer->SetNumberOfSweepSamples(e.numberOfSweepSamples);
+  optimizer->SetMaximumNumberOfInnerIterations(e.maximumInnerIterations);
+  optimizer->SetMaximumNumberOfOuterIterations(e.maximumOuterIterations);
+  optimizer->SetInnerGradientTolerance(e.innerGradientTolerance);
+  optimizer->SetOuterGradientTolerance(e.outerGradientTolerance);
+  optimizer->SetFlatnessThreshold(e.flatnessThreshold);
+  optimizer->SetEstimateUncertainty(curvature && e.estimateUncertainty);
+  optimizer->SetUncertaintyStep(e.uncertaintyStep);
+  optimizer->SetLimitElementInversion(e.limitElementInversion);
+  const bmr::WallLoadSettings & walls = setup.settings->walls;
+  optimizer->SetWallControlSpacing(walls.controlSpacing);
+  optimizer->SetWallRegularization(walls.regularization);
+  optimizer->SetWallMotionAlongNormals(walls.motion == bmr::WallMotionEnum::AlongNormals);
+  ObserveIterations(optimizer, observer);
+  optimizer->Update();
+  return optimizer;
+}
+} // namespace pipeline
+
 RegistrationResult
 RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       const BiomechanicalLabelImageType * fixedLabels,
@@ -257,8 +286,30 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.End(std::to_string(maps.size()) + " organs");
   r.state.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
-  Estimate(r, scene, maps, movingLabels, settings, clock);
+  // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
+  bmr::TetrahedralMesh coarse;
+  if (!scene.UnknownLabels().empty() && settings.coarseFactor > 1.0)
+  {
+    coarse = pipeline::MeshLabelImage(
+      movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
+  }
+  const bmr::TetrahedralMesh      estimationMesh = r.state.mesh;
+  const pipeline::EstimationSetup setup{
+    &estimationMesh, coarse.points.empty() ? nullptr : &coarse, &scene, &settings
+  };
+  const bool curvature = settings.uncertainty.method == UncertaintyMethodEnum::Curvature;
+  const auto optimizer = pipeline::RunEstimation(setup, maps, curvature, clock.GetObserver());
+  for (const auto & kv : optimizer->GetTimings())
+  {
+    clock.Add("estimation: " + kv.first, kv.second);
+  }
+  r.estimation = optimizer->GetResult();
+  r.youngsModulus = optimizer->GetEstimatedYoungsModuli();
+  r.modulusUncertainty = optimizer->GetModulusUncertainty();
+  r.gaugeLabel = optimizer->GetGaugeLabel();
+  r.state.mesh = optimizer->GetOutput()->Get();
   r.unknowns = bmr::SceneUnknownModuli(scene);
+  StateIntervals(r, setup, movingLabels, fixedLabels, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   DescribeState(r, scene);

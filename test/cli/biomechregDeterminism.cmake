@@ -1,13 +1,14 @@
 # Determinism: the same inputs give bit-identical outputs with 1 and 2 threads (ITK's work units and
 # OpenBLAS's threads, through ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS and OPENBLAS_NUM_THREADS), for the joint
-# estimation (`register`: fields, warped images, the recovered modulus) and for the Demons baseline.
+# estimation (`register`: fields, warped images, the recovered modulus, the bootstrap interval with 1 and 2
+# resampling threads) and for the Demons baseline.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregDeterminism.cmake
 foreach(threads 1 2)
   set(ENV{ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS} ${threads})
   set(ENV{OPENBLAS_NUM_THREADS} ${threads})
   execute_process(COMMAND ${CLI} register --moving-ct ${DIR}/moving_ct.nrrd --moving-labels ${DIR}/moving_labels.nrrd
     --fixed-ct ${DIR}/fixed_ct.nrrd --fixed-labels ${DIR}/fixed_labels.nrrd --scene ${DIR}/scene.json
-    --out ${OUT}/register_${threads} RESULT_VARIABLE rc OUTPUT_QUIET)
+    --resamples 3 --uncertainty-threads ${threads} --out ${OUT}/register_${threads} RESULT_VARIABLE rc OUTPUT_QUIET)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "register with ${threads} threads failed")
   endif()
@@ -36,4 +37,13 @@ endforeach()
 message(STATUS "recovered inner modulus: ${E_1} kPa (1 thread), ${E_2} kPa (2 threads)")
 if(NOT E_1 STREQUAL E_2)
   message(SEND_ERROR "the recovered modulus differs between 1 and 2 threads: ${E_1} vs ${E_2}")
+endif()
+file(READ ${OUT}/register_1/report.json report1)
+file(READ ${OUT}/register_2/report.json report2)
+string(JSON interval1 GET "${report1}" youngs_modulus_interval)
+string(JSON interval2 GET "${report2}" youngs_modulus_interval)
+if(NOT interval1 STREQUAL interval2)
+  message(SEND_ERROR "the bootstrap interval differs between 1 and 2 threads:\n${interval1}\n${interval2}")
+else()
+  message(STATUS "bootstrap interval identical with 1 and 2 threads")
 endif()

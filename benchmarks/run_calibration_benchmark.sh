@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Calibration benchmark of the stated modulus interval (not a test): N pelvis phantom pairs (200 x 160 x 160
+# grid of 1 mm voxels, truth on the phantom's finer independent mesh) with moduli drawn log-uniform over
+# 30-500 kPa, bladder walls 3-10 mm and rectum walls 2-6 mm, each registered with `biomechreg register`
+# (default settings: the bootstrap interval). Records per pair the fit, the stated (bias-corrected)
+# estimate, the 68 % / 95 % intervals and whether a bound was stated instead.
+# Usage: benchmarks/run_calibration_benchmark.sh [N (default 30)] [SEED (default 2026)]
+#        REGISTER_ARGS="--wall-motion free" adds settings to every register run; TAG names the run (default
+#        "default"); APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh.
+# Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
+# diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
+count="${1:-30}"
+seed="${2:-2026}"
+tag="${TAG:-default}"
+out="$root/benchmarks/results"
+mkdir -p "$out"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+csv="$out/calibration_runs.csv"
+if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
+  echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s" > "$csv"
+fi
+
+# The draws: reproducible from SEED (Python's Mersenne Twister), one line per pair: E bladder rectum seed.
+/usr/bin/python3 - "$count" "$seed" > "$work/draws.txt" <<'PY'
+import math, random, sys
+n, seed = int(sys.argv[1]), int(sys.argv[2]); rng = random.Random(seed)
+for k in range(n):
+    E = math.exp(rng.uniform(math.log(30), math.log(500)))
+    print(f"{E:.1f} {rng.uniform(3, 10):.2f} {rng.uniform(2, 6):.2f} {seed * 100 + k + 1}")
+PY
+
+k=0
+while read -r E bladder rectum s; do
+  k=$((k + 1))
+  ph="$work/ph"
+  rm -rf "$ph" "$work/reg"
+  t0=$(date +%s.%N)
+  "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" --bladder-mm "$bladder" \
+    --rectum-mm "$rectum" --seed "$s" --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
+  t1=$(date +%s.%N)
+  # shellcheck disable=SC2086
+  "$bin" register --moving-ct "$ph/moving_ct.nrrd" --moving-labels "$ph/moving_labels.nrrd" \
+    --fixed-ct "$ph/fixed_ct.nrrd" --fixed-labels "$ph/fixed_labels.nrrd" --scene "$ph/scene.json" \
+    --out "$work/reg" ${REGISTER_ARGS:-} > "$work/reg.log" 2>&1 || { echo "register failed: pair $k"; tail -3 "$work/reg.log"; continue; }
+  t2=$(date +%s.%N)
+  /usr/bin/python3 - "$work/reg/report.json" "$ph/truth.json" "$tag" "$k" "$E" "$bladder" "$rectum" "$s" \
+    "$(awk "BEGIN{print $t1 - $t0}")" "$(awk "BEGIN{print $t2 - $t1}")" >> "$csv" <<'PY'
+import json, sys
+rep = json.load(open(sys.argv[1])); truth = json.load(open(sys.argv[2]))
+tag, k, E, bladder, rectum, s, tph, treg = sys.argv[3:11]
+i = rep["youngs_modulus_interval"]["prostate"]
+curv = rep.get("youngs_modulus_uncertainty", {}).get("prostate", {}).get("sigma_log_E", "")
+tets = truth.get("truth_mesh", {}).get("tetrahedra", "")
+print(f'{tag},{k},{truth["youngs_modulus_kPa"]["prostate"]:g},{bladder},{rectum},{s},{i["fit_kPa"]:.3f},'
+      f'{i["estimate_kPa"]:.3f},{i["interval_68_kPa"][0]:.3f},{i["interval_68_kPa"][1]:.3f},'
+      f'{i["interval_95_kPa"][0]:.3f},{i["interval_95_kPa"][1]:.3f},{int(i["lower_end_determined"])},'
+      f'{int(i["upper_end_determined"])},{i["sigma_log_E"]:.4f},{i["log_bias"]:.4f},{len(i["resamples_kPa"])},{curv},'
+      f'{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{tets},{float(tph):.1f},{float(treg):.1f}')
+PY
+  tail -1 "$csv"
+done < "$work/draws.txt"
+
+/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out"

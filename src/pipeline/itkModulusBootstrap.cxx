@@ -1,0 +1,549 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The parametric bootstrap of the estimated moduli: resimulate from the estimate, revoxelize, re-estimate.
+#include "itkPipelineStages.h"
+
+#include "bmrDisplacementFieldRasterizer.h"
+#include "bmrError.h"
+#include "bmrLinearElasticModel.h"
+#include "bmrSurfaceMatchingObjective.h"
+#include "itkBinaryThresholdImageFilter.h"
+#include "itkGridGeometryConversion.h"
+#include "itkLinearInterpolateImageFunction.h"
+#include "itkPhysicsDeformationFieldSource.h"
+#include "itkRegionOfInterestImageFilter.h"
+#include "itkSceneDistanceMaps.h"
+#include "itkSmoothingRecursiveGaussianImageFilter.h"
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <random>
+#include <thread>
+
+namespace itk {
+namespace pipeline {
+namespace {
+using IndicatorImageType = Image<float, 3>;
+using IndicatorInterpolatorType = LinearInterpolateImageFunction<IndicatorImageType, double>;
+using Random = std::mt19937_64;
+
+/** Uniform in [lo, hi) from the raw integers (std::mt19937_64's sequence is fixed by the standard, its
+ * distributions are not): the same resamples on every platform. */
+double
+Uniform(Random & rng, double lo, double hi)
+{
+  return lo + (hi - lo) * (double(rng() >> 11) / double(std::uint64_t(1) << 53));
+}
+
+/** The values of the scene's objective labels, in objective order. */
+std::vector<std::int32_t>
+ObjectiveValues(const bmr::Scene & scene)
+{
+  std::vector<std::int32_t> values;
+  for (const bmr::ObjectiveTerm & term : scene.objective)
+  {
+    values.push_back(scene.FindLabel(term.label)->value);
+  }
+  return values;
+}
+
+/** The index box of the voxels holding one of \a values, widened by \a marginMM and clipped to the image. */
+ImageRegion<3>
+LabelBox(const BiomechanicalLabelImageType * labels, const std::vector<std::int32_t> & values, double marginMM)
+{
+  const ImageRegion<3> whole = labels->GetLargestPossibleRegion();
+  Index<3>             lo, hi;
+  lo.Fill(std::numeric_limits<IndexValueType>::max());
+  hi.Fill(std::numeric_limits<IndexValueType>::min());
+  for (ImageRegionConstIteratorWithIndex<BiomechanicalLabelImageType> it(labels, whole); !it.IsAtEnd(); ++it)
+  {
+    if (std::find(values.begin(), values.end(), it.Get()) != values.end())
+    {
+      for (unsigned int a = 0; a < 3; ++a)
+      {
+        lo[a] = std::min(lo[a], it.GetIndex()[a]);
+        hi[a] = std::max(hi[a], it.GetIndex()[a]);
+      }
+    }
+  }
+  ImageRegion<3> box;
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    const auto margin = static_cast<IndexValueType>(std::ceil(marginMM / labels->GetSpacing()[a]));
+    const auto first = std::max(whole.GetIndex(a), lo[a] - margin);
+    const auto last = std::min(whole.GetIndex(a) + IndexValueType(whole.GetSize(a)) - 1, hi[a] + margin);
+    box.SetIndex(a, first);
+    box.SetSize(a, static_cast<SizeValueType>(std::max<IndexValueType>(last - first + 1, 1)));
+  }
+  return box;
+}
+
+/** The moving anatomy as a smooth function: each objective organ's indicator, cropped around the organs and
+ * smoothed by a Gaussian of half a voxel, so that its 0.5 level is a sub-voxel surface that can be revoxelized
+ * on any grid without resampling the staircase a second time. */
+struct MovingAnatomy
+{
+  std::vector<std::int32_t>                       values;
+  std::vector<IndicatorImageType::Pointer>        indicators;
+  std::vector<IndicatorInterpolatorType::Pointer> interpolators;
+
+  MovingAnatomy(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene)
+    : values(ObjectiveValues(scene))
+  {
+    auto crop = RegionOfInterestImageFilter<BiomechanicalLabelImageType, BiomechanicalLabelImageType>::New();
+    crop->SetInput(labels);
+    crop->SetRegionOfInterest(LabelBox(labels, values, 20.0));
+    crop->Update();
+    double sigma = 0.0;
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      sigma = std::max(sigma, 0.5 * labels->GetSpacing()[a]);
+    }
+    for (std::int32_t value : values)
+    {
+      auto inside = BinaryThresholdImageFilter<BiomechanicalLabelImageType, IndicatorImageType>::New();
+      inside->SetInput(crop->GetOutput());
+      inside->SetLowerThreshold(value);
+      inside->SetUpperThreshold(value);
+      inside->SetInsideValue(1.0f);
+      inside->SetOutsideValue(0.0f);
+      auto smooth = SmoothingRecursiveGaussianImageFilter<IndicatorImageType, IndicatorImageType>::New();
+      smooth->SetInput(inside->GetOutput());
+      smooth->SetSigma(sigma);
+      smooth->Update();
+      indicators.push_back(smooth->GetOutput());
+      indicators.back()->DisconnectPipeline();
+      interpolators.push_back(IndicatorInterpolatorType::New());
+      interpolators.back()->SetInputImage(indicators.back());
+    }
+  }
+
+  /** The first objective organ whose smoothed indicator is >= 0.5 at \a y [mm], or 0. */
+  std::int32_t
+  LabelAt(const Point<double, 3> & y) const
+  {
+    for (std::size_t o = 0; o < values.size(); ++o)
+    {
+      ContinuousIndex<double, 3> index;
+      if (indicators[o]->TransformPhysicalPointToContinuousIndex(y, index) &&
+          interpolators[o]->EvaluateAtContinuousIndex(index) >= 0.5)
+      {
+        return values[o];
+      }
+    }
+    return 0;
+  }
+};
+
+/** The forward model of the resamples: the moving labels meshed finer than the estimation (another mesh, not a
+ * refinement of it), the estimated moduli, u = 0 on fixed walls and the estimated wall motion on the loaded
+ * walls, factorized once. */
+struct Resimulation
+{
+  bmr::TetrahedralMesh                     mesh;
+  std::unique_ptr<bmr::LinearElasticModel> model;
+  std::vector<double>                      forces;
+  std::vector<double>                      prescribed; ///< 3N [mm]: held walls, estimated wall motion
+  std::vector<std::int32_t>                wallNodes;
+  std::mutex                               solver; ///< CHOLMOD's workspace is shared by the solves
+};
+
+/** The estimated displacement [mm] at \a X: interpolated in the estimation mesh, or that of the nearest of
+ * \a nearby nodes when X lies just outside it (the two meshes approximate the same wall differently). */
+std::array<double, 3>
+EstimatedDisplacementAt(const bmr::PointLocator &         locator,
+                        const bmr::TetrahedralMesh &      estimated,
+                        const std::vector<std::int32_t> & nearby,
+                        const std::array<double, 3> &     X)
+{
+  std::array<double, 3> u{ { 0, 0, 0 } };
+  if (bmr::InterpolateDisplacement(locator, estimated, estimated.displacement, X, u))
+  {
+    return u;
+  }
+  double       best = std::numeric_limits<double>::infinity();
+  std::int32_t nearest = nearby.empty() ? 0 : nearby.front();
+  for (std::int32_t n : nearby)
+  {
+    const double d = std::hypot(
+      estimated.points[3 * n] - X[0], estimated.points[3 * n + 1] - X[1], estimated.points[3 * n + 2] - X[2]);
+    if (d < best)
+    {
+      best = d;
+      nearest = n;
+    }
+  }
+  for (int c = 0; c < 3; ++c)
+  {
+    u[c] = estimated.displacement[3 * nearest + c];
+  }
+  return u;
+}
+
+/** The loaded-wall nodes of \a scene on \a mesh that nothing else holds. */
+std::vector<std::int32_t>
+FreeWallNodes(const bmr::Scene & scene, const bmr::TetrahedralMesh & mesh, const std::vector<std::int32_t> & held)
+{
+  std::vector<char> isHeld(mesh.GetNumberOfPoints(), 0);
+  for (std::int32_t n : held)
+  {
+    isHeld[n] = 1;
+  }
+  std::vector<std::int32_t> nodes;
+  for (const bmr::LoadedWall & wall : bmr::SceneLoadedWalls(scene, mesh))
+  {
+    for (std::int32_t n : wall.nodes)
+    {
+      if (!isHeld[n])
+      {
+        isHeld[n] = 1;
+        nodes.push_back(n);
+      }
+    }
+  }
+  return nodes;
+}
+
+std::unique_ptr<Resimulation>
+MakeResimulation(const EstimationSetup &             setup,
+                 const RegistrationResult &          r,
+                 const BiomechanicalLabelImageType * movingLabels,
+                 StageClock &                        clock)
+{
+  bmr::Scene scene = ScaledMeshSizes(*setup.scene, setup.settings->uncertainty.simulationMeshScale);
+  scene.mesh.randomSeed += 7919;
+  auto s = std::make_unique<Resimulation>();
+  s->mesh = MeshLabelImage(movingLabels, scene, clock, "uncertainty: resimulation mesh");
+  clock.Begin("uncertainty: resimulation FEM");
+  auto materials = bmr::SceneMaterials(scene);
+  for (const bmr::UnknownModulus & unknown : r.unknowns)
+  {
+    materials[unknown.label].youngsModulus = r.youngsModulus.at(unknown.name);
+  }
+  const bmr::BoundaryConditions held = bmr::SceneBoundaryConditions(scene, s->mesh);
+  s->wallNodes = FreeWallNodes(scene, s->mesh, held.dirichletNodes);
+  s->forces = held.forces;
+  s->prescribed.assign(3 * s->mesh.GetNumberOfPoints(), 0.0);
+  for (std::size_t i = 0; i < held.dirichletNodes.size() && 3 * i + 2 < held.dirichletValues.size(); ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      s->prescribed[3 * held.dirichletNodes[i] + c] = held.dirichletValues[3 * i + c];
+    }
+  }
+  const bmr::TetrahedralMesh & estimated = r.state.mesh;
+  const bmr::PointLocator      locator(estimated.points, estimated.tetrahedra);
+  std::vector<std::int32_t>    estimatedWall;
+  for (const bmr::LoadedWall & wall : bmr::SceneLoadedWalls(*setup.scene, estimated))
+  {
+    estimatedWall.insert(estimatedWall.end(), wall.nodes.begin(), wall.nodes.end());
+  }
+  for (std::int32_t n : s->wallNodes)
+  {
+    const std::array<double, 3> X{ { s->mesh.points[3 * n], s->mesh.points[3 * n + 1], s->mesh.points[3 * n + 2] } };
+    const std::array<double, 3> u = EstimatedDisplacementAt(locator, estimated, estimatedWall, X);
+    for (int c = 0; c < 3; ++c)
+    {
+      s->prescribed[3 * n + c] = u[c];
+    }
+  }
+  std::vector<std::int32_t> nodes = held.dirichletNodes;
+  nodes.insert(nodes.end(), s->wallNodes.begin(), s->wallNodes.end());
+  std::vector<double> values;
+  for (std::int32_t n : nodes)
+  {
+    values.insert(values.end(), s->prescribed.begin() + 3 * n, s->prescribed.begin() + 3 * n + 3);
+  }
+  s->model = std::make_unique<bmr::LinearElasticModel>(s->mesh, materials);
+  s->model->SetDirichletConditions(nodes, values);
+  s->model->Factorize();
+  clock.End(std::to_string(s->mesh.GetNumberOfTetrahedra()) + " tetrahedra");
+  return s;
+}
+
+/** The resample's wall motion: the estimated one plus a smooth random field perpendicular to it, of
+ * \a fraction times its local magnitude (Gaussian bumps of 15 mm at 8 random wall nodes, normalized to unit
+ * RMS over the walls): how the walls may slide without changing the surfaces walls along normals can fit. */
+std::vector<double>
+PerturbedWallMotion(const Resimulation & s, Random & rng, double fraction)
+{
+  std::vector<double> prescribed = s.prescribed;
+  if (fraction <= 0.0 || s.wallNodes.empty())
+  {
+    return prescribed;
+  }
+  constexpr int                            bumps = 8;
+  constexpr double                         width = 15.0; // mm
+  std::array<std::array<double, 6>, bumps> bump;
+  for (auto & b : bump)
+  {
+    const std::int32_t n = s.wallNodes[rng() % s.wallNodes.size()];
+    for (int c = 0; c < 3; ++c)
+    {
+      b[c] = s.mesh.points[3 * n + c];
+      b[3 + c] = Uniform(rng, -1.0, 1.0);
+    }
+  }
+  std::vector<std::array<double, 3>> g(s.wallNodes.size(), { { 0, 0, 0 } });
+  double                             sum2 = 0.0;
+  for (std::size_t i = 0; i < s.wallNodes.size(); ++i)
+  {
+    const double * X = &s.mesh.points[3 * s.wallNodes[i]];
+    for (const auto & b : bump)
+    {
+      const double w = std::exp(-(std::pow(X[0] - b[0], 2) + std::pow(X[1] - b[1], 2) + std::pow(X[2] - b[2], 2)) /
+                                (2.0 * width * width));
+      for (int c = 0; c < 3; ++c)
+      {
+        g[i][c] += w * b[3 + c];
+      }
+    }
+    sum2 += g[i][0] * g[i][0] + g[i][1] * g[i][1] + g[i][2] * g[i][2];
+  }
+  const double scale = fraction / std::sqrt(std::max(sum2 / double(g.size()), 1e-300));
+  for (std::size_t i = 0; i < s.wallNodes.size(); ++i)
+  {
+    double *     u = &prescribed[3 * s.wallNodes[i]];
+    const double norm = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (norm == 0.0)
+    {
+      continue;
+    }
+    const double along = (g[i][0] * u[0] + g[i][1] * u[1] + g[i][2] * u[2]) / norm;
+    for (int c = 0; c < 3; ++c)
+    {
+      u[c] += scale * norm * (g[i][c] - along * u[c] / norm);
+    }
+  }
+  return prescribed;
+}
+
+/** The crop of the fixed grid around the objective organs, shifted by a random sub-voxel offset and rotated
+ * by a small random angle about its center: another scan of the same anatomy. */
+bmr::GridGeometry
+ResampleGrid(const bmr::GridGeometry & crop, Random & rng, const UncertaintySettings & u)
+{
+  std::array<double, 3> axis;
+  for (auto & a : axis)
+  {
+    a = Uniform(rng, -1.0, 1.0);
+  }
+  const double norm = std::max(std::hypot(axis[0], axis[1], axis[2]), 1e-12);
+  for (auto & a : axis)
+  {
+    a /= norm;
+  }
+  const double          angle = Uniform(rng, 0.0, u.rotationDegrees) * 3.14159265358979323846 / 180.0;
+  const double          c = std::cos(angle), s = std::sin(angle);
+  std::array<double, 9> R; // Rodrigues
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      R[3 * i + j] = (i == j ? c : 0.0) + (1.0 - c) * axis[i] * axis[j];
+    }
+  }
+  R[1] -= s * axis[2];
+  R[2] += s * axis[1];
+  R[3] += s * axis[2];
+  R[5] -= s * axis[0];
+  R[6] -= s * axis[1];
+  R[7] += s * axis[0];
+  const std::array<double, 3> center = crop.IndexToPoint(
+    { { 0.5 * double(crop.size[0] - 1), 0.5 * double(crop.size[1] - 1), 0.5 * double(crop.size[2] - 1) } });
+  bmr::GridGeometry g = crop;
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      g.direction[3 * i + j] = 0.0;
+      for (int k = 0; k < 3; ++k)
+      {
+        g.direction[3 * i + j] += R[3 * i + k] * crop.direction[3 * k + j];
+      }
+    }
+  }
+  std::array<double, 3> offset;
+  for (int j = 0; j < 3; ++j)
+  {
+    offset[j] = (0.5 * double(crop.size[j] - 1) - Uniform(rng, -u.shiftVoxels, u.shiftVoxels)) * crop.spacing[j];
+  }
+  for (int i = 0; i < 3; ++i)
+  {
+    g.origin[i] = center[i];
+    for (int j = 0; j < 3; ++j)
+    {
+      g.origin[i] -= g.direction[3 * i + j] * offset[j];
+    }
+  }
+  return g;
+}
+
+/** The fixed organs of one resample on \a grid: each voxel x gets the moving anatomy's label at x + d(x),
+ * d the pull-back of the resimulated displacement. */
+BiomechanicalLabelImageType::Pointer
+RevoxelizedLabels(const bmr::TetrahedralMesh & deformed, const bmr::GridGeometry & grid, const MovingAnatomy & anatomy)
+{
+  auto labels =
+    MakeImageOnGrid<BiomechanicalLabelImageType>(grid, std::vector<std::int32_t>(grid.GetNumberOfVoxels(), 0));
+  auto meshObject = TetrahedralMeshObject::New();
+  meshObject->Set(deformed);
+  auto pull = PhysicsDeformationFieldSource<BiomechanicalFieldType>::New();
+  pull->SetMesh(meshObject);
+  pull->SetReferenceImage(labels);
+  pull->Update();
+  const auto *   d = pull->GetOutput()->GetBufferPointer();
+  std::int32_t * out = labels->GetBufferPointer();
+  for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
+  {
+    const auto       x = grid.IndexToPoint({ { double(v % grid.size[0]),
+                                               double((v / grid.size[0]) % grid.size[1]),
+                                               double(v / (grid.size[0] * grid.size[1])) } });
+    Point<double, 3> y;
+    for (unsigned int c = 0; c < 3; ++c)
+    {
+      y[c] = x[c] + d[v][c];
+    }
+    out[v] = anatomy.LabelAt(y);
+  }
+  return labels;
+}
+
+/** The moduli [kPa, unknowns' order] re-estimated from resample \a k. */
+std::vector<double>
+Resample(unsigned int                        k,
+         const EstimationSetup &             setup,
+         Resimulation &                      sim,
+         const MovingAnatomy &               anatomy,
+         const bmr::GridGeometry &           crop,
+         const RegistrationResult &          r,
+         const BiomechanicalLabelImageType * movingLabels)
+{
+  const UncertaintySettings & u = setup.settings->uncertainty;
+  Random                      rng(u.seed * 1000003 + k);
+  // The estimation's own meshes at randomly scaled sizes (the coarse one as the registration makes it).
+  const double               jitter = Uniform(rng, 1.0 - u.meshJitter, 1.0 + u.meshJitter);
+  std::vector<PipelineStage> untimed;
+  StageClock                 quiet(nullptr, untimed);
+  const bmr::Scene           scene = ScaledMeshSizes(*setup.scene, jitter);
+  const bmr::TetrahedralMesh fine = MeshLabelImage(movingLabels, scene, quiet, "resample mesh");
+  bmr::TetrahedralMesh       coarse;
+  if (setup.coarse)
+  {
+    coarse = MeshLabelImage(movingLabels, ScaledMeshSizes(scene, setup.settings->coarseFactor), quiet, "coarse");
+  }
+  EstimationSetup resample = setup;
+  resample.fine = &fine;
+  resample.coarse = setup.coarse ? &coarse : nullptr;
+  const std::vector<double> prescribed = PerturbedWallMotion(sim, rng, u.tangentialWallFraction);
+  bmr::TetrahedralMesh      deformed = sim.mesh;
+  {
+    const std::lock_guard<std::mutex> lock(sim.solver);
+    deformed.displacement = sim.model->Solve(sim.forces, prescribed);
+  }
+  const bmr::GridGeometry grid = ResampleGrid(crop, rng, u);
+  const auto              labels = RevoxelizedLabels(deformed, grid, anatomy);
+  const auto              optimizer =
+    RunEstimation(resample, ComputeSceneDistanceMaps(labels.GetPointer(), *setup.scene), false, nullptr);
+  std::vector<double> moduli;
+  for (const bmr::UnknownModulus & unknown : r.unknowns)
+  {
+    moduli.push_back(optimizer->GetEstimatedYoungsModuli().at(unknown.name));
+  }
+  return moduli;
+}
+} // namespace
+
+std::map<std::string, ModulusInterval>
+BootstrapModuli(const EstimationSetup &             setup,
+                RegistrationResult &                r,
+                const BiomechanicalLabelImageType * movingLabels,
+                const BiomechanicalLabelImageType * fixedLabels,
+                StageClock &                        clock)
+{
+  const UncertaintySettings & u = setup.settings->uncertainty;
+  const auto                  sim = MakeResimulation(setup, r, movingLabels, clock);
+  clock.Begin("uncertainty: " + std::to_string(u.resamples) + " resamples");
+  const MovingAnatomy  anatomy(movingLabels, *setup.scene);
+  const ImageRegion<3> box = LabelBox(fixedLabels, anatomy.values, 15.0);
+  bmr::GridGeometry    crop = GridGeometryOf(fixedLabels);
+  Point<double, 3>     corner;
+  fixedLabels->TransformIndexToPhysicalPoint(box.GetIndex(), corner);
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    crop.origin[a] = corner[a];
+    crop.size[a] = box.GetSize(a);
+  }
+  std::vector<std::vector<double>> moduli(u.resamples);
+  std::vector<std::string>         failures(u.resamples);
+  std::atomic<unsigned int>        next{ 0 };
+  const auto                       work = [&]() {
+    for (unsigned int k = next++; k < u.resamples; k = next++)
+    {
+      try
+      {
+        moduli[k] = Resample(k, setup, *sim, anatomy, crop, r, movingLabels);
+      }
+      catch (const std::exception & e)
+      {
+        failures[k] = e.what();
+      }
+    }
+  };
+  std::vector<std::thread> workers;
+  for (unsigned int t = 1; t < std::min(u.threads, u.resamples); ++t)
+  {
+    workers.emplace_back(work);
+  }
+  work();
+  for (auto & w : workers)
+  {
+    w.join();
+  }
+  clock.End();
+
+  std::vector<std::string>               warnings;
+  std::map<std::string, ModulusInterval> intervals;
+  for (std::size_t m = 0; m < r.unknowns.size(); ++m)
+  {
+    std::vector<double> samples;
+    for (unsigned int k = 0; k < u.resamples; ++k)
+    {
+      if (failures[k].empty())
+      {
+        samples.push_back(moduli[k][m]);
+      }
+    }
+    const bmr::UnknownModulus & unknown = r.unknowns[m];
+    intervals[unknown.name] = BootstrapInterval(r.youngsModulus.at(unknown.name), samples, unknown);
+  }
+  for (unsigned int k = 0; k < u.resamples; ++k)
+  {
+    if (!failures[k].empty())
+    {
+      warnings.push_back("uncertainty: resample " + std::to_string(k) + " failed and is left out: " + failures[k]);
+    }
+  }
+  clock.Warn(r.state.warnings, warnings);
+  return intervals;
+}
+
+} // namespace pipeline
+} // namespace itk

@@ -1,0 +1,144 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// Intervals of an estimated modulus: from bootstrap resamples or the curvature of Phi*, and bounds.
+#include "itkPipelineStages.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace itk {
+namespace pipeline {
+namespace {
+/** Student's t quantile for probability \a p (> 0.5) and \a dof degrees of freedom: the Cornish-Fisher
+ * expansion about the normal quantile \a z (Abramowitz & Stegun 26.7.5), within 1e-3 for dof >= 3. */
+double
+StudentQuantile(double z, double dof)
+{
+  const double z3 = z * z * z, z5 = z3 * z * z, z7 = z5 * z * z;
+  return z + (z3 + z) / (4.0 * dof) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof) +
+         (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * dof * dof * dof);
+}
+
+double
+Median(std::vector<double> x)
+{
+  std::sort(x.begin(), x.end());
+  const std::size_t n = x.size();
+  return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+}
+
+/** An interval end within 0.1 % of a search bound, or beyond it, is set by the bound, not by the images. */
+bool
+ReachesLower(double E, const bmr::UnknownModulus & u)
+{
+  return E <= 1.001 * u.lowerBound;
+}
+bool
+ReachesUpper(double E, const bmr::UnknownModulus & u)
+{
+  return E >= 0.999 * u.upperBound;
+}
+
+/** Marks the ends the images do not determine and extends the interval to the search bound there (the data say
+ * nothing beyond what the search saw); a determined end stays within the bounds. */
+void
+JudgeBounds(ModulusInterval & i, const bmr::UnknownModulus & u, bool lowerReached, bool upperReached)
+{
+  i.lowerDetermined = !(lowerReached || ReachesLower(i.interval95[0], u));
+  i.upperDetermined = !(upperReached || ReachesUpper(i.interval95[1], u));
+  for (auto * interval : { &i.interval68, &i.interval95 })
+  {
+    auto & [lo, hi] = *interval;
+    lo = i.lowerDetermined ? std::min(std::max(lo, u.lowerBound), u.upperBound) : u.lowerBound;
+    hi = i.upperDetermined ? std::max(std::min(hi, u.upperBound), u.lowerBound) : u.upperBound;
+    // A bias correction may carry a one-sided bound beyond the search range: the search never saw it.
+    lo = std::min(lo, u.upperBound);
+    hi = std::max(hi, u.lowerBound);
+  }
+  i.estimate = std::min(std::max(i.estimate, u.lowerBound), u.upperBound);
+}
+} // namespace
+
+ModulusInterval
+BootstrapInterval(double fit, const std::vector<double> & resamples, const bmr::UnknownModulus & unknown)
+{
+  ModulusInterval i;
+  i.method = "bootstrap";
+  i.fit = fit;
+  i.resampleModuli = resamples;
+  const std::size_t n = resamples.size();
+  if (n < 3)
+  {
+    // Too few resamples to say anything: an interval over the whole search range.
+    i.estimate = fit;
+    i.logSigma = std::numeric_limits<double>::infinity();
+    i.interval68 = i.interval95 = { { unknown.lowerBound, unknown.upperBound } };
+    JudgeBounds(i, unknown, true, true);
+    return i;
+  }
+  std::vector<double> logs;
+  bool                lowerReached = ReachesLower(fit, unknown), upperReached = ReachesUpper(fit, unknown);
+  for (double E : resamples)
+  {
+    logs.push_back(std::log(E));
+    lowerReached = lowerReached || ReachesLower(E, unknown);
+    upperReached = upperReached || ReachesUpper(E, unknown);
+  }
+  i.logBias = Median(logs) - std::log(fit);
+  double mean = 0.0, sum2 = 0.0;
+  for (double l : logs)
+  {
+    mean += l / double(n);
+  }
+  for (double l : logs)
+  {
+    sum2 += (l - mean) * (l - mean);
+  }
+  i.logSigma = std::sqrt(sum2 / double(n - 1));
+  const double center = std::log(fit) - i.logBias;
+  const double predictive = std::sqrt(1.0 + 1.0 / double(n));
+  const double half68 = StudentQuantile(0.994457883, double(n - 1)) * i.logSigma * predictive;
+  const double half95 = StudentQuantile(1.959963985, double(n - 1)) * i.logSigma * predictive;
+  i.estimate = std::exp(center);
+  i.interval68 = { { std::exp(center - half68), std::exp(center + half68) } };
+  i.interval95 = { { std::exp(center - half95), std::exp(center + half95) } };
+  JudgeBounds(i, unknown, lowerReached, upperReached);
+  return i;
+}
+
+ModulusInterval
+CurvatureInterval(double fit, double logSigma, const bmr::UnknownModulus & unknown)
+{
+  ModulusInterval i;
+  i.method = "curvature";
+  i.fit = i.estimate = fit;
+  i.logSigma = logSigma;
+  if (!std::isfinite(logSigma))
+  {
+    i.interval68 = i.interval95 = { { unknown.lowerBound, unknown.upperBound } };
+    JudgeBounds(i, unknown, true, true);
+    return i;
+  }
+  i.interval68 = { { fit * std::exp(-logSigma), fit * std::exp(logSigma) } };
+  i.interval95 = { { fit * std::exp(-1.959963985 * logSigma), fit * std::exp(1.959963985 * logSigma) } };
+  JudgeBounds(i, unknown, ReachesLower(fit, unknown), ReachesUpper(fit, unknown));
+  return i;
+}
+
+} // namespace pipeline
+} // namespace itk
