@@ -70,6 +70,7 @@ ParsePhantomSettings(const Arguments & args)
   o.prostateNu = args.Number("--true-nu", o.prostateNu);
   o.bladderMM = args.Number("--bladder-mm", o.bladderMM);
   o.rectumMM = args.Number("--rectum-mm", o.rectumMM);
+  o.fractions = args.Choice("--fractions", { "off", "on" }) == "on";
   o.truthRefinement = args.Number("--truth-mesh-scale", o.truthRefinement);
   if (!(o.truthRefinement >= 0.3 && o.truthRefinement <= 2.0))
   {
@@ -225,7 +226,7 @@ PrintUsage(std::ostream & os)
        "  biomechreg                      run the demo into ./biomechreg-demo\n"
        "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
        "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-       "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F]\n"
+       "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F] [--fractions off|on]\n"
        "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
        "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
        "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
@@ -233,6 +234,8 @@ PrintUsage(std::ostream & os)
        "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
        "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free]\n"
        "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
+       "                      [--uncertainty bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
+       "                      [--uncertainty-threads T] [--fixed-probabilities ORGAN=FILE,...]\n"
        "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
        "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
        "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching "

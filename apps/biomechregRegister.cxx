@@ -21,6 +21,7 @@
 #include "itkBiomechanicalReports.h"
 
 #include <cmath>
+#include <sstream>
 
 namespace bmrcli {
 
@@ -35,6 +36,26 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
   u.resamples = args.Count("--resamples", u.resamples, 3, 1000);
   u.seed = args.Count("--uncertainty-seed", static_cast<unsigned int>(u.seed), 0, 4000000000u);
   u.threads = args.Count("--uncertainty-threads", u.threads, 1, 64);
+}
+
+/** --fixed-probabilities prostate=p.nrrd,bladder=b.nrrd: one probability image per organ (empty: none). */
+itk::OrganProbabilityImages
+ReadProbabilityImages(const std::string & list)
+{
+  itk::OrganProbabilityImages images;
+  std::stringstream           items(list);
+  for (std::string item; std::getline(items, item, ',');)
+  {
+    const auto equals = item.find('=');
+    if (equals == std::string::npos || equals == 0 || equals + 1 == item.size())
+    {
+      throw UsageError("--fixed-probabilities takes ORGAN=FILE pairs separated by commas, got \"" + item + "\"");
+    }
+    const std::string organ = item.substr(0, equals);
+    images[organ] =
+      ReadImage<itk::BiomechanicalProbabilityImageType>(item.substr(equals + 1), "fixed probability of " + organ);
+  }
+  return images;
 }
 
 itk::RegistrationSettings
@@ -120,6 +141,7 @@ RegisterCommand(const Arguments & args)
   const std::string scenePath = args.Require("--scene");
   const std::string out = args.Require("--out");
   const auto        settings = ParseRegistrationSettings(args);
+  const std::string probabilities = args.Get("--fixed-probabilities");
   args.CheckAllUsed();
 
   StageTimer timer(true);
@@ -131,8 +153,10 @@ RegisterCommand(const Arguments & args)
   // The fixed CT is read to check it; the fixed label image defines the output grid.
   ReadImage<CTImageType>(fixedCT, "fixed CT");
   const auto fixedMap = ReadImage<LabelImageType>(fixedLabels, "fixed label image");
+  const auto fixedProbabilities = ReadProbabilityImages(probabilities);
   timer.End();
-  const auto result = itk::RegisterSegmentedPair(movingMap, fixedMap, moving, scene, settings, &timer);
+  const auto result =
+    itk::RegisterSegmentedPair(movingMap, fixedMap, fixedProbabilities, moving, scene, settings, &timer);
   timer.stages.insert(timer.stages.end(), result.state.stages.begin(), result.state.stages.end());
   WriteRegistration(out, result, settings, timer);
 

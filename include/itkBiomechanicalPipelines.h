@@ -188,6 +188,25 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       const RegistrationSettings &        settings = RegistrationSettings(),
                       PipelineObserver *                  observer = nullptr);
 
+/** Per organ (scene label name), a probability or partial-volume image of the fixed scan, in [0, 1].
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+using BiomechanicalProbabilityImageType = Image<float, 3>;
+using OrganProbabilityImages = std::map<std::string, BiomechanicalProbabilityImageType::Pointer>;
+
+/** As above, with probabilistic or partial-volume fixed segmentations for some objective organs: their distance
+ * maps come from the 0.5 level of \a fixedProbabilities (ComputeProbabilityDistanceMap, a sub-voxel surface)
+ * instead of the fixed labels' staircase, and the bootstrap's resamples give those organs fractions too. The
+ * fixed labels still define the output grid and serve the other organs and Dice. Throws when a name is not an
+ * objective organ of the scene. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT RegistrationResult
+RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
+                      const BiomechanicalLabelImageType * fixedLabels,
+                      const OrganProbabilityImages &      fixedProbabilities,
+                      const BiomechanicalCTImageType *    movingCT,
+                      const bmr::Scene &                  scene,
+                      const RegistrationSettings &        settings = RegistrationSettings(),
+                      PipelineObserver *                  observer = nullptr);
+
 /** Settings of a phantom pair; the defaults are biomechreg phantom's.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT PhantomSettings
@@ -211,6 +230,7 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   double               noiseHU{ 10.0 };
   std::uint64_t        seed{ 1 };
   unsigned int         numberOfSeeds{ 3 };
+  bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
 
   /** The defaults of an anatomy: the pelvis as above; the spheres on their own 96^3 grid of 1 mm, the outer
@@ -231,6 +251,7 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
   bmr::Scene                           scene;      ///< what the estimator sees (prostate modulus unknown)
   bmr::Scene                           truthScene; ///< known moduli and wall loads
   std::vector<bmr::Landmark>           movingLandmarks, fixedLandmarks; ///< seed centers [mm, LPS]
+  OrganProbabilityImages               fixedFractions; ///< per objective organ, with PhantomSettings::fractions
   std::size_t                          truthTetrahedra{ 0 }, truthNodes{ 0 };
   std::vector<PipelineStage>           stages;
 };

@@ -21,7 +21,10 @@
 #include "bmrScene.h"
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkImageRegionConstIterator.h"
+#include "itkIsoContourDistanceImageFilter.h"
 #include "itkSignedMaurerDistanceMapImageFilter.h"
+
+#include <cmath>
 
 #include <map>
 #include <string>
@@ -107,6 +110,80 @@ ComputeSceneDistanceMaps(const TLabelImage * labels, const bmr::Scene & scene)
     maps[term.label] = part[0];
   }
   return maps;
+}
+
+/** \brief Signed distance map [mm, negative inside] of the 0.5 level of a probability or partial-volume image.
+ *
+ * \a probability holds, per voxel, the organ's probability (a segmentation network's softmax) or its volume
+ * fraction, in [0, 1]. The surface is the 0.5 level of its trilinear interpolation, a sub-voxel surface where a
+ * label map has a staircase. Near it (the voxels whose 6-neighborhood crosses the level)
+ * itk::IsoContourDistanceImageFilter gives the distance to the linearly interpolated level in physical units;
+ * farther away, the Euclidean distance to the faces of the mask p >= 0.5 (SignedMaurerDistanceMapImageFilter of
+ * the mask and of its complement, averaged, as ComputeSceneDistanceMaps), which differs from the sub-voxel
+ * distance by less than half a voxel where the band ends. Throws itk::ExceptionObject naming \a what when a voxel
+ * is not finite or lies outside [0, 1] (beyond 1e-3), or when no voxel reaches 0.5.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationScene */
+template<typename TProbabilityImage>
+typename Image<float, 3>::Pointer
+ComputeProbabilityDistanceMap(const TProbabilityImage * probability, const std::string & what)
+{
+  using MapType = Image<float, 3>;
+  using MaskType = Image<unsigned char, 3>;
+  if (probability == nullptr || probability->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
+  {
+    itkGenericExceptionMacro(<< what << ": the probability image is empty");
+  }
+  std::size_t inside = 0;
+  for (ImageRegionConstIterator<TProbabilityImage> it(probability, probability->GetLargestPossibleRegion());
+       !it.IsAtEnd();
+       ++it)
+  {
+    const double p = static_cast<double>(it.Get());
+    if (!std::isfinite(p) || p < -1e-3 || p > 1.0 + 1e-3)
+    {
+      itkGenericExceptionMacro(<< what << ": a voxel holds " << p << ", not a probability in [0, 1]");
+    }
+    inside += p >= 0.5;
+  }
+  if (inside == 0)
+  {
+    itkGenericExceptionMacro(<< what << ": no voxel reaches 0.5, the organ is absent");
+  }
+  // Far from the surface: the mask's distance map, as ComputeSceneDistanceMaps does for a label.
+  typename MapType::Pointer part[2];
+  for (int complement = 0; complement < 2; ++complement)
+  {
+    auto threshold = BinaryThresholdImageFilter<TProbabilityImage, MaskType>::New();
+    threshold->SetInput(probability);
+    threshold->SetLowerThreshold(static_cast<typename TProbabilityImage::PixelType>(0.5));
+    threshold->SetInsideValue(complement ? 0 : 1);
+    threshold->SetOutsideValue(complement ? 1 : 0);
+    auto distance = SignedMaurerDistanceMapImageFilter<MaskType, MapType>::New();
+    distance->SetInput(threshold->GetOutput());
+    distance->SetUseImageSpacing(true);
+    distance->SetSquaredDistance(false);
+    distance->SetInsideIsPositive(false);
+    distance->SetBackgroundValue(0);
+    distance->Update();
+    part[complement] = distance->GetOutput();
+    part[complement]->DisconnectPipeline();
+  }
+  // Near it: the distance to the interpolated 0.5 level (positive where p > 0.5, hence the sign flip).
+  auto       iso = IsoContourDistanceImageFilter<TProbabilityImage, MapType>::New();
+  const auto far = NumericTraits<float>::max();
+  iso->SetInput(probability);
+  iso->SetLevelSetValue(0.5);
+  iso->SetFarValue(far);
+  iso->Update();
+  float *           phi = part[0]->GetBufferPointer();
+  const float *     rest = part[1]->GetBufferPointer();
+  const float *     near = iso->GetOutput()->GetBufferPointer();
+  const std::size_t n = part[0]->GetBufferedRegion().GetNumberOfPixels();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    phi[i] = std::abs(near[i]) < far ? -near[i] : 0.5f * (phi[i] - rest[i]);
+  }
+  return part[0];
 }
 
 } // namespace itk

@@ -110,6 +110,10 @@ WritePhantomPair(const std::string & directory, const PhantomPair & pair, const 
   WriteImageAtomically(pair.movingLabels.GetPointer(), directory + "/moving_labels.nrrd");
   WriteImageAtomically(pair.fixedCT.GetPointer(), directory + "/fixed_ct.nrrd");
   WriteImageAtomically(pair.fixedLabels.GetPointer(), directory + "/fixed_labels.nrrd");
+  for (const auto & kv : pair.fixedFractions)
+  {
+    WriteImageAtomically(kv.second.GetPointer(), directory + "/fixed_fraction_" + kv.first + ".nrrd");
+  }
   WriteImageAtomically(pair.truthField.GetPointer(), directory + "/truth_field.nrrd");
   bmr::WriteTextFileAtomically(directory + "/scene.json", bmr::SceneToJson(pair.scene));
   bmr::WriteTextFileAtomically(directory + "/truth_scene.json", bmr::SceneToJson(pair.truthScene));

@@ -135,15 +135,23 @@ struct MovingAnatomy
     }
   }
 
+  /** The smoothed indicator of objective organ \a o at \a y [mm], in [0, 1]: 0 outside its crop. */
+  double
+  IndicatorAt(std::size_t o, const Point<double, 3> & y) const
+  {
+    ContinuousIndex<double, 3> index;
+    return indicators[o]->TransformPhysicalPointToContinuousIndex(y, index)
+             ? std::min(std::max(interpolators[o]->EvaluateAtContinuousIndex(index), 0.0), 1.0)
+             : 0.0;
+  }
+
   /** The first objective organ whose smoothed indicator is >= 0.5 at \a y [mm], or 0. */
   std::int32_t
   LabelAt(const Point<double, 3> & y) const
   {
     for (std::size_t o = 0; o < values.size(); ++o)
     {
-      ContinuousIndex<double, 3> index;
-      if (indicators[o]->TransformPhysicalPointToContinuousIndex(y, index) &&
-          interpolators[o]->EvaluateAtContinuousIndex(index) >= 0.5)
+      if (IndicatorAt(o, y) >= 0.5)
       {
         return values[o];
       }
@@ -396,13 +404,29 @@ ResampleGrid(const bmr::GridGeometry & crop, Random & rng, const UncertaintySett
   return g;
 }
 
-/** The fixed organs of one resample on \a grid: each voxel x gets the moving anatomy's label at x + d(x),
- * d the pull-back of the resimulated displacement. */
-BiomechanicalLabelImageType::Pointer
-RevoxelizedLabels(const bmr::TetrahedralMesh & deformed, const bmr::GridGeometry & grid, const MovingAnatomy & anatomy)
+/** The fixed organs of one resample on \a grid: each voxel x gets the moving anatomy's label at x + d(x), d the
+ * pull-back of the resimulated displacement, and each organ of \a fractionOrgans its smoothed indicator there
+ * (the resample's partial-volume image, when the data came as probabilities). Returns the distance maps. */
+std::map<std::string, Image<float, 3>::Pointer>
+RevoxelizedMaps(const bmr::TetrahedralMesh &     deformed,
+                const bmr::GridGeometry &        grid,
+                const MovingAnatomy &            anatomy,
+                const bmr::Scene &               scene,
+                const std::vector<std::string> & fractionOrgans)
 {
   auto labels =
     MakeImageOnGrid<BiomechanicalLabelImageType>(grid, std::vector<std::int32_t>(grid.GetNumberOfVoxels(), 0));
+  std::vector<std::pair<std::size_t, std::vector<float>>> fractions;
+  for (const std::string & name : fractionOrgans)
+  {
+    for (std::size_t o = 0; o < scene.objective.size(); ++o)
+    {
+      if (scene.objective[o].label == name)
+      {
+        fractions.push_back({ o, std::vector<float>(grid.GetNumberOfVoxels(), 0.0f) });
+      }
+    }
+  }
   auto meshObject = TetrahedralMeshObject::New();
   meshObject->Set(deformed);
   auto pull = PhysicsDeformationFieldSource<BiomechanicalFieldType>::New();
@@ -422,8 +446,17 @@ RevoxelizedLabels(const bmr::TetrahedralMesh & deformed, const bmr::GridGeometry
       y[c] = x[c] + d[v][c];
     }
     out[v] = anatomy.LabelAt(y);
+    for (auto & f : fractions)
+    {
+      f.second[v] = static_cast<float>(anatomy.IndicatorAt(f.first, y));
+    }
   }
-  return labels;
+  OrganProbabilityImages probabilities;
+  for (const auto & f : fractions)
+  {
+    probabilities[scene.objective[f.first].label] = MakeImageOnGrid<BiomechanicalProbabilityImageType>(grid, f.second);
+  }
+  return ObjectiveDistanceMaps(labels, probabilities, scene);
 }
 
 /** The moduli [kPa, unknowns' order] re-estimated from resample \a k. */
@@ -459,9 +492,8 @@ Resample(unsigned int                        k,
     deformed.displacement = sim.model->Solve(sim.forces, prescribed);
   }
   const bmr::GridGeometry grid = ResampleGrid(crop, rng, u);
-  const auto              labels = RevoxelizedLabels(deformed, grid, anatomy);
-  const auto              optimizer =
-    RunEstimation(resample, ComputeSceneDistanceMaps(labels.GetPointer(), *setup.scene), false, nullptr);
+  const auto              optimizer = RunEstimation(
+    resample, RevoxelizedMaps(deformed, grid, anatomy, *setup.scene, setup.probabilityOrgans), false, nullptr);
   std::vector<double> moduli;
   for (const bmr::UnknownModulus & unknown : r.unknowns)
   {

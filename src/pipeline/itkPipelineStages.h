@@ -83,7 +83,14 @@ struct EstimationSetup
   const bmr::TetrahedralMesh * coarse{ nullptr };
   const bmr::Scene *           scene{ nullptr };
   const RegistrationSettings * settings{ nullptr };
+  std::vector<std::string>     probabilityOrgans; ///< objective organs whose fixed data are probabilities
 };
+
+/** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels. */
+std::map<std::string, Image<float, 3>::Pointer>
+ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
+                      const OrganProbabilityImages &      probabilities,
+                      const bmr::Scene &                  scene);
 
 /** FEMElasticityOptimizer on \a setup with the distance maps \a maps; the curvature uncertainty only when
  * \a curvature; the observer (may be null) sees the inner solves. */

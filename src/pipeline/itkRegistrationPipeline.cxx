@@ -26,6 +26,7 @@
 
 #include "itkCommand.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -220,6 +221,28 @@ Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLa
 } // namespace
 
 namespace pipeline {
+std::map<std::string, Image<float, 3>::Pointer>
+ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
+                      const OrganProbabilityImages &      probabilities,
+                      const bmr::Scene &                  scene)
+{
+  bmr::Scene fromLabels = scene;
+  fromLabels.objective.clear();
+  for (const bmr::ObjectiveTerm & term : scene.objective)
+  {
+    if (probabilities.count(term.label) == 0)
+    {
+      fromLabels.objective.push_back(term);
+    }
+  }
+  auto maps = ComputeSceneDistanceMaps(labels, fromLabels);
+  for (const auto & kv : probabilities)
+  {
+    maps[kv.first] = ComputeProbabilityDistanceMap(kv.second.GetPointer(), "fixed probability of \"" + kv.first + "\"");
+  }
+  return maps;
+}
+
 FEMElasticityOptimizer::Pointer
 RunEstimation(const EstimationSetup &                                 setup,
               const std::map<std::string, Image<float, 3>::Pointer> & maps,
@@ -265,10 +288,37 @@ RegistrationResult
 RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       const BiomechanicalLabelImageType * fixedLabels,
                       const BiomechanicalCTImageType *    movingCT,
+                      const bmr::Scene &                  scene,
+                      const RegistrationSettings &        settings,
+                      PipelineObserver *                  observer)
+{
+  return RegisterSegmentedPair(
+    movingLabels, fixedLabels, OrganProbabilityImages(), movingCT, scene, settings, observer);
+}
+
+RegistrationResult
+RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
+                      const BiomechanicalLabelImageType * fixedLabels,
+                      const OrganProbabilityImages &      fixedProbabilities,
+                      const BiomechanicalCTImageType *    movingCT,
                       const bmr::Scene &                  inputScene,
                       const RegistrationSettings &        settings,
                       PipelineObserver *                  observer)
 {
+  std::vector<std::string> probabilityOrgans;
+  for (const auto & kv : fixedProbabilities)
+  {
+    const bool objective = std::any_of(inputScene.objective.begin(),
+                                       inputScene.objective.end(),
+                                       [&kv](const bmr::ObjectiveTerm & t) { return t.label == kv.first; });
+    if (!objective || !kv.second)
+    {
+      bmr::Fail("RegisterSegmentedPair",
+                "a fixed probability image is given for \"" + kv.first +
+                  "\", which is not an objective organ of the scene (or the image is null)");
+    }
+    probabilityOrgans.push_back(kv.first);
+  }
   if (movingLabels == nullptr || fixedLabels == nullptr)
   {
     bmr::Fail("RegisterSegmentedPair", "the moving and the fixed label images are required");
@@ -282,7 +332,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, VoxelWarnings(scene, movingLabels, fixedLabels));
 
   clock.Begin("distance maps (fixed labels)");
-  const auto maps = ComputeSceneDistanceMaps(fixedLabels, scene);
+  const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
   clock.End(std::to_string(maps.size()) + " organs");
   r.state.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
@@ -295,7 +345,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   }
   const bmr::TetrahedralMesh      estimationMesh = r.state.mesh;
   const pipeline::EstimationSetup setup{
-    &estimationMesh, coarse.points.empty() ? nullptr : &coarse, &scene, &settings
+    &estimationMesh, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans
   };
   const bool curvature = settings.uncertainty.method == UncertaintyMethodEnum::Curvature;
   const auto optimizer = pipeline::RunEstimation(setup, maps, curvature, clock.GetObserver());

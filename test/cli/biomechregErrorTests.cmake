@@ -104,6 +104,20 @@ expect_error(bad_step_limit "--element-inversion must be allow or limit"
 expect_error(step_limit_reduced_basis "--element-inversion limit needs --wall-spacing-mm 0"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --element-inversion limit --wall-spacing-mm 6 --out ${TEMP}/r5)
+# Probability images: not ORGAN=FILE, an organ that is no objective organ, voxels outside [0, 1] (the fixed CT);
+# a bad uncertainty method.
+expect_error(probability_syntax "--fixed-probabilities takes ORGAN=FILE pairs"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --fixed-probabilities ${TEMP}/ok/fixed_ct.nrrd --out ${TEMP}/r6)
+expect_error(probability_not_objective "\"bone\", which is not an objective organ"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --fixed-probabilities bone=${TEMP}/ok/fixed_ct.nrrd --out ${TEMP}/r7)
+expect_error(probability_range "fixed probability of \"inner\": a voxel holds .*not a probability in \\[0, 1\\]"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --fixed-probabilities inner=${TEMP}/ok/fixed_ct.nrrd --out ${TEMP}/r8)
+expect_error(bad_uncertainty "--uncertainty must be bootstrap, curvature or none"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --uncertainty guess --out ${TEMP}/r9)
 
 # Non-finite voxels, an absurd declared size, images that do not overlap in physical space.
 string(REPEAT "40 " 63 values)

@@ -142,7 +142,8 @@ itkModulusBootstrapTest(int, char *[])
   Check(coarse.interval95[1] / coarse.interval95[0] > two.interval95[1] / two.interval95[0],
         "the 95 % interval widens when the fixed voxels coarsen from 1 to 2 mm");
 
-  const itk::ModulusInterval stiff = Interval(Spheres(1000.0), Spheres(1000.0).fixedLabels, 2, 1);
+  const itk::PhantomPair     stiffPair = Spheres(1000.0);
+  const itk::ModulusInterval stiff = Interval(stiffPair, stiffPair.fixedLabels, 2, 1);
   Check(!stiff.upperDetermined && itk::ModulusIntervalText("inner", stiff).find("inner E >= ") == 0,
         "1000 kPa (bound 300 kPa): stated as a lower bound");
 
