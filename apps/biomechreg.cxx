@@ -196,7 +196,7 @@ DemoCommand()
             << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
             << std::noshowpos << " %), fit " << result.youngsModulus.at("prostate") << " kPa"
             << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
-            << "\n  (the error over 50-350 kPa on this phantom: docs/benchmarks.md, estimation benchmark)"
+            << "\n  (coverage of the interval over 30-500 kPa: docs/benchmarks.md, calibration benchmark)"
             << (result.estimation.identifiable ? "" : "\n  warning: ")
             << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
             << "\n  Dice after warping:";

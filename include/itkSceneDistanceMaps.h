@@ -31,6 +31,45 @@
 
 namespace itk {
 
+namespace detail {
+/** The signed distance [mm, negative inside] to the voxel faces of the mask of \a image's voxels in [lower, upper]:
+ * Maurer's map of the mask and of its complement, averaged, \f$ \phi = (\phi_{mask} - \phi_{complement}) / 2 \f$. */
+template<typename TImage>
+typename Image<float, 3>::Pointer
+FaceDistanceMap(const TImage * image, typename TImage::PixelType lower, typename TImage::PixelType upper)
+{
+  using MapType = Image<float, 3>;
+  using MaskType = Image<unsigned char, 3>;
+  typename MapType::Pointer part[2];
+  for (int complement = 0; complement < 2; ++complement)
+  {
+    auto threshold = BinaryThresholdImageFilter<TImage, MaskType>::New();
+    threshold->SetInput(image);
+    threshold->SetLowerThreshold(lower);
+    threshold->SetUpperThreshold(upper);
+    threshold->SetInsideValue(complement ? 0 : 1);
+    threshold->SetOutsideValue(complement ? 1 : 0);
+    auto distance = SignedMaurerDistanceMapImageFilter<MaskType, MapType>::New();
+    distance->SetInput(threshold->GetOutput());
+    distance->SetUseImageSpacing(true);
+    distance->SetSquaredDistance(false);
+    distance->SetInsideIsPositive(false);
+    distance->SetBackgroundValue(0);
+    distance->Update();
+    part[complement] = distance->GetOutput();
+    part[complement]->DisconnectPipeline();
+  }
+  float *           organ = part[0]->GetBufferPointer();
+  const float *     rest = part[1]->GetBufferPointer();
+  const std::size_t n = part[0]->GetBufferedRegion().GetNumberOfPixels();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    organ[i] = 0.5f * (organ[i] - rest[i]);
+  }
+  return part[0];
+}
+} // namespace detail
+
 /** \brief Signed distance maps [mm] of the scene's objective organs in a fixed label image.
  *
  * For every objective label of \a scene, the signed Euclidean distance to the
@@ -54,7 +93,6 @@ std::map<std::string, typename Image<float, 3>::Pointer>
 ComputeSceneDistanceMaps(const TLabelImage * labels, const bmr::Scene & scene)
 {
   using MapType = Image<float, 3>;
-  using MaskType = Image<unsigned char, 3>;
   if (labels == nullptr || labels->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
   {
     itkGenericExceptionMacro(<< "ComputeSceneDistanceMaps: the fixed label image is empty");
@@ -78,36 +116,8 @@ ComputeSceneDistanceMaps(const TLabelImage * labels, const bmr::Scene & scene)
       itkGenericExceptionMacro(<< "objective label \"" << term.label << "\" (value " << label->value
                                << ") is missing from the fixed label image");
     }
-    // Signed map of the organ (inside = 1) and of its complement (inside = 0).
-    typename MapType::Pointer part[2];
-    for (int complement = 0; complement < 2; ++complement)
-    {
-      using ThresholdType = BinaryThresholdImageFilter<TLabelImage, MaskType>;
-      auto threshold = ThresholdType::New();
-      threshold->SetInput(labels);
-      threshold->SetLowerThreshold(static_cast<typename TLabelImage::PixelType>(label->value));
-      threshold->SetUpperThreshold(static_cast<typename TLabelImage::PixelType>(label->value));
-      threshold->SetInsideValue(complement ? 0 : 1);
-      threshold->SetOutsideValue(complement ? 1 : 0);
-      using DistanceType = SignedMaurerDistanceMapImageFilter<MaskType, MapType>;
-      auto distance = DistanceType::New();
-      distance->SetInput(threshold->GetOutput());
-      distance->SetUseImageSpacing(true);
-      distance->SetSquaredDistance(false);
-      distance->SetInsideIsPositive(false);
-      distance->SetBackgroundValue(0);
-      distance->Update();
-      part[complement] = distance->GetOutput();
-      part[complement]->DisconnectPipeline();
-    }
-    float *           organ = part[0]->GetBufferPointer();
-    const float *     rest = part[1]->GetBufferPointer();
-    const std::size_t n = part[0]->GetBufferedRegion().GetNumberOfPixels();
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      organ[i] = 0.5f * (organ[i] - rest[i]);
-    }
-    maps[term.label] = part[0];
+    const auto value = static_cast<typename TLabelImage::PixelType>(label->value);
+    maps[term.label] = detail::FaceDistanceMap(labels, value, value);
   }
   return maps;
 }
@@ -128,7 +138,6 @@ typename Image<float, 3>::Pointer
 ComputeProbabilityDistanceMap(const TProbabilityImage * probability, const std::string & what)
 {
   using MapType = Image<float, 3>;
-  using MaskType = Image<unsigned char, 3>;
   if (probability == nullptr || probability->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
   {
     itkGenericExceptionMacro(<< what << ": the probability image is empty");
@@ -150,24 +159,9 @@ ComputeProbabilityDistanceMap(const TProbabilityImage * probability, const std::
     itkGenericExceptionMacro(<< what << ": no voxel reaches 0.5, the organ is absent");
   }
   // Far from the surface: the mask's distance map, as ComputeSceneDistanceMaps does for a label.
-  typename MapType::Pointer part[2];
-  for (int complement = 0; complement < 2; ++complement)
-  {
-    auto threshold = BinaryThresholdImageFilter<TProbabilityImage, MaskType>::New();
-    threshold->SetInput(probability);
-    threshold->SetLowerThreshold(static_cast<typename TProbabilityImage::PixelType>(0.5));
-    threshold->SetInsideValue(complement ? 0 : 1);
-    threshold->SetOutsideValue(complement ? 1 : 0);
-    auto distance = SignedMaurerDistanceMapImageFilter<MaskType, MapType>::New();
-    distance->SetInput(threshold->GetOutput());
-    distance->SetUseImageSpacing(true);
-    distance->SetSquaredDistance(false);
-    distance->SetInsideIsPositive(false);
-    distance->SetBackgroundValue(0);
-    distance->Update();
-    part[complement] = distance->GetOutput();
-    part[complement]->DisconnectPipeline();
-  }
+  const auto phiMap = detail::FaceDistanceMap(probability,
+                                              static_cast<typename TProbabilityImage::PixelType>(0.5),
+                                              NumericTraits<typename TProbabilityImage::PixelType>::max());
   // Near it: the distance to the interpolated 0.5 level (positive where p > 0.5, hence the sign flip).
   auto       iso = IsoContourDistanceImageFilter<TProbabilityImage, MapType>::New();
   const auto far = NumericTraits<float>::max();
@@ -175,15 +169,14 @@ ComputeProbabilityDistanceMap(const TProbabilityImage * probability, const std::
   iso->SetLevelSetValue(0.5);
   iso->SetFarValue(far);
   iso->Update();
-  float *           phi = part[0]->GetBufferPointer();
-  const float *     rest = part[1]->GetBufferPointer();
+  float *           phi = phiMap->GetBufferPointer();
   const float *     near = iso->GetOutput()->GetBufferPointer();
-  const std::size_t n = part[0]->GetBufferedRegion().GetNumberOfPixels();
+  const std::size_t n = phiMap->GetBufferedRegion().GetNumberOfPixels();
   for (std::size_t i = 0; i < n; ++i)
   {
-    phi[i] = std::abs(near[i]) < far ? -near[i] : 0.5f * (phi[i] - rest[i]);
+    phi[i] = std::abs(near[i]) < far ? -near[i] : phi[i];
   }
-  return part[0];
+  return phiMap;
 }
 
 } // namespace itk
