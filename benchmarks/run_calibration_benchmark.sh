@@ -6,7 +6,8 @@
 # estimate, the 68 % / 95 % intervals and whether a bound was stated instead.
 # Usage: benchmarks/run_calibration_benchmark.sh [N (default 30)] [SEED (default 2026)]
 #        REGISTER_ARGS="--wall-motion free" adds settings to every register run; TAG names the run (default
-#        "default"); APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh.
+#        "default"); APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh; START=K skips the
+#        draws before pair K (to resume a run).
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
 set -euo pipefail
@@ -36,6 +37,7 @@ PY
 k=0
 while read -r E bladder rectum s; do
   k=$((k + 1))
+  [ "$k" -lt "${START:-1}" ] && continue
   ph="$work/ph"
   rm -rf "$ph" "$work/reg"
   t0=$(date +%s.%N)

@@ -108,14 +108,16 @@ enum class UncertaintyMethodEnum : std::uint8_t
 struct BiomechanicalRegistration_EXPORT UncertaintySettings
 {
   UncertaintyMethodEnum method{ UncertaintyMethodEnum::Bootstrap };
-  unsigned int          resamples{ 8 };                ///< re-estimations (bootstrap)
-  std::uint64_t         seed{ 1 };                     ///< the resamples' random numbers: same seed, same interval
-  unsigned int          threads{ 2 };                  ///< resamples run at once
-  double                simulationMeshScale{ 0.8 };    ///< resimulation mesh sizes relative to the estimation's
-  double                meshJitter{ 0.15 };            ///< each resample re-meshes at the sizes x U(1 - this, 1 + this)
-  double                shiftVoxels{ 0.5 };            ///< sub-voxel shift of the revoxelized grid, uniform in +-
-  double                rotationDegrees{ 2.0 };        ///< its rotation, uniform in [0, this] about a random axis
-  double                tangentialWallFraction{ 0.3 }; ///< tangential wall motion / the wall's own motion
+  unsigned int          resamples{ 8 }; ///< re-estimations (bootstrap)
+  std::uint64_t         seed{ 1 };      ///< the resamples' random numbers: same seed, same interval
+  /** Resamples run at once. 1 (default) is bit-reproducible; more is faster but reproducible only to rounding:
+   * ITK's vnl numerics (netlib routines with static state, ITK issue #230) are shared by concurrent estimations. */
+  unsigned int threads{ 1 };
+  double       simulationMeshScale{ 0.8 };    ///< resimulation mesh sizes relative to the estimation's
+  double       meshJitter{ 0.15 };            ///< each resample re-meshes at the sizes x U(1 - this, 1 + this)
+  double       shiftVoxels{ 0.5 };            ///< sub-voxel shift of the revoxelized grid, uniform in +-
+  double       rotationDegrees{ 2.0 };        ///< its rotation, uniform in [0, this] about a random axis
+  double       tangentialWallFraction{ 0.3 }; ///< tangential wall motion / the wall's own motion
 };
 
 /** The interval of one estimated modulus [kPa]. A parametric bootstrap (dissertation's generative model run

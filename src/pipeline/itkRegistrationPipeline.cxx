@@ -133,6 +133,48 @@ ObserveIterations(FEMElasticityOptimizer * optimizer, PipelineObserver * observe
   });
 }
 
+/** The organs of \a probabilities, each checked to be an objective organ of \a scene with an image. */
+std::vector<std::string>
+ProbabilityOrgans(const OrganProbabilityImages & probabilities, const bmr::Scene & scene)
+{
+  std::vector<std::string> organs;
+  for (const auto & kv : probabilities)
+  {
+    const bool objective = std::any_of(scene.objective.begin(),
+                                       scene.objective.end(),
+                                       [&kv](const bmr::ObjectiveTerm & t) { return t.label == kv.first; });
+    if (!objective || !kv.second)
+    {
+      bmr::Fail("RegisterSegmentedPair",
+                "a fixed probability image is given for \"" + kv.first +
+                  "\", which is not an objective organ of the scene (or the image is null)");
+    }
+    organs.push_back(kv.first);
+  }
+  return organs;
+}
+
+/** The fit: FEMElasticityOptimizer on \a setup, its timings as stages and its outputs in \a r. */
+void
+Estimate(RegistrationResult &                                    r,
+         const pipeline::EstimationSetup &                       setup,
+         const std::map<std::string, Image<float, 3>::Pointer> & maps,
+         pipeline::StageClock &                                  clock)
+{
+  const bool curvature = setup.settings->uncertainty.method == UncertaintyMethodEnum::Curvature;
+  const auto optimizer = pipeline::RunEstimation(setup, maps, curvature, clock.GetObserver());
+  for (const auto & kv : optimizer->GetTimings())
+  {
+    clock.Add("estimation: " + kv.first, kv.second);
+  }
+  r.estimation = optimizer->GetResult();
+  r.youngsModulus = optimizer->GetEstimatedYoungsModuli();
+  r.modulusUncertainty = optimizer->GetModulusUncertainty();
+  r.gaugeLabel = optimizer->GetGaugeLabel();
+  r.state.mesh = optimizer->GetOutput()->Get();
+  r.unknowns = bmr::SceneUnknownModuli(*setup.scene);
+}
+
 /** The stated interval of every unknown modulus, by the chosen method, and what it leaves undetermined in the
  * identifiability verdict. */
 void
@@ -305,20 +347,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       const RegistrationSettings &        settings,
                       PipelineObserver *                  observer)
 {
-  std::vector<std::string> probabilityOrgans;
-  for (const auto & kv : fixedProbabilities)
-  {
-    const bool objective = std::any_of(inputScene.objective.begin(),
-                                       inputScene.objective.end(),
-                                       [&kv](const bmr::ObjectiveTerm & t) { return t.label == kv.first; });
-    if (!objective || !kv.second)
-    {
-      bmr::Fail("RegisterSegmentedPair",
-                "a fixed probability image is given for \"" + kv.first +
-                  "\", which is not an objective organ of the scene (or the image is null)");
-    }
-    probabilityOrgans.push_back(kv.first);
-  }
+  const std::vector<std::string> probabilityOrgans = ProbabilityOrgans(fixedProbabilities, inputScene);
   if (movingLabels == nullptr || fixedLabels == nullptr)
   {
     bmr::Fail("RegisterSegmentedPair", "the moving and the fixed label images are required");
@@ -347,18 +376,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   const pipeline::EstimationSetup setup{
     &estimationMesh, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans
   };
-  const bool curvature = settings.uncertainty.method == UncertaintyMethodEnum::Curvature;
-  const auto optimizer = pipeline::RunEstimation(setup, maps, curvature, clock.GetObserver());
-  for (const auto & kv : optimizer->GetTimings())
-  {
-    clock.Add("estimation: " + kv.first, kv.second);
-  }
-  r.estimation = optimizer->GetResult();
-  r.youngsModulus = optimizer->GetEstimatedYoungsModuli();
-  r.modulusUncertainty = optimizer->GetModulusUncertainty();
-  r.gaugeLabel = optimizer->GetGaugeLabel();
-  r.state.mesh = optimizer->GetOutput()->Get();
-  r.unknowns = bmr::SceneUnknownModuli(scene);
+  Estimate(r, setup, maps, clock);
   StateIntervals(r, setup, movingLabels, fixedLabels, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
