@@ -25,17 +25,41 @@
 
 namespace bmrcli {
 
-/** --uncertainty bootstrap|curvature|none, --resamples N, --uncertainty-seed S, --uncertainty-threads T. */
+/** --uncertainty rescan|bootstrap|curvature|none, --resamples N, --uncertainty-seed S, --uncertainty-threads T. */
 void
 ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
 {
-  const std::string method = args.Choice("--uncertainty", { "bootstrap", "curvature", "none" });
-  u.method = method == "bootstrap"   ? itk::UncertaintyMethodEnum::Bootstrap
+  const std::string method = args.Choice("--uncertainty", { "rescan", "bootstrap", "curvature", "none" });
+  u.method = method == "rescan"      ? itk::UncertaintyMethodEnum::Rescan
+             : method == "bootstrap" ? itk::UncertaintyMethodEnum::Bootstrap
              : method == "curvature" ? itk::UncertaintyMethodEnum::Curvature
                                      : itk::UncertaintyMethodEnum::None;
   u.resamples = args.Count("--resamples", u.resamples, 3, 1000);
   u.seed = args.Count("--uncertainty-seed", static_cast<unsigned int>(u.seed), 0, 4000000000u);
   u.threads = args.Count("--uncertainty-threads", u.threads, 1, 64);
+  // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
+  const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
+                                                       { "--uncertainty-shift-voxels", &u.shiftVoxels },
+                                                       { "--uncertainty-rotation-deg", &u.rotationDegrees },
+                                                       { "--uncertainty-wall-slip", &u.tangentialWallFraction } };
+  for (const auto & [key, value] : scales)
+  {
+    *value = args.Number(key, *value);
+    if (!(*value >= 0.0) || !std::isfinite(*value))
+    {
+      throw UsageError(std::string(key) + " must be a finite number >= 0 (0: not varied)");
+    }
+  }
+  u.simulationMeshScale = args.Number("--uncertainty-simulation-mesh-scale", u.simulationMeshScale);
+  if (!(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
+  {
+    throw UsageError("--uncertainty-simulation-mesh-scale must lie in [0.25, 2] (resimulation mesh sizes relative to "
+                     "the estimation's)");
+  }
+  if (u.meshJitter >= 0.9)
+  {
+    throw UsageError("--uncertainty-mesh-jitter must lie in [0, 0.9) (mesh sizes x U(1 - j, 1 + j))");
+  }
 }
 
 /** --fixed-probabilities prostate=p.nrrd,bladder=b.nrrd: one probability image per organ (empty: none). */

@@ -2,11 +2,11 @@
 # Calibration benchmark of the stated modulus interval (not a test): N pelvis phantom pairs (200 x 160 x 160
 # grid of 1 mm voxels, truth on the phantom's finer independent mesh) with moduli drawn log-uniform over
 # 30-500 kPa, bladder walls 3-10 mm and rectum walls 2-6 mm, each registered with `biomechreg register`
-# (default settings: the bootstrap interval). Records per pair the fit, the stated (bias-corrected)
-# estimate, the 68 % / 95 % intervals and whether a bound was stated instead.
+# (default settings: the rescan interval). Records per pair the fit, the stated estimate, the 68 % / 95 %
+# intervals, whether a bound was stated instead, and the resampled moduli.
 # Usage: benchmarks/run_calibration_benchmark.sh [N (default 30)] [SEED (default 2026)]
 #        REGISTER_ARGS="--wall-motion free" adds settings to every register run; TAG names the run (default
-#        "default"); APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh; START=K skips the
+#        "rescan"); APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh; START=K skips the
 #        draws before pair K (to resume a run).
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
@@ -15,14 +15,14 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
 count="${1:-30}"
 seed="${2:-2026}"
-tag="${TAG:-default}"
+tag="${TAG:-rescan}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 csv="$out/calibration_runs.csv"
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
-  echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s" > "$csv"
+  echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa" > "$csv"
 fi
 
 # The draws: reproducible from SEED (Python's Mersenne Twister), one line per pair: E bladder rectum seed.
@@ -61,9 +61,11 @@ print(f'{tag},{k},{truth["youngs_modulus_kPa"]["prostate"]:g},{bladder},{rectum}
       f'{i["estimate_kPa"]:.3f},{i["interval_68_kPa"][0]:.3f},{i["interval_68_kPa"][1]:.3f},'
       f'{i["interval_95_kPa"][0]:.3f},{i["interval_95_kPa"][1]:.3f},{int(i["lower_end_determined"])},'
       f'{int(i["upper_end_determined"])},{i["sigma_log_E"]:.4f},{i["log_bias"]:.4f},{len(i["resamples_kPa"])},{curv},'
-      f'{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{tets},{float(tph):.1f},{float(treg):.1f}')
+      f'{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{tets},{float(tph):.1f},{float(treg):.1f},'
+      f'{int(i.get("bias_corrected", True))},{";".join(f"{x:.3f}" for x in i["resamples_kPa"])}')
 PY
   tail -1 "$csv"
 done < "$work/draws.txt"
 
-/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out"
+# The first run (the resimulating bootstrap, seed 2026) is kept beside it for comparison.
+/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out/calibration_runs_bootstrap_v1.csv" "$out"

@@ -2,7 +2,7 @@
 the coverage of the stated 68 % and 95 % intervals, the median and 90th-percentile |error| per band of true E,
 how often a bound was stated instead, and a reliability diagram. Writes calibration.csv and calibration.png into
 the output directory and prints markdown tables.
-Usage: summarize_calibration.py RUNS.csv OUT_DIR"""
+Usage: summarize_calibration.py RUNS.csv [MORE_RUNS.csv ...] OUT_DIR (the runs of several files together, by tag)"""
 import csv
 import math
 import statistics
@@ -51,8 +51,8 @@ def pct(values, q):
     return v[f] + (v[min(f + 1, len(v) - 1)] - v[f]) * (k - f)
 
 
-runs_csv, out = sys.argv[1], sys.argv[2]
-rows = list(csv.DictReader(open(runs_csv)))
+*runs_csvs, out = sys.argv[1:]
+rows = [r for runs_csv in runs_csvs for r in csv.DictReader(open(runs_csv))]
 tags = OrderedDict()
 for r in rows:
     tags.setdefault(r["tag"], []).append(r)
@@ -128,7 +128,7 @@ ax[1].set(xscale="log", yscale="log", xlabel="true prostate E [kPa]", ylabel="st
           title="stated estimate and 95 % interval")
 ax[1].legend(fontsize=8)
 ax[2].axhline(0, color="k", lw=0.8)
-ax[2].set(xscale="log", xlabel="true prostate E [kPa]", ylabel="error [%]", title="fit and bias-corrected estimate")
+ax[2].set(xscale="log", xlabel="true prostate E [kPa]", ylabel="error [%]", title="fit and stated estimate")
 ax[2].legend(fontsize=8)
 fig.tight_layout()
 fig.savefig(f"{out}/calibration.png", dpi=110)

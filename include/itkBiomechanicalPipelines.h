@@ -100,14 +100,15 @@ enum class UncertaintyMethodEnum : std::uint8_t
 {
   None,      ///< no interval
   Curvature, ///< the residual and the curvature of Phi* (fast; treats node residuals as independent noise)
-  Bootstrap  ///< parametric bootstrap: resimulate, revoxelize and re-estimate (default)
+  Bootstrap, ///< parametric bootstrap: resimulate from the estimate, revoxelize and re-estimate
+  Rescan     ///< rescan the fixed anatomy at random sub-voxel shifts, re-mesh and re-estimate (default)
 };
 
 /** Settings of the modulus uncertainty (the parametric bootstrap, ModulusInterval).
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT UncertaintySettings
 {
-  UncertaintyMethodEnum method{ UncertaintyMethodEnum::Bootstrap };
+  UncertaintyMethodEnum method{ UncertaintyMethodEnum::Rescan };
   unsigned int          resamples{ 8 }; ///< re-estimations (bootstrap)
   std::uint64_t         seed{ 1 };      ///< the resamples' random numbers: same seed, same interval
   /** Resamples run at once. 1 (default) is bit-reproducible; more is faster but reproducible only to rounding:
@@ -120,28 +121,34 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   double       tangentialWallFraction{ 0.3 }; ///< tangential wall motion / the wall's own motion
 };
 
+/** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b. */
+constexpr double BootstrapBiasSignificance = 3.0;
+
 /** The interval of one estimated modulus [kPa]. A parametric bootstrap (dissertation's generative model run
  * forward from the estimate): the fixed anatomy is resimulated from the estimate on a finer, independent mesh
  * with the estimated wall motion plus a smooth random tangential part (what walls along normals cannot see),
  * revoxelized on the fixed grid shifted by a random sub-voxel offset and rotated by a small random angle, and
  * re-estimated as the data were, on the moving labels meshed again at randomly scaled sizes (the estimate
  * depends on the mesh by several per cent, not monotonically: that is part of its uncertainty). With \f$ \ell_k = \log
- * E^*_k \f$ of the resamples: \f[ b = \mathrm{median}_k \ell_k - \log \hat E, \quad \log \tilde E = \log \hat E - b,
- * \quad s = \mathrm{SD}_k \ell_k, \quad I_{1-\alpha} = \tilde E \exp(\pm t_{1-\alpha/2,n-1} s \sqrt{1+1/n}) \f]
- * (bias-corrected, Student's t for the few resamples). An interval end beyond the scene's bounds is not
- * determined by the images: the modulus is then reported as a bound ("E >= lower end"). */
+ * E^*_k \f$ of the resamples: \f[ b = \mathrm{median}_k \ell_k - \log \hat E, \quad s = \mathrm{SD}_k \ell_k, \quad
+ * \log \tilde E = \log \hat E - b \; [\,|b| > 3 \cdot 1.2533\, s / \sqrt n\,], \quad
+ * I_{1-\alpha} = \tilde E \exp(\pm t_{1-\alpha/2,n-1} s \sqrt{1+1/n}) \f]
+ * (the bias corrected only when it exceeds three standard errors of the resamples' median, Student's t for the
+ * few resamples). An interval end beyond the scene's bounds is not determined by the images: the modulus is
+ * then reported as a bound ("E >= lower end"). */
 struct BiomechanicalRegistration_EXPORT ModulusInterval
 {
   double                fit{ 0.0 };                 ///< kPa: the estimate of the fit (the state and fields use it)
-  double                estimate{ 0.0 };            ///< kPa: bias-corrected (bootstrap) or the fit
+  double                estimate{ 0.0 };            ///< kPa: the fit, bias-corrected when biasCorrected
   double                logBias{ 0.0 };             ///< b
+  bool                  biasCorrected{ false };     ///< true: |b| is significant and estimate = fit e^(-b)
   double                logSigma{ 0.0 };            ///< s (bootstrap) or the curvature's sigma
   std::array<double, 2> interval68{ { 0.0, 0.0 } }; ///< kPa
   std::array<double, 2> interval95{ { 0.0, 0.0 } }; ///< kPa
   bool                  lowerDetermined{ true };    ///< false: the images do not bound E from below
   bool                  upperDetermined{ true };    ///< false: only "at least interval95[0]"
   std::vector<double>   resampleModuli;             ///< kPa, in resample order
-  std::string           method;                     ///< "bootstrap", "curvature"
+  std::string           method;                     ///< "rescan", "bootstrap", "curvature"
 };
 
 /** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.

@@ -77,6 +77,7 @@ ModulusSection(const RegistrationResult & r)
                             { "estimate_kPa", Number(i.estimate) },
                             { "fit_kPa", Number(i.fit) },
                             { "log_bias", Number(i.logBias) },
+                            { "bias_corrected", i.biasCorrected },
                             { "sigma_log_E", Number(i.logSigma) },
                             { "interval_68_kPa", { Number(i.interval68[0]), Number(i.interval68[1]) } },
                             { "interval_95_kPa", { Number(i.interval95[0]), Number(i.interval95[1]) } },
@@ -284,6 +285,7 @@ ModulusIntervalText(const std::string & name, const ModulusInterval & i)
   std::ostringstream os;
   os << std::setprecision(3) << name;
   const std::string source = i.method == "bootstrap" ? std::to_string(i.resampleModuli.size()) + " bootstrap resamples"
+                             : i.method == "rescan"  ? std::to_string(i.resampleModuli.size()) + " rescans"
                                                      : std::string("curvature of Phi*");
   if (!i.lowerDetermined && !i.upperDetermined)
   {
@@ -302,7 +304,7 @@ ModulusIntervalText(const std::string & name, const ModulusInterval & i)
   {
     os << " E = " << i.estimate << " kPa (68 %: " << i.interval68[0] << " to " << i.interval68[1]
        << " kPa, 95 %: " << i.interval95[0] << " to " << i.interval95[1] << " kPa; " << source << ", fit " << i.fit
-       << " kPa)";
+       << " kPa" << (i.biasCorrected ? ", corrected for the resamples' bias" : "") << ")";
   }
   return os.str();
 }

@@ -79,11 +79,12 @@ ComputeFields(SimulationResult &   result,
 /** What an estimation runs on: the fine mesh (and a coarse one for the sweep, or null), the scene and the settings. */
 struct EstimationSetup
 {
-  const bmr::TetrahedralMesh * fine{ nullptr };
-  const bmr::TetrahedralMesh * coarse{ nullptr };
-  const bmr::Scene *           scene{ nullptr };
-  const RegistrationSettings * settings{ nullptr };
-  std::vector<std::string>     probabilityOrgans; ///< objective organs whose fixed data are probabilities
+  const bmr::TetrahedralMesh *   fine{ nullptr };
+  const bmr::TetrahedralMesh *   coarse{ nullptr };
+  const bmr::Scene *             scene{ nullptr };
+  const RegistrationSettings *   settings{ nullptr };
+  std::vector<std::string>       probabilityOrgans;        ///< objective organs whose fixed data are probabilities
+  const OrganProbabilityImages * probabilities{ nullptr }; ///< those data (may be null when there are none)
 };
 
 /** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels. */
@@ -100,7 +101,8 @@ RunEstimation(const EstimationSetup &                                 setup,
               bool                                                    curvature,
               PipelineObserver *                                      observer);
 
-/** The parametric bootstrap of every unknown modulus (ModulusInterval); failed resamples become warnings. */
+/** The resampled interval of every unknown modulus (ModulusInterval) by the settings' method, Bootstrap or
+ * Rescan; failed resamples become warnings. */
 std::map<std::string, ModulusInterval>
 BootstrapModuli(const EstimationSetup &             setup,
                 RegistrationResult &                r,

@@ -189,7 +189,8 @@ StateIntervals(RegistrationResult &                r,
   {
     return;
   }
-  if (method == UncertaintyMethodEnum::Bootstrap && setup.settings->uncertainty.resamples > 0)
+  if ((method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan) &&
+      setup.settings->uncertainty.resamples > 0)
   {
     r.modulusInterval = pipeline::BootstrapModuli(setup, r, movingLabels, fixedLabels, clock);
   }
@@ -374,7 +375,8 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   }
   const bmr::TetrahedralMesh      estimationMesh = r.state.mesh;
   const pipeline::EstimationSetup setup{
-    &estimationMesh, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans
+    &estimationMesh,    coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans,
+    &fixedProbabilities
   };
   Estimate(r, setup, maps, clock);
   StateIntervals(r, setup, movingLabels, fixedLabels, clock);

@@ -1,6 +1,6 @@
 # Determinism: the same inputs give bit-identical outputs with 1 and 2 threads (ITK's work units and
 # OpenBLAS's threads, through ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS and OPENBLAS_NUM_THREADS), for the joint
-# estimation (`register`: fields, warped images, the recovered modulus, the bootstrap interval) and for the
+# estimation (`register`: fields, warped images, the recovered modulus, the rescan interval) and for the
 # Demons baseline.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregDeterminism.cmake
 foreach(threads 1 2)
@@ -43,7 +43,7 @@ file(READ ${OUT}/register_2/report.json report2)
 string(JSON interval1 GET "${report1}" youngs_modulus_interval)
 string(JSON interval2 GET "${report2}" youngs_modulus_interval)
 if(NOT interval1 STREQUAL interval2)
-  message(SEND_ERROR "the bootstrap interval differs between 1 and 2 threads:\n${interval1}\n${interval2}")
+  message(SEND_ERROR "the rescan interval differs between 1 and 2 threads:\n${interval1}\n${interval2}")
 else()
-  message(STATUS "bootstrap interval identical with 1 and 2 threads")
+  message(STATUS "rescan interval identical with 1 and 2 threads")
 endif()

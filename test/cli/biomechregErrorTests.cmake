@@ -115,7 +115,7 @@ expect_error(probability_not_objective "\"bone\", which is not an objective orga
 expect_error(probability_range "fixed probability of \"inner\": a voxel holds .*not a probability in \\[0, 1\\]"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --fixed-probabilities inner=${TEMP}/ok/fixed_ct.nrrd --out ${TEMP}/r8)
-expect_error(bad_uncertainty "--uncertainty must be bootstrap, curvature or none"
+expect_error(bad_uncertainty "--uncertainty must be rescan, bootstrap, curvature or none"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --uncertainty guess --out ${TEMP}/r9)
 

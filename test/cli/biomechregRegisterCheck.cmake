@@ -1,5 +1,5 @@
 # Checks the outputs of `biomechreg register` on a pelvis phantom pair in DIR (DIR/reg):
-# - the stated prostate modulus (bias-corrected by the bootstrap) is within 10 % of the truth (truth.json), and
+# - the stated prostate modulus (the default rescan interval's centre) is within 10 % of the truth (truth.json), and
 #   its 95 % interval contains the truth with both ends determined (100 kPa lies well inside [20, 600] kPa).
 #   The fixed scan is made on a finer, independent mesh and voxelized at 1 mm, so the shape change that
 #   carries the modulus is seen through the label staircase; benchmarks/run_calibration_benchmark.sh measures

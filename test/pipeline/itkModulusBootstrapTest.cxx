@@ -15,7 +15,8 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-// The stated interval of an estimated modulus (the parametric bootstrap of itk::RegisterSegmentedPair) on the
+// The resimulating interval of an estimated modulus (UncertaintyMethodEnum::Bootstrap of
+// itk::RegisterSegmentedPair; the default, the rescan, is itkModulusRescanTest) on the
 // concentric-spheres phantom (96^3 voxels of 1 mm, the core's modulus unknown within [30, 300] kPa), and the
 // phantom's truth mesh. What is checked, and why these limits:
 // - core 80 kPa: the fit is about 30 % too soft (the label staircase of the fixed scan; docs/estimation.md), the
@@ -30,9 +31,8 @@
 //   register --mesh-scale can come): no inverse crime.
 #include "itkBiomechanicalPipelines.h"
 #include "itkBiomechanicalReports.h"
+#include "itkCoarsenedLabels.h"
 #include "itkLabelImageToTetrahedralMeshFilter.h"
-#include "itkNearestNeighborInterpolateImageFunction.h"
-#include "itkResampleImageFilter.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -65,6 +65,7 @@ Interval(const itk::PhantomPair &                 pair,
          std::uint64_t                            seed)
 {
   itk::RegistrationSettings settings;
+  settings.uncertainty.method = itk::UncertaintyMethodEnum::Bootstrap;
   settings.uncertainty.resamples = 4;
   settings.uncertainty.threads = threads;
   settings.uncertainty.seed = seed;
@@ -79,31 +80,6 @@ Interval(const itk::PhantomPair &                 pair,
   std::cout << std::setprecision(6);
   std::cout << std::endl;
   return i;
-}
-
-/** The fixed labels on a grid of 2 mm voxels over the same extent (nearest neighbor). */
-itk::BiomechanicalLabelImageType::Pointer
-Coarsened(const itk::BiomechanicalLabelImageType * labels)
-{
-  using ResampleType = itk::ResampleImageFilter<itk::BiomechanicalLabelImageType, itk::BiomechanicalLabelImageType>;
-  auto resample = ResampleType::New();
-  resample->SetInput(labels);
-  resample->SetInterpolator(itk::NearestNeighborInterpolateImageFunction<itk::BiomechanicalLabelImageType>::New());
-  auto size = labels->GetLargestPossibleRegion().GetSize();
-  auto spacing = labels->GetSpacing();
-  auto origin = labels->GetOrigin();
-  for (unsigned int a = 0; a < 3; ++a)
-  {
-    size[a] /= 2;
-    origin[a] += 0.5 * spacing[a]; // the 2 mm voxels cover the same extent
-    spacing[a] *= 2.0;
-  }
-  resample->SetSize(size);
-  resample->SetOutputSpacing(spacing);
-  resample->SetOutputOrigin(origin);
-  resample->SetOutputDirection(labels->GetDirection());
-  resample->Update();
-  return resample->GetOutput();
 }
 
 std::set<std::array<double, 3>>
@@ -149,7 +125,7 @@ itkModulusBootstrapTest(int, char *[])
   const itk::ModulusInterval other = Interval(pair, pair.fixedLabels, 2, 2);
   Check(other.resampleModuli != two.resampleModuli, "another seed gives other resamples");
 
-  const itk::ModulusInterval coarse = Interval(pair, Coarsened(pair.fixedLabels), 2, 1);
+  const itk::ModulusInterval coarse = Interval(pair, itk::test::Coarsened(pair.fixedLabels), 2, 1);
   Check(coarse.interval95[1] / coarse.interval95[0] > two.interval95[1] / two.interval95[0],
         "the 95 % interval widens when the fixed voxels coarsen from 1 to 2 mm");
 

@@ -18,7 +18,7 @@
 // The library's registration pipeline end to end, without the command line: itk::MakePhantomPair makes a pelvis
 // pair at 1 mm (prostate 60 kPa, bladder +8 mm, rectum +4 mm, a seed of its own; the fixed scan from a finer,
 // independently seeded mesh), itk::RegisterSegmentedPair registers it as a user's scans would be registered,
-// and the stated modulus (bias-corrected by the bootstrap) must lie within 10 % of the truth with a 95 %
+// and the stated modulus (the default rescan interval's centre) must lie within 10 % of the truth with a 95 %
 // interval that contains it (the CLI test checks 100 kPa, the calibration benchmark 30-500 kPa), bring the prostate
 // surface within half a voxel, warp the labels onto the fixed ones (prostate Dice > 0.9), produce the field on the
 // fixed grid and a report that names the gauge; the in-memory result must equal what the report says.
