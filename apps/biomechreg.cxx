@@ -237,7 +237,7 @@ PrintUsage(std::ostream & os)
        "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
        "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"
        "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F]\n"
-       "                      [--uncertainty-simulation-mesh-scale F]\n"
+       "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
        "                      [--fixed-probabilities ORGAN=FILE,...]\n"
        "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
        "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"

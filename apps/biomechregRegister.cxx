@@ -37,6 +37,7 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
   u.resamples = args.Count("--resamples", u.resamples, 3, 1000);
   u.seed = args.Count("--uncertainty-seed", static_cast<unsigned int>(u.seed), 0, 4000000000u);
   u.threads = args.Count("--uncertainty-threads", u.threads, 1, 64);
+  u.correctBias = args.Choice("--uncertainty-bias-correction", { "off", "on" }) == "on";
   // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
   const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
                                                        { "--uncertainty-shift-voxels", &u.shiftVoxels },

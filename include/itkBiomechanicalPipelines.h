@@ -104,12 +104,12 @@ enum class UncertaintyMethodEnum : std::uint8_t
   Rescan     ///< rescan the fixed anatomy at random sub-voxel shifts, re-mesh and re-estimate (default)
 };
 
-/** Settings of the modulus uncertainty (the parametric bootstrap, ModulusInterval).
+/** Settings of the modulus uncertainty (the rescans or the parametric bootstrap of ModulusInterval).
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT UncertaintySettings
 {
   UncertaintyMethodEnum method{ UncertaintyMethodEnum::Rescan };
-  unsigned int          resamples{ 8 }; ///< re-estimations (bootstrap)
+  unsigned int          resamples{ 8 }; ///< re-estimations (rescan, bootstrap)
   std::uint64_t         seed{ 1 };      ///< the resamples' random numbers: same seed, same interval
   /** Resamples run at once. 1 (default) is bit-reproducible; more is faster but reproducible only to rounding:
    * ITK's vnl numerics (netlib routines with static state, ITK issue #230) are shared by concurrent estimations. */
@@ -119,29 +119,39 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   double       shiftVoxels{ 0.5 };            ///< sub-voxel shift of the revoxelized grid, uniform in +-
   double       rotationDegrees{ 2.0 };        ///< its rotation, uniform in [0, this] about a random axis
   double       tangentialWallFraction{ 0.3 }; ///< tangential wall motion / the wall's own motion
+  /** Centre the interval on fit e^(-b) when the resamples' offset b is significant (BootstrapBiasSignificance).
+   * Off by default: on the pelvis phantoms b came from the mesh jitter (the default mesh sits near a minimum of
+   * the mesh dependence), and correcting by it made the estimate worse in both calibration runs. */
+  bool correctBias{ false };
 };
 
-/** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b. */
+/** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b
+ * (UncertaintySettings::correctBias). */
 constexpr double BootstrapBiasSignificance = 3.0;
 
-/** The interval of one estimated modulus [kPa]. A parametric bootstrap (dissertation's generative model run
- * forward from the estimate): the fixed anatomy is resimulated from the estimate on a finer, independent mesh
- * with the estimated wall motion plus a smooth random tangential part (what walls along normals cannot see),
- * revoxelized on the fixed grid shifted by a random sub-voxel offset and rotated by a small random angle, and
- * re-estimated as the data were, on the moving labels meshed again at randomly scaled sizes (the estimate
- * depends on the mesh by several per cent, not monotonically: that is part of its uncertainty). With \f$ \ell_k = \log
- * E^*_k \f$ of the resamples: \f[ b = \mathrm{median}_k \ell_k - \log \hat E, \quad s = \mathrm{SD}_k \ell_k, \quad
- * \log \tilde E = \log \hat E - b \; [\,|b| > 3 \cdot 1.2533\, s / \sqrt n\,], \quad
- * I_{1-\alpha} = \tilde E \exp(\pm t_{1-\alpha/2,n-1} s \sqrt{1+1/n}) \f]
- * (the bias corrected only when it exceeds three standard errors of the resamples' median, Student's t for the
- * few resamples). An interval end beyond the scene's bounds is not determined by the images: the modulus is
- * then reported as a bound ("E >= lower end"). */
+/** The interval of one estimated modulus [kPa], from n re-estimations on the moving labels meshed again at
+ * randomly scaled sizes (the estimate depends on the mesh by several per cent, not monotonically: that is part
+ * of its uncertainty) of resampled data:
+ * - Rescan (default): the fixed anatomy itself, a smooth volume-preserving function of its labels (or its
+ *   probabilities), revoxelized on the fixed grid shifted by a random sub-voxel offset and rotated by a small
+ *   random angle: another scan of the same anatomy, with no model in the loop;
+ * - Bootstrap (the dissertation's generative model run forward from the estimate): the fixed anatomy
+ *   resimulated from the estimate on a finer, independent mesh with the estimated wall motion plus a smooth
+ *   random tangential part (what walls along normals cannot see), revoxelized in the same way. Its resamples
+ *   drift off the fit on the pelvis phantoms (docs/estimation.md), hence not the default.
+ *
+ * With \f$ \ell_k = \log E^*_k \f$ of the resamples: \f[ b = \mathrm{median}_k \ell_k - \log \hat E, \quad s =
+ * \mathrm{SD}_k \ell_k, \quad \log \tilde E = \log \hat E \; (- b \text{ if asked and } |b| > 3 \cdot 1.2533\, s /
+ * \sqrt n), \quad I_{1-\alpha} = \tilde E \exp(\pm t_{1-\alpha/2,n-1} s \sqrt{1+1/n}) \f] (centred on the fit;
+ * corrected for the resamples' offset b only when asked and when it exceeds three standard errors of their median;
+ * Student's t for the few resamples). An interval end beyond the scene's bounds is not determined by the images: the
+ * modulus is then reported as a bound ("E >= lower end"). */
 struct BiomechanicalRegistration_EXPORT ModulusInterval
 {
   double                fit{ 0.0 };                 ///< kPa: the estimate of the fit (the state and fields use it)
   double                estimate{ 0.0 };            ///< kPa: the fit, bias-corrected when biasCorrected
   double                logBias{ 0.0 };             ///< b
-  bool                  biasCorrected{ false };     ///< true: |b| is significant and estimate = fit e^(-b)
+  bool                  biasCorrected{ false };     ///< true: asked, |b| significant, estimate = fit e^(-b)
   double                logSigma{ 0.0 };            ///< s (bootstrap) or the curvature's sigma
   std::array<double, 2> interval68{ { 0.0, 0.0 } }; ///< kPa
   std::array<double, 2> interval95{ { 0.0, 0.0 } }; ///< kPa

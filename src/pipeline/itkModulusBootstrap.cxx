@@ -647,7 +647,7 @@ BootstrapModuli(const EstimationSetup &             setup,
       }
     }
     const bmr::UnknownModulus & unknown = r.unknowns[m];
-    intervals[unknown.name] = BootstrapInterval(r.youngsModulus.at(unknown.name), samples, unknown);
+    intervals[unknown.name] = BootstrapInterval(r.youngsModulus.at(unknown.name), samples, unknown, u.correctBias);
     intervals[unknown.name].method = rescan ? "rescan" : "bootstrap";
   }
   for (unsigned int k = 0; k < u.resamples; ++k)

@@ -75,7 +75,10 @@ JudgeBounds(ModulusInterval & i, const bmr::UnknownModulus & u, bool lowerReache
 } // namespace
 
 ModulusInterval
-BootstrapInterval(double fit, const std::vector<double> & resamples, const bmr::UnknownModulus & unknown)
+BootstrapInterval(double                      fit,
+                  const std::vector<double> & resamples,
+                  const bmr::UnknownModulus & unknown,
+                  bool                        correctBias)
 {
   ModulusInterval i;
   i.method = "bootstrap";
@@ -111,8 +114,9 @@ BootstrapInterval(double fit, const std::vector<double> & resamples, const bmr::
   }
   i.logSigma = std::sqrt(sum2 / double(n - 1));
   // The median of n resamples has a standard error of about 1.25 s / sqrt(n): a smaller b is the resamples'
-  // own noise, and correcting by it only adds that noise (calibration benchmark: it doubled the median error).
-  i.biasCorrected = std::abs(i.logBias) > BootstrapBiasSignificance * 1.2533 * i.logSigma / std::sqrt(double(n));
+  // own noise, and correcting by it only adds that noise.
+  i.biasCorrected =
+    correctBias && std::abs(i.logBias) > BootstrapBiasSignificance * 1.2533 * i.logSigma / std::sqrt(double(n));
   const double center = std::log(fit) - (i.biasCorrected ? i.logBias : 0.0);
   const double predictive = std::sqrt(1.0 + 1.0 / double(n));
   const double half68 = StudentQuantile(0.994457883, double(n - 1)) * i.logSigma * predictive;

@@ -110,10 +110,13 @@ BootstrapModuli(const EstimationSetup &             setup,
                 const BiomechanicalLabelImageType * fixedLabels,
                 StageClock &                        clock);
 
-/** The bias-corrected interval of \a resamples [kPa] around \a fit (ModulusInterval); fewer than 3 resamples
- * leave the whole search range. */
+/** The interval of \a resamples [kPa] around \a fit (ModulusInterval; corrected for their offset when
+ * \a correctBias and it is significant); fewer than 3 resamples leave the whole search range. */
 ModulusInterval
-BootstrapInterval(double fit, const std::vector<double> & resamples, const bmr::UnknownModulus & unknown);
+BootstrapInterval(double                      fit,
+                  const std::vector<double> & resamples,
+                  const bmr::UnknownModulus & unknown,
+                  bool                        correctBias);
 
 /** The interval fit x exp(+-z sigma) of the curvature's \a logSigma (infinite: the whole search range). */
 ModulusInterval
