@@ -154,6 +154,29 @@ ProbabilityOrgans(const OrganProbabilityImages & probabilities, const bmr::Scene
   return organs;
 }
 
+/** Fails, naming the setting, on resampling scales the resamples cannot honour (negative, non-finite, a mesh jitter
+ * that would make sizes vanish, a resimulation mesh outside [0.25, 2]): what the CLI checks, for library users too. */
+void
+CheckUncertaintySettings(const UncertaintySettings & u)
+{
+  const std::pair<const char *, double> scales[] = { { "meshJitter", u.meshJitter },
+                                                     { "shiftVoxels", u.shiftVoxels },
+                                                     { "rotationDegrees", u.rotationDegrees },
+                                                     { "tangentialWallFraction", u.tangentialWallFraction } };
+  for (const auto & [name, value] : scales)
+  {
+    if (!(value >= 0.0) || !std::isfinite(value))
+    {
+      bmr::Fail("RegisterSegmentedPair", std::string("UncertaintySettings::") + name + " must be finite and >= 0");
+    }
+  }
+  if (u.meshJitter >= 0.9 || !(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
+  {
+    bmr::Fail("RegisterSegmentedPair",
+              "UncertaintySettings: meshJitter must lie in [0, 0.9) and simulationMeshScale in [0.25, 2]");
+  }
+}
+
 /** The fit: FEMElasticityOptimizer on \a setup, its timings as stages and its outputs in \a r. */
 void
 Estimate(RegistrationResult &                                    r,
@@ -354,6 +377,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     bmr::Fail("RegisterSegmentedPair", "the moving and the fixed label images are required");
   }
   CheckOverlap(movingLabels, fixedLabels);
+  CheckUncertaintySettings(settings.uncertainty);
   const bmr::Scene scene = ScaledMeshSizes(inputScene, settings.meshScale);
   scene.Validate();
   RegistrationResult   r;

@@ -23,7 +23,8 @@
 //   the rule by which the interval would correct it). The resimulating bootstrap is off by 0.1-0.5 in log E on
 //   the pelvis (docs/estimation.md);
 // - the spread comes from the data: it is larger on 2 mm voxels than on 1 mm ones;
-// - deterministic: the same seed gives bit-identical rescans.
+// - deterministic: the same seed gives bit-identical rescans;
+// - resampling scales the rescans cannot honour are refused with an itk::ExceptionObject naming the setting.
 #include "itkBiomechanicalPipelines.h"
 #include "itkBiomechanicalReports.h"
 #include "itkIntervalTestSupport.h"
@@ -76,5 +77,18 @@ itkModulusRescanTest(int, char *[])
   const itk::ModulusInterval again = Rescan(pair, pair.fixedLabels, jitter);
   Check(again.resampleModuli == one.resampleModuli && again.interval95 == one.interval95,
         "the same seed gives bit-identical rescans");
+
+  itk::RegistrationSettings bad;
+  bad.uncertainty.meshJitter = 1.5; // mesh sizes x U(-0.5, 2.5)
+  std::string message;
+  try
+  {
+    itk::RegisterSegmentedPair(pair.movingLabels, pair.fixedLabels, nullptr, pair.scene, bad);
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    message = e.GetDescription();
+  }
+  Check(message.find("meshJitter") != std::string::npos, "a mesh jitter of 1.5 is refused, naming the setting");
   return Check.ExitCode();
 }
