@@ -23,10 +23,12 @@
 //   biomechreg demons ...           the intensity-based baseline (ITK Demons, multi-resolution)
 //   biomechreg phantom-set ...      N phantom pairs with ground-truth seed landmarks
 //   biomechreg compare ...          FEM vs Demons vs identity on seed landmarks, with paired t-tests
-// Every error is one line on stderr and a non-zero exit; outputs are written to
-// temporary names and renamed when complete.
+//   biomechreg help [SUB], biomechreg SUB --help, biomechreg --version
+// Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
+// written to temporary names and renamed when complete.
 #include "biomechregCommon.h"
 #include "itkBiomechanicalReports.h"
+#include "itkVersion.h"
 
 #include <algorithm>
 #include <cmath>
@@ -218,36 +220,6 @@ DemoCommand()
   return EXIT_SUCCESS;
 }
 
-void
-PrintUsage(std::ostream & os)
-{
-  os
-    << "usage:\n"
-       "  biomechreg                      run the demo into ./biomechreg-demo\n"
-       "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
-       "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
-       "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F] [--fractions off|on]\n"
-       "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
-       "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
-       "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
-       "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
-       "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
-       "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free]\n"
-       "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
-       "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
-       "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"
-       "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F]\n"
-       "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
-       "                      [--fixed-probabilities ORGAN=FILE,...]\n"
-       "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
-       "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
-       "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching "
-       "on|off]\n"
-       "  biomechreg phantom-set --out DIR [--count N] [--seed S]\n"
-       "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
-       "                     [--flatten LABELS] [register's and demons' settings]\n"
-       "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n";
-}
 } // namespace
 
 namespace bmrcli {
@@ -268,42 +240,57 @@ main(int argc, char * argv[])
 {
   try
   {
-    if (argc < 2)
+    std::vector<std::string> args(argv + 1, argv + argc);
+    const GlobalOptions      global = TakeGlobalOptions(args);
+    ApplyGlobalOptions(global);
+    const std::string command = args.empty() ? std::string() : args.front();
+    if (global.version || command == "version")
+    {
+      std::cout << "biomechreg " << BMR_VERSION << " (ITKBiomechanicalRegistration; ITK "
+                << itk::Version::GetITKVersion() << ")" << std::endl;
+      return EXIT_SUCCESS;
+    }
+    if (command == "help" || global.help)
+    {
+      // "biomechreg help SUB", "biomechreg SUB --help": that subcommand's usage; otherwise all of them.
+      const std::string topic = command == "help" ? (args.size() > 1 ? args[1] : std::string()) : command;
+      if (!topic.empty() && !IsCommand(topic))
+      {
+        throw UsageError("unknown command \"" + topic + "\"");
+      }
+      PrintUsage(std::cout, topic);
+      return EXIT_SUCCESS;
+    }
+    if (command.empty())
     {
       return DemoCommand();
     }
-    const std::string command = argv[1];
-    if (command == "help" || command == "--help" || command == "-h")
-    {
-      PrintUsage(std::cout);
-      return EXIT_SUCCESS;
-    }
-    const Arguments args(argc, argv, 2);
+    const Arguments options(std::vector<std::string>(args.begin() + 1, args.end()));
     if (command == "phantom")
     {
-      return PhantomCommand(args);
+      return PhantomCommand(options);
     }
     if (command == "simulate")
     {
-      return SimulateCommand(args);
+      return SimulateCommand(options);
     }
     if (command == "register")
     {
-      return RegisterCommand(args);
+      return RegisterCommand(options);
     }
     if (command == "demons")
     {
-      return bmrcli::DemonsCommand(args);
+      return bmrcli::DemonsCommand(options);
     }
     if (command == "compare")
     {
-      return bmrcli::CompareCommand(args);
+      return bmrcli::CompareCommand(options);
     }
     if (command == "phantom-set")
     {
-      return bmrcli::PhantomSetCommand(args);
+      return bmrcli::PhantomSetCommand(options);
     }
-    throw UsageError("unknown command \"" + command + "\" (try: biomechreg help)");
+    throw UsageError("unknown command \"" + command + "\"");
   }
   catch (const UsageError & e)
   {

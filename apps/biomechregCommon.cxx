@@ -25,22 +25,32 @@ namespace bmrcli {
 void
 StageTimer::StageBegin(const std::string & name)
 {
-  std::cout << "  " << std::left << std::setw(34) << (name + " ...") << std::right << std::flush;
+  // Formatted apart, so that std::cout's own flags (and what later lines print) stay as they were.
+  std::ostringstream line;
+  line << "  " << std::left << std::setw(34) << (name + " ...");
+  m_StageStart = Clock::now();
+  m_Solves = 0;
+  OpenStageLine(line.str());
 }
 
 void
 StageTimer::StageEnd(const std::string &, double seconds, const std::string & detail)
 {
-  // Formatted apart, so that std::cout's own flags (and what later lines print) stay as they were.
   std::ostringstream time;
   time << std::fixed << std::setprecision(2) << std::setw(7) << seconds << " s";
-  std::cout << time.str() << (detail.empty() ? "" : "  ") << detail << std::endl;
+  CloseStageLine(time.str() + (detail.empty() ? "" : "  ") + detail);
 }
 
 void
 StageTimer::Warning(const std::string & message)
 {
-  std::cout << "warning: " << message << std::endl;
+  PrintWarning(message);
+}
+
+void
+StageTimer::Progress(double fraction, const std::string & detail)
+{
+  ShowProgress(fraction, std::chrono::duration<double>(Clock::now() - m_StageStart).count(), detail);
 }
 
 void
@@ -48,13 +58,15 @@ StageTimer::Iteration(const bmr::IterationRecord & r)
 {
   if (!m_Iterations)
   {
+    // How many solves and where the estimation is: a progress line without a known end.
+    Progress(-1.0, std::to_string(++m_Solves) + " solves, " + r.stage);
     return;
   }
   if (r.stage == "sweep" && r.iteration == 0)
   {
-    std::cout << "\n  estimation (sweep of E on the coarse mesh, then L-BFGS-B over log E on the fine mesh):\n";
+    PrintLine("  inner solves (sweep of E on the coarse mesh, then L-BFGS-B over log E on the fine mesh):");
   }
-  std::cout << itk::FormatIterationRecord(r) << std::endl;
+  PrintLine(itk::FormatIterationRecord(r));
 }
 
 void
@@ -76,23 +88,25 @@ StageTimer::End(const std::string & detail)
 void
 PrintTimings(const Stages & stages)
 {
-  std::cout << "\n" << itk::StageTable(stages) << std::flush;
+  std::ostringstream memory;
+  memory << std::fixed << std::setprecision(0) << PeakMemoryMB();
+  std::cout << "\n" << itk::StageTable(stages) << "peak memory (resident): " << memory.str() << " MB" << std::endl;
 }
 
-Arguments::Arguments(int argc, char * argv[], int first)
+Arguments::Arguments(const std::vector<std::string> & args)
 {
-  for (int i = first; i < argc; ++i)
+  for (std::size_t i = 0; i < args.size(); ++i)
   {
-    std::string key = argv[i];
+    const std::string & key = args[i];
     if (key.rfind("--", 0) != 0)
     {
       throw UsageError("unexpected argument \"" + key + "\"");
     }
-    if (i + 1 >= argc)
+    if (i + 1 >= args.size())
     {
       throw UsageError("option " + key + " needs a value");
     }
-    m_Values[key] = argv[++i];
+    m_Values[key] = args[++i];
   }
 }
 

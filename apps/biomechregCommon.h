@@ -45,13 +45,71 @@ struct UsageError : std::runtime_error
   using std::runtime_error::runtime_error;
 };
 
+// ---------------------------------------------------------------- console manners (biomechregConsole.cxx)
+
+enum class Verbosity
+{
+  Quiet,  ///< warnings (on stderr) and errors only
+  Normal, ///< the stages, their times and the results
+  Verbose ///< also one line per inner solve of the estimation and ITK's debug output
+};
+
+/** The options every subcommand takes; main() takes them out before the subcommand parses its own. */
+struct GlobalOptions
+{
+  bool         help{ false };
+  bool         version{ false };
+  bool         quiet{ false };
+  bool         verbose{ false };
+  unsigned int threads{ 0 }; ///< ITK's and OpenBLAS's threads; 0: their defaults
+};
+
+/** Removes --help/-h, --version, --quiet/-q, --verbose/-v and --threads N from \a args. */
+GlobalOptions
+TakeGlobalOptions(std::vector<std::string> & args);
+/** Verbosity, thread counts, and ITK's output window (warnings as one "warning: ..." line). */
+void
+ApplyGlobalOptions(const GlobalOptions & options);
+Verbosity
+GetVerbosity();
+/** \a text on a line of its own (stdout, or stderr for a \a warning under --quiet), also while a stage line is
+ * open: that line is ended and printed again after it. */
+void
+PrintLine(const std::string & text, bool warning = false);
+/** "warning: <message>" on a line of its own (stdout; stderr under --quiet), even while a stage line is open. */
+void
+PrintWarning(const std::string & message);
+/** ITK's "WARNING: In FILE, line N\nClass (0x...): text" reduced to "text", on one line. */
+std::string
+StripITKPrefix(const std::string & text);
+/** A stage's line is opened when it begins and closed with its time; a progress bar may redraw it meanwhile. */
+void
+OpenStageLine(const std::string & text);
+void
+CloseStageLine(const std::string & rest);
+/** On a terminal, redraws the open stage line with a bar (\a fraction in [0, 1]; negative: unknown), the
+ * elapsed and the remaining time; otherwise does nothing. */
+void
+ShowProgress(double fraction, double elapsedSeconds, const std::string & detail);
+bool
+IsTerminal();
+/** The process's peak resident memory so far [MB]. */
+double
+PeakMemoryMB();
+/** The usage of \a command, or of every command when it is empty. */
+void
+PrintUsage(std::ostream & os, const std::string & command = std::string());
+bool
+IsCommand(const std::string & command);
+
 /** Prints the stages of a run as they happen (its own and the library's), its warnings and, with
  * \c iterations, one line per inner solve of the estimation; collects its own stages. */
 class StageTimer : public itk::PipelineObserver
 {
 public:
+  /** \a iterations: print the inner solves (under --verbose). */
   explicit StageTimer(bool iterations = false)
-    : m_Iterations(iterations)
+    : m_Iterations(iterations && GetVerbosity() == Verbosity::Verbose)
   {}
   void
   StageBegin(const std::string & name) override;
@@ -61,6 +119,8 @@ public:
   Warning(const std::string & message) override;
   void
   Iteration(const bmr::IterationRecord & record) override;
+  void
+  Progress(double fraction, const std::string & detail) override;
   /** A stage of the command itself, recorded in \c stages. */
   void
   Begin(const std::string & name);
@@ -71,11 +131,13 @@ public:
 
 private:
   bool              m_Iterations;
+  unsigned int      m_Solves{ 0 }; ///< inner solves of the running stage (for the progress line)
+  Clock::time_point m_StageStart;  ///< of the stage that StageBegin() opened (the library's or our own)
   Clock::time_point m_Start;
   std::string       m_Current;
 };
 
-/** The table of stage wall times and their total. */
+/** The table of stage wall times, their total and the peak memory. */
 void
 PrintTimings(const Stages & stages);
 
@@ -93,7 +155,7 @@ ReadImage(const std::string & path, const std::string & what)
 class Arguments
 {
 public:
-  Arguments(int argc, char * argv[], int first);
+  explicit Arguments(const std::vector<std::string> & args);
   bool
   Has(const std::string & key) const
   {

@@ -63,6 +63,11 @@ public:
   virtual void
   Iteration(const bmr::IterationRecord & /*record*/)
   {}
+  /** Progress of the running stage: \a fraction of its work done, in [0, 1] (e.g. rescans finished of those
+   * asked for), and what that is ("3 of 8 rescans"). Calls come one at a time, possibly from worker threads. */
+  virtual void
+  Progress(double /*fraction*/, const std::string & /*detail*/)
+  {}
 };
 
 /** Wall time of one stage [s]. */

@@ -609,6 +609,8 @@ BootstrapModuli(const EstimationSetup &             setup,
   std::vector<std::vector<double>> moduli(u.resamples);
   std::vector<std::string>         failures(u.resamples);
   std::atomic<unsigned int>        next{ 0 };
+  unsigned int                     finished = 0;
+  std::mutex                       progress; // the observer hears one worker at a time
   const auto                       work = [&]() {
     for (unsigned int k = next++; k < u.resamples; k = next++)
     {
@@ -619,6 +621,13 @@ BootstrapModuli(const EstimationSetup &             setup,
       catch (const std::exception & e)
       {
         failures[k] = e.what();
+      }
+      const std::lock_guard<std::mutex> lock(progress);
+      if (clock.GetObserver() != nullptr)
+      {
+        ++finished;
+        clock.GetObserver()->Progress(double(finished) / u.resamples,
+                                      std::to_string(finished) + " of " + std::to_string(u.resamples) + " done");
       }
     }
   };

@@ -185,7 +185,18 @@ Estimate(RegistrationResult &                                    r,
          pipeline::StageClock &                                  clock)
 {
   const bool curvature = setup.settings->uncertainty.method == UncertaintyMethodEnum::Curvature;
-  const auto optimizer = pipeline::RunEstimation(setup, maps, curvature, clock.GetObserver());
+  // Told to the observer as one stage (its progress: the inner solves), recorded as the optimizer's parts.
+  PipelineObserver * observer = clock.GetObserver();
+  const auto         start = bmr::SteadyClock::now();
+  if (observer != nullptr)
+  {
+    observer->StageBegin("estimation");
+  }
+  const auto optimizer = pipeline::RunEstimation(setup, maps, curvature, observer);
+  if (observer != nullptr)
+  {
+    observer->StageEnd("estimation", bmr::SecondsSince(start), "");
+  }
   for (const auto & kv : optimizer->GetTimings())
   {
     clock.Add("estimation: " + kv.first, kv.second);

@@ -1,0 +1,106 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The usage text of biomechreg and of each subcommand (biomechreg help, biomechreg SUB --help).
+#include "biomechregCommon.h"
+
+#include <utility>
+
+namespace bmrcli {
+namespace {
+
+// Options every subcommand takes (main() reads them before the subcommand's own).
+const char * const globalOptions =
+  "  global options: [--threads N (ITK and BLAS threads; default: all cores)] [--quiet (warnings and errors only)]\n"
+  "                  [--verbose (also every inner solve of the estimation)] [-h|--help] [--version]\n";
+
+const std::pair<const char *, const char *> commands[] = {
+  { "phantom",
+    "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
+    "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
+    "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F] [--fractions off|on]\n"
+    "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
+    "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
+    "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
+  { "simulate",
+    "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
+    "    forward simulation of a scene on a moving label map: fields [mm], warped images\n" },
+  { "register",
+    "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
+    "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
+    "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free]\n"
+    "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
+    "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
+    "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"
+    "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F]\n"
+    "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
+    "                      [--fixed-probabilities ORGAN=FILE,...]\n"
+    "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
+    "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
+  { "demons",
+    "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
+    "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
+    "                    [--demons-iterations N (per level)] [--demons-sigma S (voxels)] [--histogram-matching "
+    "on|off]\n"
+    "    the intensity-based baseline (ITK Demons, multi-resolution)\n" },
+  { "phantom-set",
+    "  biomechreg phantom-set --out DIR [--count N] [--seed S]\n"
+    "    N reproducible pelvis phantom pairs with seed landmarks and pairs.csv for compare\n" },
+  { "compare",
+    "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
+    "                     [--flatten LABELS] [register's and demons' settings]\n"
+    "    FEM vs Demons vs identity on seed landmarks, with paired t-tests\n" },
+};
+
+const char * const footer =
+  "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n"
+  "Exit status: 0 success, 1 error (bad input, failed computation), 2 usage error.\n";
+
+} // namespace
+
+bool
+IsCommand(const std::string & command)
+{
+  for (const auto & c : commands)
+  {
+    if (command == c.first)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+void
+PrintUsage(std::ostream & os, const std::string & command)
+{
+  os << "usage:\n";
+  if (command.empty())
+  {
+    os << "  biomechreg                      run the demo into ./biomechreg-demo\n";
+  }
+  for (const auto & c : commands)
+  {
+    if (command.empty() || command == c.first)
+    {
+      os << c.second;
+    }
+  }
+  os << globalOptions << footer;
+}
+
+} // namespace bmrcli
