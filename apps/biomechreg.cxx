@@ -78,6 +78,11 @@ ParsePhantomSettings(const Arguments & args)
   {
     throw UsageError("--truth-mesh-scale must lie in [0.3, 2] (the truth's mesh sizes relative to the scene's)");
   }
+  o.fixedGridShiftVoxels = args.Number("--fixed-grid-shift-voxels", o.fixedGridShiftVoxels);
+  if (!(o.fixedGridShiftVoxels >= 0.0 && o.fixedGridShiftVoxels <= 0.5))
+  {
+    throw UsageError("--fixed-grid-shift-voxels must lie in [0, 0.5] (the fixed grid's offset, U(-S, S) voxels)");
+  }
   o.filling = args.Choice("--wall-load", { "normal", "point" }) == "normal" ? bmr::WallFillingEnum::AlongNormals
                                                                             : bmr::WallFillingEnum::FromPoint;
   o.tumourFraction = args.Number("--tumour-fraction", o.tumourFraction);

@@ -42,7 +42,8 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
   const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
                                                        { "--uncertainty-shift-voxels", &u.shiftVoxels },
                                                        { "--uncertainty-rotation-deg", &u.rotationDegrees },
-                                                       { "--uncertainty-wall-slip", &u.tangentialWallFraction } };
+                                                       { "--uncertainty-wall-slip", &u.tangentialWallFraction },
+                                                       { "--uncertainty-smoothing-voxels", &u.smoothingVoxels } };
   for (const auto & [key, value] : scales)
   {
     *value = args.Number(key, *value);

@@ -35,6 +35,7 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F] [--fractions off|on]\n"
     "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
     "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
+    "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"
     "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
   { "simulate",
     "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"
@@ -46,7 +47,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
     "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
     "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"
-    "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F]\n"
+    "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F] [--uncertainty-smoothing-voxels "
+    "S]\n"
     "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
     "                      [--fixed-probabilities ORGAN=FILE,...]\n"
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"

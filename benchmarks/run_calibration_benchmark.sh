@@ -5,8 +5,10 @@
 # (default settings: the rescan interval). Records per pair the fit, the stated estimate, the 68 % / 95 %
 # intervals, whether a bound was stated instead, and the resampled moduli.
 # Usage: benchmarks/run_calibration_benchmark.sh [N (default 30)] [SEED (default 2026)]
-#        REGISTER_ARGS="--wall-motion free" adds settings to every register run; TAG names the run (default
-#        "rescan"); APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh; START=K skips the
+#        REGISTER_ARGS="--wall-motion free" adds settings to every register run; PHANTOM_ARGS to every phantom
+#        (default "--fixed-grid-shift-voxels 0.5": the fixed scan on its own grid, offset by a random sub-voxel
+#        shift from the moving one, as two real scans are); TAG names the run (default "rescan-shifted");
+#        APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh; START=K skips the
 #        draws before pair K (to resume a run).
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
@@ -15,7 +17,8 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
 count="${1:-30}"
 seed="${2:-2026}"
-tag="${TAG:-rescan}"
+tag="${TAG:-rescan-shifted}"
+phantom_args="${PHANTOM_ARGS---fixed-grid-shift-voxels 0.5}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
 work="$(mktemp -d)"
@@ -41,8 +44,9 @@ while read -r E bladder rectum s; do
   ph="$work/ph"
   rm -rf "$ph" "$work/reg"
   t0=$(date +%s.%N)
+  # shellcheck disable=SC2086
   "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" --bladder-mm "$bladder" \
-    --rectum-mm "$rectum" --seed "$s" --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
+    --rectum-mm "$rectum" --seed "$s" $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
   t1=$(date +%s.%N)
   # shellcheck disable=SC2086
   "$bin" register --moving-ct "$ph/moving_ct.nrrd" --moving-labels "$ph/moving_labels.nrrd" \
@@ -67,5 +71,7 @@ PY
   tail -1 "$csv"
 done < "$work/draws.txt"
 
-# The first run (the resimulating bootstrap, seed 2026) is kept beside it for comparison.
-/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out/calibration_runs_bootstrap_v1.csv" "$out"
+# The earlier runs (the resimulating bootstrap, seed 2026; the rescans on phantoms whose two scans share one
+# grid, seed 2027) are kept beside it for comparison.
+/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out/calibration_runs_rescan_v2.csv" \
+  "$out/calibration_runs_bootstrap_v1.csv" "$out"

@@ -124,6 +124,8 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   double       shiftVoxels{ 0.5 };            ///< sub-voxel shift of the revoxelized grid, uniform in +-
   double       rotationDegrees{ 2.0 };        ///< its rotation, uniform in [0, this] about a random axis
   double       tangentialWallFraction{ 0.3 }; ///< tangential wall motion / the wall's own motion
+  /** Gaussian sigma [voxels] that turns the rescanned (or revoxelized) labels into a smooth anatomy. */
+  double smoothingVoxels{ 0.5 };
   /** Centre the interval on fit e^(-b) when the resamples' offset b is significant (BootstrapBiasSignificance).
    * Off by default: on the pelvis phantoms b came from the mesh jitter (the default mesh sits near a minimum of
    * the mesh dependence), and correcting by it made the estimate worse in both calibration runs. */
@@ -256,6 +258,10 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   unsigned int         numberOfSeeds{ 3 };
   bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
+  /** The fixed scan's grid is the moving one shifted by U(-this, this) voxels along each axis (seeded by seed):
+   * two scans are not aligned to the voxel. 0 (default): the same grid, whose quantization then partly cancels
+   * between the scans where the tissue moves little. */
+  double fixedGridShiftVoxels{ 0.0 };
 
   /** The defaults of an anatomy: the pelvis as above; the spheres on their own 96^3 grid of 1 mm, the outer
    * surface pressed 1.5 mm inwards (bladderMM). */

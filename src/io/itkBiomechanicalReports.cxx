@@ -217,6 +217,8 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
                       { "nodes", pair.truthNodes },
                       { "cell_size_mm", pair.truthScene.mesh.cellSize } };
   j["ct_noise_sigma_HU"] = settings.noiseHU;
+  // The fixed grid's offset from the moving one: drawn within +- this many voxels per axis (its origin says where).
+  j["fixed_grid_shift_voxels"] = settings.fixedGridShiftVoxels;
   j["landmarks"] = landmarks;
   return j.dump(2) + "\n";
 }

@@ -153,9 +153,9 @@ PreserveVolume(IndicatorImageType * smooth, std::size_t voxels)
 }
 
 /** An anatomy as a smooth function: each objective organ's indicator, cropped around the organs, smoothed by a
- * Gaussian of half a voxel and shifted to preserve the organ's volume (PreserveVolume()), so that its 0.5 level
- * is a sub-voxel surface that can be revoxelized on any grid without resampling the staircase a second time;
- * an organ given as a probability image keeps that image. */
+ * Gaussian (UncertaintySettings::smoothingVoxels) and shifted to preserve the organ's volume (PreserveVolume()), so
+ * that its 0.5 level is a sub-voxel surface that can be revoxelized on any grid without resampling the staircase a
+ * second time; an organ given as a probability image keeps that image. */
 struct SmoothAnatomy
 {
   std::vector<std::int32_t>                       values;
@@ -164,6 +164,7 @@ struct SmoothAnatomy
 
   SmoothAnatomy(const BiomechanicalLabelImageType * labels,
                 const bmr::Scene &                  scene,
+                double                              sigmaVoxels,
                 const OrganProbabilityImages *      probabilities = nullptr)
     : values(ObjectiveValues(scene))
   {
@@ -174,7 +175,7 @@ struct SmoothAnatomy
     double sigma = 0.0;
     for (unsigned int a = 0; a < 3; ++a)
     {
-      sigma = std::max(sigma, 0.5 * labels->GetSpacing()[a]);
+      sigma = std::max(sigma, sigmaVoxels * labels->GetSpacing()[a]);
     }
     for (std::size_t o = 0; o < values.size(); ++o)
     {
@@ -595,8 +596,9 @@ BootstrapModuli(const EstimationSetup &             setup,
   const auto                  sim = rescan ? nullptr : MakeResimulation(setup, r, movingLabels, clock);
   clock.Begin("uncertainty: " + std::to_string(u.resamples) + (rescan ? " rescans" : " resamples"));
   // The rescans revoxelize the fixed anatomy (its probabilities where given), the bootstrap the moving one.
-  const SmoothAnatomy anatomy =
-    rescan ? SmoothAnatomy(fixedLabels, *setup.scene, setup.probabilities) : SmoothAnatomy(movingLabels, *setup.scene);
+  const SmoothAnatomy  anatomy = rescan
+                                   ? SmoothAnatomy(fixedLabels, *setup.scene, u.smoothingVoxels, setup.probabilities)
+                                   : SmoothAnatomy(movingLabels, *setup.scene, u.smoothingVoxels);
   const ImageRegion<3> box = LabelBox(fixedLabels, anatomy.values, 15.0);
   bmr::GridGeometry    crop = GridGeometryOf(fixedLabels);
   Point<double, 3>     corner;

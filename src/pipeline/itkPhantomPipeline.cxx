@@ -262,6 +262,24 @@ FixedFractions(const PhantomSettings &             s,
 }
 
 /** Seed centers moved by the simulated displacement: the ground-truth landmark pairs. */
+/** \a grid with its origin moved by U(-shift, shift) voxels along each of its axes (mt19937_64(seed)'s raw
+ * integers, whose sequence the standard fixes). */
+bmr::GridGeometry
+ShiftedGrid(const bmr::GridGeometry & grid, double shift, std::uint64_t seed)
+{
+  bmr::GridGeometry shifted = grid;
+  std::mt19937_64   rng(seed);
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    const double offset = shift * (2.0 * double(rng() >> 11) / double(1ull << 53) - 1.0) * grid.spacing[a];
+    for (unsigned int r = 0; r < 3; ++r)
+    {
+      shifted.origin[r] += grid.direction[3 * r + a] * offset;
+    }
+  }
+  return shifted;
+}
+
 void
 MoveSeeds(PhantomPair & pair, const std::vector<bmr::Seed> & seeds, const bmr::TetrahedralMesh & mesh)
 {
@@ -298,7 +316,12 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
     truthLabels = MakeImageOnGrid<BiomechanicalLabelImageType>(
       moving.grid, WithTumour(moving.labels, moving.grid, s, pair.truthScene));
   }
-  const SimulationResult truth = SimulateLabelImage(truthLabels, pair.truthScene, pair.movingLabels, observer, false);
+  // The fixed scan's own grid: the moving one shifted by a sub-voxel offset (fixedGridShiftVoxels), as two scans of
+  // a patient are never aligned to the voxel. The truth field and the fixed images live on it.
+  const bmr::GridGeometry fixedGrid = ShiftedGrid(moving.grid, s.fixedGridShiftVoxels, 4000 + s.seed);
+  const auto              fixedReference =
+    MakeImageOnGrid<BiomechanicalLabelImageType>(fixedGrid, std::vector<std::int32_t>(fixedGrid.GetNumberOfVoxels()));
+  const SimulationResult truth = SimulateLabelImage(truthLabels, pair.truthScene, fixedReference, observer, false);
   pair.truthField = truth.pullBack;
   pair.truthTetrahedra = truth.mesh.GetNumberOfTetrahedra();
   pair.truthNodes = truth.mesh.GetNumberOfPoints();
@@ -306,7 +329,7 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
 
   clock.Begin("warp to the fixed volume");
   pair.fixedCT = WarpImage(pair.movingCT.GetPointer(), truth.pullBack.GetPointer(), false, -1000.0f);
-  pair.fixedLabels = FixedLabels(s, moving.grid, truth.pullBack);
+  pair.fixedLabels = FixedLabels(s, fixedGrid, truth.pullBack);
   // The fixed scan has its own noise on top of the warped (noisy) moving one.
   std::vector<float> noise(pair.fixedCT->GetBufferedRegion().GetNumberOfPixels(), 0.0f);
   bmr::AddGaussianNoise(noise, s.noiseHU, 2000 + s.seed);

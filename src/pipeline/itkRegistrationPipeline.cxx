@@ -162,7 +162,8 @@ CheckUncertaintySettings(const UncertaintySettings & u)
   const std::pair<const char *, double> scales[] = { { "meshJitter", u.meshJitter },
                                                      { "shiftVoxels", u.shiftVoxels },
                                                      { "rotationDegrees", u.rotationDegrees },
-                                                     { "tangentialWallFraction", u.tangentialWallFraction } };
+                                                     { "tangentialWallFraction", u.tangentialWallFraction },
+                                                     { "smoothingVoxels", u.smoothingVoxels } };
   for (const auto & [name, value] : scales)
   {
     if (!(value >= 0.0) || !std::isfinite(value))
