@@ -193,7 +193,7 @@ DemoCommand()
   const auto result = itk::RegisterSegmentedPair(
     pair.movingLabels, pair.fixedLabels, pair.movingCT, pair.scene, itk::RegistrationSettings(), &run);
   run.stages.insert(run.stages.end(), result.state.stages.begin(), result.state.stages.end());
-  WriteRegistration(dir + "/register", result, itk::RegistrationSettings(), run);
+  WriteRegistration(dir + "/register", result, itk::RegistrationSettings(), itk::RegistrationOutputs(), run);
   PrintOuterIterations(result);
 
   const auto   stated = result.modulusInterval.find("prostate");
@@ -220,8 +220,7 @@ DemoCommand()
   std::cout << "\nRegistration (" << result.state.mesh.GetNumberOfTetrahedra() << " tetrahedra):";
   PrintTimings(run.stages);
   std::cout << "\nWrote " << dir << "/{moving,fixed}_{ct,labels}.nrrd, scene.json, truth.json, landmarks_*.csv, and "
-            << dir << "/register/{field.nrrd, forward_field.nrrd, warped_ct.nrrd, warped_labels.nrrd, mesh.vtu, "
-            << "history.csv, sweep.csv, report.json}" << std::endl;
+            << dir << "/register/{field.nrrd, warped_ct.nrrd, warped_labels.nrrd, report.json}" << std::endl;
   return EXIT_SUCCESS;
 }
 

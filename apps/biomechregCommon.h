@@ -190,12 +190,17 @@ private:
 itk::RegistrationSettings
 ParseRegistrationSettings(const Arguments & args);
 
-/** Writes a registration's outputs into \a out: field, forward field, warped images, mesh.vtu,
- * history.csv, sweep.csv and report.json (wall times: the timer's stages, which end with the writing). */
+/** --outputs LIST, --field-precision float|double, --compression-level N (register, demo). */
+itk::RegistrationOutputs
+ParseRegistrationOutputs(const Arguments & args);
+
+/** Writes the registration's \a outputs into \a out (report.json's wall times: the timer's stages, which end
+ * with the writing). */
 void
 WriteRegistration(const std::string &               out,
                   const itk::RegistrationResult &   result,
                   const itk::RegistrationSettings & settings,
+                  const itk::RegistrationOutputs &  outputs,
                   StageTimer &                      timer);
 
 /** The accepted outer iterates (E, Phi*) and the outer stop condition. */

@@ -151,7 +151,7 @@ MethodField(const std::string &         method,
       seconds += s.seconds;
     }
     fem.stages = result.state.stages;
-    WriteRegistration(dir + "/fem", result, o.fem, fem);
+    WriteRegistration(dir + "/fem", result, o.fem, itk::RegistrationOutputs(), fem);
     return result.state.pullBack;
   }
   const std::string flatten = o.flatten.empty() ? d.organ : o.flatten;

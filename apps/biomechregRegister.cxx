@@ -128,14 +128,32 @@ ParseRegistrationSettings(const Arguments & args)
   return s;
 }
 
+itk::RegistrationOutputs
+ParseRegistrationOutputs(const Arguments & args)
+{
+  itk::RegistrationOutputs o;
+  try
+  {
+    o = itk::RegistrationOutputs::Parse(args.Get("--outputs", "default"));
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    throw UsageError(std::string("--outputs: ") + e.GetDescription());
+  }
+  o.doubleFields = args.Choice("--field-precision", { "float", "double" }) == "double";
+  o.compressionLevel = static_cast<int>(args.Count("--compression-level", o.compressionLevel, 0, 9));
+  return o;
+}
+
 void
 WriteRegistration(const std::string &               out,
                   const itk::RegistrationResult &   result,
                   const itk::RegistrationSettings & settings,
+                  const itk::RegistrationOutputs &  outputs,
                   StageTimer &                      timer)
 {
   timer.StageBegin("write outputs");
-  timer.stages.push_back(itk::WriteRegistrationOutputs(out, result, settings, timer.stages));
+  timer.stages.push_back(itk::WriteRegistrationOutputs(out, result, settings, timer.stages, outputs));
   timer.StageEnd("write outputs", timer.stages.back().seconds, "");
 }
 
@@ -166,7 +184,9 @@ RegisterCommand(const Arguments & args)
   const std::string fixedLabels = args.Require("--fixed-labels");
   const std::string scenePath = args.Require("--scene");
   const std::string out = args.Require("--out");
-  const auto        settings = ParseRegistrationSettings(args);
+  const auto        outputs = ParseRegistrationOutputs(args);
+  auto              settings = ParseRegistrationSettings(args);
+  settings.pushField = outputs.forwardField; // computed only when written
   const std::string probabilities = args.Get("--fixed-probabilities");
   args.CheckAllUsed();
 
@@ -184,7 +204,7 @@ RegisterCommand(const Arguments & args)
   const auto result =
     itk::RegisterSegmentedPair(movingMap, fixedMap, fixedProbabilities, moving, scene, settings, &timer);
   timer.stages.insert(timer.stages.end(), result.state.stages.begin(), result.state.stages.end());
-  WriteRegistration(out, result, settings, timer);
+  WriteRegistration(out, result, settings, outputs, timer);
 
   PrintOuterIterations(result);
   std::cout << "\n  recovered Young's moduli:";

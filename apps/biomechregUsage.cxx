@@ -51,6 +51,9 @@ const std::pair<const char *, const char *> commands[] = {
     "S]\n"
     "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
     "                      [--fixed-probabilities ORGAN=FILE,...]\n"
+    "                      [--outputs LIST|all|default (field,warped_ct,warped_labels,report; also "
+    "forward_field,mesh,\n"
+    "                      history,sweep)] [--field-precision float|double] [--compression-level 0-9 (1)]\n"
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
     "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
   { "demons",

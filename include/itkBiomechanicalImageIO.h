@@ -181,18 +181,23 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
   return image;
 }
 
-/** Writes \a image to \a path (format by the extension, compressed when \a compress) through a temporary
+/** Writes \a image to \a path (format by the extension; gzip at \a compressionLevel, 1 fastest ... 9 smallest, 0
+ * uncompressed, where the format compresses) through a temporary
  * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO */
 template<typename TImage>
 void
-WriteImageAtomically(const TImage * image, const std::string & path, bool compress = true)
+WriteImageAtomically(const TImage * image, const std::string & path, int compressionLevel = 1)
 {
   const std::string tmp = bmr::TemporaryPathFor(path);
   auto              writer = ImageFileWriter<TImage>::New();
   writer->SetInput(image);
   writer->SetFileName(tmp);
-  writer->SetUseCompression(compress);
+  writer->SetUseCompression(compressionLevel > 0);
+  if (compressionLevel > 0)
+  {
+    writer->SetCompressionLevel(compressionLevel);
+  }
   try
   {
     writer->Update();

@@ -177,6 +177,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   double                 coarseFactor{ 1.6 }; ///< coarse (sweep) mesh sizes = scene's x this; <= 1: no coarse mesh
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
   UncertaintySettings    uncertainty;
+  bool                   pushField{ false }; ///< also the push field (moving -> fixed) in state.push: 2-3 s more
 };
 
 /** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */

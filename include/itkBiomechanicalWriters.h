@@ -42,15 +42,40 @@ WriteSimulationOutputs(const std::string &                 directory,
                        const BiomechanicalLabelImageType * warpedLabels,
                        const BiomechanicalCTImageType *    warpedCT);
 
-/** Writes a registration into \a directory: WriteSimulationOutputs(), history.csv (every fine-mesh inner solve,
- * then the accepted outer iterates), sweep.csv and report.json, whose wall times are \a stages and the
- * writing itself. Returns the writing's stage ("write outputs"). \ingroup BiomechanicalRegistration
- * BiomechanicalRegistrationIO */
+/** Which files WriteRegistrationOutputs() writes, and how. The defaults are what most runs use: the field, the
+ * warped images and the report; the rest on request. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+struct BiomechanicalRegistration_EXPORT RegistrationOutputs
+{
+  bool field{ true };         ///< field.nrrd: fixed -> moving [mm] on the fixed grid
+  bool forwardField{ false }; ///< forward_field.nrrd: moving -> fixed [mm] (needs RegistrationSettings::pushField)
+  bool warpedCT{ true };      ///< warped_ct.nrrd [HU]
+  bool warpedLabels{ true };  ///< warped_labels.nrrd
+  bool mesh{ false };         ///< mesh.vtu: the estimated state (WriteSimulationMesh())
+  bool history{ false };      ///< history.csv: every fine-mesh inner solve, then the accepted outer iterates
+  bool sweep{ false };        ///< sweep.csv: Phi*(E) of the sweep
+  bool report{ true };        ///< report.json: moduli, intervals, distances, Dice, wall times
+  bool doubleFields{ false }; ///< the fields as double vectors; float (default) is exact to 1e-7 relative
+  /** gzip level of the NRRD images: 0 none, 1 (default) fastest ... 9 smallest. */
+  int compressionLevel{ 1 };
+
+  /** Every file (the forward field too). */
+  static RegistrationOutputs
+  All();
+  /** From a comma-separated list of field, forward_field, warped_ct, warped_labels, mesh, history, sweep,
+   * report, or "all" or "default"; throws naming the unknown item. */
+  static RegistrationOutputs
+  Parse(const std::string & list);
+};
+
+/** Writes a registration into \a directory: the files \a outputs asks for, report.json's wall times being
+ * \a stages and the writing itself; every file through a temporary name. Returns the writing's stage ("write
+ * outputs"). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT PipelineStage
 WriteRegistrationOutputs(const std::string &                directory,
                          const RegistrationResult &         result,
                          const RegistrationSettings &       settings,
-                         const std::vector<PipelineStage> & stages);
+                         const std::vector<PipelineStage> & stages,
+                         const RegistrationOutputs &        outputs = RegistrationOutputs());
 
 /** Writes a phantom pair into \a directory: moving and fixed CT and labels, truth_field.nrrd, scene.json (what
  * the estimator sees), truth_scene.json, truth.json and the seed landmarks. \ingroup BiomechanicalRegistration

@@ -23,9 +23,11 @@
 #include "bmrVtuWriter.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkBiomechanicalReports.h"
+#include "itkCastImageFilter.h"
 
 #include <chrono>
 #include <filesystem>
+#include <sstream>
 
 namespace itk {
 
@@ -75,30 +77,128 @@ WriteSimulationOutputs(const std::string &                 directory,
   }
 }
 
+RegistrationOutputs
+RegistrationOutputs::All()
+{
+  RegistrationOutputs o;
+  o.forwardField = o.mesh = o.history = o.sweep = true;
+  return o;
+}
+
+RegistrationOutputs
+RegistrationOutputs::Parse(const std::string & list)
+{
+  if (list == "all")
+  {
+    return All();
+  }
+  RegistrationOutputs o;
+  if (list == "default")
+  {
+    return o;
+  }
+  o.field = o.warpedCT = o.warpedLabels = o.report = false;
+  const std::pair<const char *, bool *> items[] = { { "field", &o.field },        { "forward_field", &o.forwardField },
+                                                    { "warped_ct", &o.warpedCT }, { "warped_labels", &o.warpedLabels },
+                                                    { "mesh", &o.mesh },          { "history", &o.history },
+                                                    { "sweep", &o.sweep },        { "report", &o.report } };
+  std::stringstream                     in(list);
+  for (std::string item; std::getline(in, item, ',');)
+  {
+    bool known = false;
+    for (const auto & [name, flag] : items)
+    {
+      if (item == name)
+      {
+        *flag = known = true;
+      }
+    }
+    if (!known)
+    {
+      bmr::Fail("RegistrationOutputs",
+                "unknown output \"" + item +
+                  "\" (outputs: field, forward_field, warped_ct, warped_labels, mesh, history, sweep, report, all, "
+                  "default)");
+    }
+  }
+  return o;
+}
+
+namespace {
+/** A displacement field at the precision asked for. */
+void
+WriteField(const BiomechanicalFieldType * field, const std::string & path, const RegistrationOutputs & o)
+{
+  if (o.doubleFields)
+  {
+    WriteImageAtomically(field, path, o.compressionLevel);
+    return;
+  }
+  using FloatFieldType = Image<Vector<float, 3>, 3>;
+  auto cast = CastImageFilter<BiomechanicalFieldType, FloatFieldType>::New();
+  cast->SetInput(field);
+  cast->Update();
+  WriteImageAtomically(cast->GetOutput(), path, o.compressionLevel);
+}
+} // namespace
+
 PipelineStage
 WriteRegistrationOutputs(const std::string &                directory,
                          const RegistrationResult &         result,
                          const RegistrationSettings &       settings,
-                         const std::vector<PipelineStage> & stages)
+                         const std::vector<PipelineStage> & stages,
+                         const RegistrationOutputs &        o)
 {
   const auto start = bmr::SteadyClock::now();
-  WriteSimulationOutputs(directory, result.state, result.warpedLabels, result.warpedCT);
+  if (o.forwardField && !result.state.push)
+  {
+    bmr::Fail("WriteRegistrationOutputs",
+              "forward_field asked for, but the push field was not computed "
+              "(RegistrationSettings::pushField)");
+  }
+  MakeOutputDirectory(directory);
+  if (o.mesh)
+  {
+    WriteSimulationMesh(directory + "/mesh.vtu", result.state);
+  }
+  if (o.field)
+  {
+    WriteField(result.state.pullBack.GetPointer(), directory + "/field.nrrd", o);
+  }
+  if (o.forwardField)
+  {
+    WriteField(result.state.push.GetPointer(), directory + "/forward_field.nrrd", o);
+  }
+  if (o.warpedLabels)
+  {
+    WriteImageAtomically(result.warpedLabels.GetPointer(), directory + "/warped_labels.nrrd", o.compressionLevel);
+  }
+  if (o.warpedCT && result.warpedCT)
+  {
+    WriteImageAtomically(result.warpedCT.GetPointer(), directory + "/warped_ct.nrrd", o.compressionLevel);
+  }
   std::vector<std::string> unknownNames;
   for (const auto & u : result.unknowns)
   {
     unknownNames.push_back(u.name);
   }
-  auto history = result.estimation.history;
-  history.insert(history.end(), result.estimation.outerIterations.begin(), result.estimation.outerIterations.end());
-  bmr::WriteTextFileAtomically(directory + "/history.csv", IterationHistoryCsv(history, unknownNames));
-  if (!result.estimation.sweep.empty())
+  if (o.history)
+  {
+    auto history = result.estimation.history;
+    history.insert(history.end(), result.estimation.outerIterations.begin(), result.estimation.outerIterations.end());
+    bmr::WriteTextFileAtomically(directory + "/history.csv", IterationHistoryCsv(history, unknownNames));
+  }
+  if (o.sweep && !result.estimation.sweep.empty())
   {
     bmr::WriteTextFileAtomically(directory + "/sweep.csv", IterationHistoryCsv(result.estimation.sweep, unknownNames));
   }
-  const PipelineStage        writing{ "write outputs", bmr::SecondsSince(start) };
-  std::vector<PipelineStage> wallTimes = stages;
-  wallTimes.push_back(writing);
-  bmr::WriteTextFileAtomically(directory + "/report.json", RegistrationReportJson(result, settings, wallTimes));
+  const PipelineStage writing{ "write outputs", bmr::SecondsSince(start) };
+  if (o.report)
+  {
+    std::vector<PipelineStage> wallTimes = stages;
+    wallTimes.push_back(writing);
+    bmr::WriteTextFileAtomically(directory + "/report.json", RegistrationReportJson(result, settings, wallTimes));
+  }
   return writing;
 }
 

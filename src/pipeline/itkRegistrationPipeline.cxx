@@ -420,7 +420,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   DescribeState(r, scene);
 
-  pipeline::ComputeFields(r.state, fixedLabels, movingLabels, true, clock);
+  pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, clock);
   clock.Begin("warp (CT linear; labels nearest)");
   r.warpedLabels = WarpImage(movingLabels, r.state.pullBack.GetPointer(), true, 0);
   if (movingCT)

@@ -8,7 +8,7 @@ foreach(threads 1 2)
   set(ENV{OPENBLAS_NUM_THREADS} ${threads})
   execute_process(COMMAND ${CLI} register --moving-ct ${DIR}/moving_ct.nrrd --moving-labels ${DIR}/moving_labels.nrrd
     --fixed-ct ${DIR}/fixed_ct.nrrd --fixed-labels ${DIR}/fixed_labels.nrrd --scene ${DIR}/scene.json
-    --resamples 3 --out ${OUT}/register_${threads} RESULT_VARIABLE rc OUTPUT_QUIET)
+    --resamples 3 --outputs all --out ${OUT}/register_${threads} RESULT_VARIABLE rc OUTPUT_QUIET)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "register with ${threads} threads failed")
   endif()

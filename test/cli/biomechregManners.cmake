@@ -1,6 +1,7 @@
 # Command-line manners of biomechreg: per-subcommand --help/-h (exit 0, that subcommand's usage only),
-# help SUB, --version, exit codes (0 ok, 1 error, 2 usage), --threads, --quiet, the peak memory line, and
-# ITK's warnings as one "warning: ..." line without source path or object address.
+# help SUB, --version, exit codes (0 ok, 1 error, 2 usage), --threads, --quiet, the peak memory line,
+# ITK's warnings as one "warning: ..." line without source path or object address, and register's --outputs,
+# --field-precision and --compression-level.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregManners.cmake
 file(REMOVE_RECURSE ${OUT})
 set(commands phantom simulate register demons phantom-set compare)
@@ -87,4 +88,42 @@ endif()
 expect_rc(register_verbose 0 ${register} --verbose --out ${OUT}/reg_verbose)
 if(NOT out MATCHES "\n    sweep +[0-9]+  E")
   message(SEND_ERROR "--verbose does not print the inner solves:\n${out}")
+endif()
+
+# Only what is asked is written: the default set, a chosen set, the precision and the compression.
+function(expect_files dir)
+  file(GLOB present RELATIVE ${dir} ${dir}/*)
+  list(SORT present)
+  set(expected ${ARGN})
+  list(SORT expected)
+  if(NOT present STREQUAL expected)
+    message(SEND_ERROR "${dir} holds ${present}, expected ${expected}")
+  endif()
+endfunction()
+function(nrrd_header file var)
+  file(STRINGS ${file} lines LIMIT_COUNT 20 REGEX "^(type|encoding): ")
+  set(${var} "${lines}" PARENT_SCOPE)
+endfunction()
+expect_files(${OUT}/reg field.nrrd report.json warped_ct.nrrd warped_labels.nrrd)
+nrrd_header(${OUT}/reg/field.nrrd header)
+if(NOT header MATCHES "type: float" OR NOT header MATCHES "encoding: gzip")
+  message(SEND_ERROR "the default field is not gzip-compressed float: ${header}")
+endif()
+expect_rc(outputs_chosen 0 ${register} --outputs field,history --field-precision double --compression-level 0
+  --out ${OUT}/reg_chosen)
+expect_files(${OUT}/reg_chosen field.nrrd history.csv)
+nrrd_header(${OUT}/reg_chosen/field.nrrd header)
+if(NOT header MATCHES "type: double" OR NOT header MATCHES "encoding: raw")
+  message(SEND_ERROR "--field-precision double --compression-level 0 gave: ${header}")
+endif()
+if(out MATCHES "push field")
+  message(SEND_ERROR "the push field was computed though forward_field was not asked for")
+endif()
+expect_rc(outputs_unknown 2 ${register} --outputs field,frob --out ${OUT}/reg_bad)
+if(NOT err MATCHES "unknown output \"frob\"")
+  message(SEND_ERROR "--outputs frob: ${err}")
+endif()
+expect_rc(compression_bad 2 ${register} --compression-level 10 --out ${OUT}/reg_bad)
+if(EXISTS ${OUT}/reg_bad)
+  message(SEND_ERROR "a refused register left ${OUT}/reg_bad")
 endif()
