@@ -23,6 +23,7 @@
 #include "itkOutputWindow.h"
 
 #include <dlfcn.h>
+#include <mutex>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -34,6 +35,8 @@ Verbosity g_Verbosity = Verbosity::Normal;
 std::string g_OpenStage;
 bool        g_StageOpen = false;
 bool        g_StageInterrupted = false; // a line was printed while it was open
+// Warnings may come from worker threads (ITK's, the resamples'): one line at a time.
+std::mutex g_Console;
 
 /** Discards what is written to it (std::cout under --quiet). */
 class NullBuffer : public std::streambuf
@@ -133,7 +136,8 @@ GetVerbosity()
 void
 PrintLine(const std::string & text, bool warning)
 {
-  std::ostream & os = warning && g_Verbosity == Verbosity::Quiet ? std::cerr : std::cout;
+  const std::lock_guard<std::mutex> lock(g_Console);
+  std::ostream &                    os = warning && g_Verbosity == Verbosity::Quiet ? std::cerr : std::cout;
   // An open stage line is ended first; its time comes later on a line that names the stage again (on a
   // terminal the stage line is redrawn below the text at once, for the progress bar).
   if (g_StageOpen && IsTerminal())
@@ -164,6 +168,7 @@ PrintWarning(const std::string & message)
 void
 OpenStageLine(const std::string & text)
 {
+  const std::lock_guard<std::mutex> lock(g_Console);
   g_OpenStage = text;
   g_StageOpen = true;
   g_StageInterrupted = false;
@@ -173,6 +178,7 @@ OpenStageLine(const std::string & text)
 void
 CloseStageLine(const std::string & rest)
 {
+  const std::lock_guard<std::mutex> lock(g_Console);
   if (IsTerminal() && g_StageOpen)
   {
     std::cout << "\r\033[K" << g_OpenStage; // wipe a progress bar
@@ -188,6 +194,7 @@ CloseStageLine(const std::string & rest)
 void
 ShowProgress(double fraction, double elapsed, const std::string & detail)
 {
+  const std::lock_guard<std::mutex> lock(g_Console);
   if (!g_StageOpen || !IsTerminal() || g_Verbosity == Verbosity::Quiet)
   {
     return; // plain output (a file or a pipe) gets the stage's line at its end only

@@ -85,7 +85,7 @@ DemonsCommand(const Arguments & args)
   std::ostringstream detail;
   detail << settings.variant << ", " << settings.levels << " levels x " << settings.iterations << " iterations";
   timer.Begin("Demons");
-  const auto field = itk::RunDemonsBaseline(fixedCT, movingCT, fixedLabels, movingLabels, flatten, settings);
+  const auto field = itk::RunDemonsBaseline(fixedCT, movingCT, fixedLabels, movingLabels, flatten, settings, &timer);
   timer.End(detail.str());
   timer.Begin("warp CT (linear)");
   auto warped = itk::WarpImage(movingCT.GetPointer(), field.GetPointer(), false, -1000.0f);

@@ -313,7 +313,8 @@ struct BiomechanicalRegistration_EXPORT DemonsSettings
 };
 
 /** Demons of the moving CT onto the fixed CT; returns the fixed -> moving field [mm]. The label images are used
- * only when \a flatten names organs to flatten (each replaced by its mean in its own image).
+ * only when \a flatten names organs to flatten (each replaced by its mean in its own image). The \a observer
+ * (may be null) hears the progress over the levels.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT BiomechanicalFieldType::Pointer
                                  RunDemonsBaseline(const BiomechanicalCTImageType *    fixedCT,
@@ -321,7 +322,8 @@ BiomechanicalRegistration_EXPORT BiomechanicalFieldType::Pointer
                                                    const BiomechanicalLabelImageType * fixedLabels,
                                                    const BiomechanicalLabelImageType * movingLabels,
                                                    const std::vector<std::int32_t> &   flatten,
-                                                   const DemonsSettings &              settings);
+                                                   const DemonsSettings &              settings,
+                                                   PipelineObserver *                  observer = nullptr);
 
 /** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
 BiomechanicalRegistration_EXPORT bmr::Scene

@@ -284,6 +284,18 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
   multiResolution->SetMovingImage(moving);
   multiResolution->SetNumberOfLevels(m_NumberOfLevels);
   multiResolution->SetNumberOfIterations(const_cast<unsigned int *>(m_NumberOfIterations.data()));
+  // Progress by work done: an iteration on a level costs its voxels, 1/8 of the next finer level's.
+  const auto levelCost = [this](unsigned int level) { return std::pow(0.125, double(m_NumberOfLevels - 1 - level)); };
+  double     total = 0.0, done = 0.0;
+  for (unsigned int level = 0; level < m_NumberOfLevels; ++level)
+  {
+    total += m_NumberOfIterations[level] * levelCost(level);
+  }
+  this->UpdateProgress(0.0f);
+  demons->AddObserver(IterationEvent(), [&](const EventObject &) {
+    done += levelCost(multiResolution->GetCurrentLevel());
+    this->UpdateProgress(static_cast<float>(std::min(1.0, done / total)));
+  });
   multiResolution->Update();
   m_FinalMetric = diffeomorphic ? diffeomorphic->GetMetric() : symmetric->GetMetric();
 

@@ -28,7 +28,8 @@ RunDemonsBaseline(const BiomechanicalCTImageType *    fixedCT,
                   const BiomechanicalLabelImageType * fixedLabels,
                   const BiomechanicalLabelImageType * movingLabels,
                   const std::vector<std::int32_t> &   flatten,
-                  const DemonsSettings &              settings)
+                  const DemonsSettings &              settings,
+                  PipelineObserver *                  observer)
 {
   using FilterType =
     DemonsBaselineRegistrationFilter<BiomechanicalCTImageType, BiomechanicalFieldType, BiomechanicalLabelImageType>;
@@ -46,6 +47,13 @@ RunDemonsBaseline(const BiomechanicalCTImageType *    fixedCT,
     demons->SetFixedLabelImage(fixedLabels);
     demons->SetMovingLabelImage(movingLabels);
     demons->SetFlattenLabels(flatten);
+  }
+  if (observer != nullptr)
+  {
+    FilterType * filter = demons.GetPointer();
+    demons->AddObserver(ProgressEvent(), [filter, observer](const EventObject &) {
+      observer->Progress(filter->GetProgress(), std::to_string(filter->GetNumberOfLevels()) + " levels");
+    });
   }
   demons->Update();
   return demons->GetOutput();
