@@ -59,18 +59,9 @@ public:
   using Pointer = itk::SmartPointer<Self>;
   itkNewMacro(Self);
 
+  /** Where ITK's warnings, errors and generic output all end up (OutputWindow's other Display methods call it). */
   void
   DisplayText(const char * text) override
-  {
-    PrintWarning(StripITKPrefix(text));
-  }
-  void
-  DisplayWarningText(const char * text) override
-  {
-    PrintWarning(StripITKPrefix(text));
-  }
-  void
-  DisplayGenericOutputText(const char * text) override
   {
     PrintWarning(StripITKPrefix(text));
   }

@@ -46,14 +46,6 @@ using IndicatorImageType = Image<float, 3>;
 using IndicatorInterpolatorType = LinearInterpolateImageFunction<IndicatorImageType, double>;
 using Random = std::mt19937_64;
 
-/** Uniform in [lo, hi) from the raw integers (std::mt19937_64's sequence is fixed by the standard, its
- * distributions are not): the same resamples on every platform. */
-double
-Uniform(Random & rng, double lo, double hi)
-{
-  return lo + (hi - lo) * (double(rng() >> 11) / double(std::uint64_t(1) << 53));
-}
-
 /** The values of the scene's objective labels, in objective order. */
 std::vector<std::int32_t>
 ObjectiveValues(const bmr::Scene & scene)

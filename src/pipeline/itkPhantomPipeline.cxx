@@ -271,7 +271,7 @@ ShiftedGrid(const bmr::GridGeometry & grid, double shift, std::uint64_t seed)
   std::mt19937_64   rng(seed);
   for (unsigned int a = 0; a < 3; ++a)
   {
-    const double offset = shift * (2.0 * double(rng() >> 11) / double(1ull << 53) - 1.0) * grid.spacing[a];
+    const double offset = shift * (2.0 * pipeline::Uniform(rng, 0.0, 1.0) - 1.0) * grid.spacing[a];
     for (unsigned int r = 0; r < 3; ++r)
     {
       shifted.origin[r] += grid.direction[3 * r + a] * offset;
@@ -374,10 +374,8 @@ DrawPhantomSet(unsigned int count, std::uint64_t seed)
 {
   // std::mt19937_64's sequence is fixed by the standard (its distributions are not, so the uniform numbers are
   // made from the raw integers): the same set on every platform.
-  std::mt19937_64 rng(seed);
-  const auto      uniform = [&rng](double lo, double hi) {
-    return lo + (hi - lo) * (double(rng() >> 11) / double(std::uint64_t(1) << 53));
-  };
+  std::mt19937_64              rng(seed);
+  const auto                   uniform = [&rng](double lo, double hi) { return pipeline::Uniform(rng, lo, hi); };
   std::vector<PhantomSettings> set(count);
   for (unsigned int k = 0; k < count; ++k)
   {
