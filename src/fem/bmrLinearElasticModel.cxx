@@ -20,97 +20,31 @@
 #include "bmrLinearElasticModel.h"
 
 #include "bmrError.h"
+#include "bmrFemAssembly.h"
 #include "bmrStopwatch.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 
-#include <dlfcn.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <mutex>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <utility>
 
 namespace bmr {
-namespace {
 using Clock = SteadyClock;
-
-/** Gradients of the four barycentric coordinates of element e and its volume. */
-double
-ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
-{
-  const std::int32_t * t = &mesh.tetrahedra[4 * e];
-  const double *       x0 = &mesh.points[3 * t[0]];
-  double               J[3][3]; // columns x1-x0, x2-x0, x3-x0
-  for (int c = 0; c < 3; ++c)
-  {
-    const double * xc = &mesh.points[3 * t[c + 1]];
-    for (int r = 0; r < 3; ++r)
-    {
-      J[r][c] = xc[r] - x0[r];
-    }
-  }
-  const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
-                     J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
-                     J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
-  // Rows of J^{-1} are the gradients of barycentric coordinates 1..3.
-  const double inv = 1.0 / det;
-  g[1][0] = (J[1][1] * J[2][2] - J[1][2] * J[2][1]) * inv;
-  g[1][1] = (J[0][2] * J[2][1] - J[0][1] * J[2][2]) * inv;
-  g[1][2] = (J[0][1] * J[1][2] - J[0][2] * J[1][1]) * inv;
-  g[2][0] = (J[1][2] * J[2][0] - J[1][0] * J[2][2]) * inv;
-  g[2][1] = (J[0][0] * J[2][2] - J[0][2] * J[2][0]) * inv;
-  g[2][2] = (J[0][2] * J[1][0] - J[0][0] * J[1][2]) * inv;
-  g[3][0] = (J[1][0] * J[2][1] - J[1][1] * J[2][0]) * inv;
-  g[3][1] = (J[0][1] * J[2][0] - J[0][0] * J[2][1]) * inv;
-  g[3][2] = (J[0][0] * J[1][1] - J[0][1] * J[1][0]) * inv;
-  for (int i = 0; i < 3; ++i)
-  {
-    g[0][i] = -(g[1][i] + g[2][i] + g[3][i]);
-  }
-  return det / 6.0;
-}
-
-/** Runs the BLAS that CHOLMOD calls on one thread. A multithreaded OpenBLAS splits the supernodal
- * updates differently for different thread counts, and so rounds differently: the factorization, and with
- * it every field and estimate, would change with the machine's core count (measured: fields differing in
- * the last bits between OPENBLAS_NUM_THREADS=1 and 2). The symbol is looked up at run time, so any other
- * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorizations of
- * this project take well under a second and are reused for every solve. */
-void
-PinBlasToOneThread()
-{
-  static std::once_flag once;
-  std::call_once(once, [] {
-    using SetThreads = void (*)(int);
-    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-    {
-      set(1);
-    }
-  });
-}
-
-void
-LameParameters(double E, double nu, double & lambda, double & mu)
-{
-  lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-  mu = E / (2.0 * (1.0 + nu));
-}
-} // namespace
+using fem::ElementGradients;
+using fem::LameParameters;
 
 struct LinearElasticModel::Impl
 {
-  const TetrahedralMesh &                    mesh;
-  std::map<std::int32_t, MaterialParameters> materials;
-  std::size_t                                ndof{ 0 };
-  // Lower triangle of the full 3N x 3N stiffness, compressed by column.
-  std::vector<std::int64_t>                   colStart;
-  std::vector<std::int32_t>                   rowIndex;
+  const TetrahedralMesh &                     mesh;
+  std::map<std::int32_t, MaterialParameters>  materials;
+  std::size_t                                 ndof{ 0 };
+  fem::LowerPattern                           pattern;    // of the full 3N x 3N stiffness
   std::map<std::int32_t, std::vector<double>> unitValues; // Khat_m per label, on the shared pattern
   std::vector<double>                         values;     // sum_m E_m Khat_m
   bool                                        valuesCurrent{ false };
@@ -138,26 +72,12 @@ struct LinearElasticModel::Impl
   };
   std::vector<AveragingPatch>
   BuildAveragingPatches() const;
-  /** Position of the lower-triangle entry (row >= col) in rowIndex / values. */
-  std::size_t
-  EntryIndex(std::size_t row, std::size_t col) const
-  {
-    const auto first = rowIndex.begin() + colStart[col];
-    const auto last = rowIndex.begin() + colStart[col + 1];
-    return static_cast<std::size_t>(std::lower_bound(first, last, static_cast<std::int32_t>(row)) - rowIndex.begin());
-  }
   void
   BuildPattern();
-  // Pieces of BuildPattern, in the order it calls them.
-  using NodeAdjacency = std::vector<std::vector<std::int32_t>>;
-  NodeAdjacency
-  ElementNodeAdjacency() const;
+  // Pieces of BuildPattern.
+  using NodeAdjacency = fem::NodeAdjacency;
   static void
   AddPatchNodeCouplings(const std::vector<AveragingPatch> & patches, NodeAdjacency & upper);
-  void
-  SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper) const;
-  void
-  BuildColumnPattern(const NodeAdjacency & upper);
   void
   AccumulateUnitElementStiffnesses();
   void
@@ -165,17 +85,12 @@ struct LinearElasticModel::Impl
   void
   CheckElements() const;
   void
-  CheckRigidBodyModes() const;
-  void
   UpdateValues();
   void
-  SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const;
-  static void
-  SymmetricProduct(const std::vector<std::int64_t> & start,
-                   const std::vector<std::int32_t> & rows,
-                   const std::vector<double> &       vals,
-                   const std::vector<double> &       x,
-                   std::vector<double> &             y);
+  SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
+  {
+    fem::SymmetricProduct(pattern, values, x, y);
+  }
 };
 
 void
@@ -240,30 +155,6 @@ LinearElasticModel::Impl::BuildAveragingPatches() const -> std::vector<Averaging
   return patches;
 }
 
-// Node adjacency (each node with itself and its element neighbors of higher or equal index).
-auto
-LinearElasticModel::Impl::ElementNodeAdjacency() const -> NodeAdjacency
-{
-  const std::size_t N = mesh.GetNumberOfPoints();
-  const std::size_t M = mesh.GetNumberOfTetrahedra();
-  NodeAdjacency     upper(N);
-  for (std::size_t e = 0; e < M; ++e)
-  {
-    const std::int32_t * t = &mesh.tetrahedra[4 * e];
-    for (int a = 0; a < 4; ++a)
-    {
-      for (int b = 0; b < 4; ++b)
-      {
-        if (t[b] >= t[a])
-        {
-          upper[t[a]].push_back(t[b]);
-        }
-      }
-    }
-  }
-  return upper;
-}
-
 // Nodal-averaged pressure: the volumetric strain of a (node, material) pair averages the elements of that
 // material around the node, which couples every pair of nodes of that patch.
 void
@@ -284,63 +175,6 @@ LinearElasticModel::Impl::AddPatchNodeCouplings(const std::vector<AveragingPatch
   }
 }
 
-void
-LinearElasticModel::Impl::SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper) const
-{
-  const std::size_t N = mesh.GetNumberOfPoints();
-  std::vector<char> used(N, 0);
-  for (std::size_t n = 0; n < N; ++n)
-  {
-    auto & v = upper[n];
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
-    used[n] = !v.empty();
-  }
-  for (std::size_t n = 0; n < N; ++n)
-  {
-    if (!used[n])
-    {
-      std::ostringstream msg;
-      msg << "node " << n << " belongs to no element (its stiffness would be singular)";
-      Fail("LinearElasticModel", msg.str());
-    }
-  }
-}
-
-// Column 3n+c holds rows 3m+r >= 3n+c for every neighbor m >= n.
-void
-LinearElasticModel::Impl::BuildColumnPattern(const NodeAdjacency & upper)
-{
-  const std::size_t N = mesh.GetNumberOfPoints();
-  colStart.assign(ndof + 1, 0);
-  for (std::size_t n = 0; n < N; ++n)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      colStart[3 * n + c + 1] = colStart[3 * n + c] + static_cast<std::int64_t>(3 * upper[n].size() - c);
-    }
-  }
-  rowIndex.resize(static_cast<std::size_t>(colStart[ndof]));
-  for (std::size_t n = 0; n < N; ++n)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      std::int64_t k = colStart[3 * n + c];
-      for (std::int32_t m : upper[n])
-      {
-        for (int r = 0; r < 3; ++r)
-        {
-          const std::size_t row = 3 * static_cast<std::size_t>(m) + r;
-          if (row >= 3 * n + c)
-          {
-            rowIndex[k++] = static_cast<std::int32_t>(row);
-          }
-        }
-      }
-    }
-  }
-}
-
 // Unit-modulus element stiffnesses accumulated per label on the shared pattern.
 void
 LinearElasticModel::Impl::AccumulateUnitElementStiffnesses()
@@ -348,7 +182,7 @@ LinearElasticModel::Impl::AccumulateUnitElementStiffnesses()
   const std::size_t M = mesh.GetNumberOfTetrahedra();
   for (const auto & kv : materials)
   {
-    unitValues[kv.first].assign(rowIndex.size(), 0.0);
+    unitValues[kv.first].assign(pattern.Size(), 0.0);
   }
   for (std::size_t e = 0; e < M; ++e)
   {
@@ -380,7 +214,7 @@ LinearElasticModel::Impl::AccumulateUnitElementStiffnesses()
               continue;
             }
             const double kij = V * (lambda * g[a][i] * g[b][j] + mu * g[a][j] * g[b][i] + (i == j ? mu * gab : 0.0));
-            vals[EntryIndex(row, col)] += kij;
+            vals[pattern.EntryIndex(row, col)] += kij;
           }
         }
       }
@@ -430,7 +264,7 @@ LinearElasticModel::Impl::AccumulateAveragedBulkStiffnesses(const std::vector<Av
             const std::size_t col = 3 * static_cast<std::size_t>(patch.nodes[kb]) + j;
             if (row >= col)
             {
-              vals[EntryIndex(row, col)] += kappa * volume * gbar[3 * ka + i] * gbar[3 * kb + j];
+              vals[pattern.EntryIndex(row, col)] += kappa * volume * gbar[3 * ka + i] * gbar[3 * kb + j];
             }
           }
         }
@@ -444,14 +278,14 @@ LinearElasticModel::Impl::BuildPattern()
 {
   const std::size_t N = mesh.GetNumberOfPoints();
   ndof = 3 * N;
-  NodeAdjacency                     upper = ElementNodeAdjacency();
+  NodeAdjacency                     upper = fem::ElementNodeAdjacency(mesh);
   const std::vector<AveragingPatch> patches = BuildAveragingPatches();
   AddPatchNodeCouplings(patches, upper);
-  SortAdjacencyAndCheckNodesUsed(upper);
-  BuildColumnPattern(upper);
+  fem::SortAdjacencyAndCheckNodesUsed(upper, "LinearElasticModel");
+  pattern = fem::BuildColumnPattern(upper);
   AccumulateUnitElementStiffnesses();
   AccumulateAveragedBulkStiffnesses(patches);
-  values.assign(rowIndex.size(), 0.0);
+  values.assign(pattern.Size(), 0.0);
   valuesCurrent = false;
 }
 
@@ -475,107 +309,6 @@ LinearElasticModel::Impl::UpdateValues()
   valuesCurrent = true;
 }
 
-void
-LinearElasticModel::Impl::SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
-{
-  SymmetricProduct(colStart, rowIndex, values, x, y);
-}
-
-void
-LinearElasticModel::Impl::SymmetricProduct(const std::vector<std::int64_t> & start,
-                                           const std::vector<std::int32_t> & rows,
-                                           const std::vector<double> &       vals,
-                                           const std::vector<double> &       x,
-                                           std::vector<double> &             y)
-{
-  const std::size_t n = start.size() - 1;
-  y.assign(n, 0.0);
-  for (std::size_t col = 0; col < n; ++col)
-  {
-    for (std::int64_t k = start[col]; k < start[col + 1]; ++k)
-    {
-      const std::size_t row = static_cast<std::size_t>(rows[k]);
-      y[row] += vals[k] * x[col];
-      if (row != col)
-      {
-        y[col] += vals[k] * x[row];
-      }
-    }
-  }
-}
-
-void
-LinearElasticModel::Impl::CheckRigidBodyModes() const
-{
-  std::vector<std::int32_t> component;
-  const std::size_t         ncomp = ConnectedComponents(mesh, &component);
-  const std::size_t         N = mesh.GetNumberOfPoints();
-  for (std::size_t c = 0; c < ncomp; ++c)
-  {
-    // A component is held when its fully constrained nodes are not all on one line.
-    std::vector<std::size_t> held;
-    for (std::size_t n = 0; n < N; ++n)
-    {
-      if (component[n] == static_cast<std::int32_t>(c) && constrained[3 * n] && constrained[3 * n + 1] &&
-          constrained[3 * n + 2])
-      {
-        held.push_back(n);
-      }
-    }
-    bool ok = false;
-    if (held.size() >= 3)
-    {
-      const double * p0 = &mesh.points[3 * held[0]];
-      std::size_t    far = held[0];
-      double         best = -1;
-      for (std::size_t n : held)
-      {
-        const double * p = &mesh.points[3 * n];
-        const double   d = std::hypot(p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]);
-        if (d > best)
-        {
-          best = d;
-          far = n;
-        }
-      }
-      const double * p1 = &mesh.points[3 * far];
-      const double   axis[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
-      for (std::size_t n : held)
-      {
-        const double * p = &mesh.points[3 * n];
-        const double   v[3] = { p[0] - p0[0], p[1] - p0[1], p[2] - p0[2] };
-        const double   cx = axis[1] * v[2] - axis[2] * v[1];
-        const double   cy = axis[2] * v[0] - axis[0] * v[2];
-        const double   cz = axis[0] * v[1] - axis[1] * v[0];
-        if (std::sqrt(cx * cx + cy * cy + cz * cz) > 1e-6 * best * best)
-        {
-          ok = true;
-          break;
-        }
-      }
-    }
-    if (!ok)
-    {
-      std::set<std::int32_t> labels;
-      for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
-      {
-        if (component[mesh.tetrahedra[4 * e]] == static_cast<std::int32_t>(c))
-        {
-          labels.insert(mesh.labels[e]);
-        }
-      }
-      std::ostringstream msg;
-      msg << "nothing prevents rigid-body motion of the connected mesh component " << c << " (labels";
-      for (auto l : labels)
-      {
-        msg << ' ' << l;
-      }
-      msg << "): it has " << held.size()
-          << " fixed nodes, at least 3 not on one line are needed (add a fixed label or fix the ROI boundary)";
-      Fail("LinearElasticModel", msg.str());
-    }
-  }
-}
 
 LinearElasticModel::LinearElasticModel(const TetrahedralMesh &                            mesh,
                                        const std::map<std::int32_t, MaterialParameters> & materials)
@@ -686,49 +419,21 @@ LinearElasticModel::Factorize()
   {
     return;
   }
-  PinBlasToOneThread();
+  fem::PinBlasToOneThread();
   auto t0 = Clock::now();
   if (!d.analyzed)
   {
-    d.CheckRigidBodyModes();
+    fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
   }
   d.UpdateValues();
-  // Free-dof numbering is monotone in the dof number, so K_ff stays lower triangular.
-  d.freeIndex.assign(d.ndof, -1);
-  d.nfree = 0;
-  for (std::size_t i = 0; i < d.ndof; ++i)
-  {
-    if (!d.constrained[i])
-    {
-      d.freeIndex[i] = static_cast<std::int32_t>(d.nfree++);
-    }
-  }
+  d.nfree = fem::NumberFreeDofs(d.constrained, d.freeIndex);
   if (d.nfree == 0)
   {
     d.factorized = true;
     d.timings.assemble += SecondsSince(t0);
     return;
   }
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(d.values.size());
-  for (std::size_t col = 0; col < d.ndof; ++col)
-  {
-    const std::int32_t fc = d.freeIndex[col];
-    if (fc < 0)
-    {
-      continue;
-    }
-    for (std::int64_t k = d.colStart[col]; k < d.colStart[col + 1]; ++k)
-    {
-      const std::int32_t fr = d.freeIndex[d.rowIndex[k]];
-      if (fr >= 0)
-      {
-        triplets.emplace_back(fr, fc, d.values[k]);
-      }
-    }
-  }
-  d.Kff.resize(static_cast<Eigen::Index>(d.nfree), static_cast<Eigen::Index>(d.nfree));
-  d.Kff.setFromTriplets(triplets.begin(), triplets.end());
+  d.Kff = fem::FreeBlock(d.pattern, d.values, d.freeIndex, d.nfree);
   d.timings.assemble += SecondsSince(t0);
   if (!d.analyzed)
   {
@@ -850,7 +555,7 @@ LinearElasticModel::ComputeMaterialStiffnessProduct(std::int32_t label, const st
     Fail("LinearElasticModel::ComputeMaterialStiffnessProduct", "label " + std::to_string(label) + " has no material");
   }
   std::vector<double> y;
-  Impl::SymmetricProduct(m_Impl->colStart, m_Impl->rowIndex, it->second, u, y);
+  fem::SymmetricProduct(m_Impl->pattern, it->second, u, y);
   return y;
 }
 

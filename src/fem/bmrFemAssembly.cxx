@@ -1,0 +1,368 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The system Eigen 3.4 and CHOLMOD are used only in src/fem; no ITK header that bundles ITK's own Eigen
+// may be included here.
+#include "bmrFemAssembly.h"
+
+#include "bmrError.h"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+namespace bmr {
+namespace fem {
+
+/** Gradients of the four barycentric coordinates of element e and its volume. */
+double
+ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
+{
+  const std::int32_t * t = &mesh.tetrahedra[4 * e];
+  const double *       x0 = &mesh.points[3 * t[0]];
+  double               J[3][3]; // columns x1-x0, x2-x0, x3-x0
+  for (int c = 0; c < 3; ++c)
+  {
+    const double * xc = &mesh.points[3 * t[c + 1]];
+    for (int r = 0; r < 3; ++r)
+    {
+      J[r][c] = xc[r] - x0[r];
+    }
+  }
+  const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                     J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                     J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+  // Rows of J^{-1} are the gradients of barycentric coordinates 1..3.
+  const double inv = 1.0 / det;
+  g[1][0] = (J[1][1] * J[2][2] - J[1][2] * J[2][1]) * inv;
+  g[1][1] = (J[0][2] * J[2][1] - J[0][1] * J[2][2]) * inv;
+  g[1][2] = (J[0][1] * J[1][2] - J[0][2] * J[1][1]) * inv;
+  g[2][0] = (J[1][2] * J[2][0] - J[1][0] * J[2][2]) * inv;
+  g[2][1] = (J[0][0] * J[2][2] - J[0][2] * J[2][0]) * inv;
+  g[2][2] = (J[0][2] * J[1][0] - J[0][0] * J[1][2]) * inv;
+  g[3][0] = (J[1][0] * J[2][1] - J[1][1] * J[2][0]) * inv;
+  g[3][1] = (J[0][1] * J[2][0] - J[0][0] * J[2][1]) * inv;
+  g[3][2] = (J[0][0] * J[1][1] - J[0][1] * J[1][0]) * inv;
+  for (int i = 0; i < 3; ++i)
+  {
+    g[0][i] = -(g[1][i] + g[2][i] + g[3][i]);
+  }
+  return det / 6.0;
+}
+
+/** Runs the BLAS that CHOLMOD calls on one thread. A multithreaded OpenBLAS splits the supernodal
+ * updates differently for different thread counts, and so rounds differently: the factorization, and with
+ * it every field and estimate, would change with the machine's core count (measured: fields differing in
+ * the last bits between OPENBLAS_NUM_THREADS=1 and 2). The symbol is looked up at run time, so any other
+ * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorizations of
+ * this project take well under a second and are reused for every solve. */
+void
+PinBlasToOneThread()
+{
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
+    {
+      set(1);
+    }
+  });
+}
+
+void
+LameParameters(double E, double nu, double & lambda, double & mu)
+{
+  lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  mu = E / (2.0 * (1.0 + nu));
+}
+// Node adjacency (each node with itself and its element neighbors of higher or equal index).
+NodeAdjacency
+ElementNodeAdjacency(const TetrahedralMesh & mesh)
+{
+  const std::size_t N = mesh.GetNumberOfPoints();
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
+  NodeAdjacency     upper(N);
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    const std::int32_t * t = &mesh.tetrahedra[4 * e];
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = 0; b < 4; ++b)
+      {
+        if (t[b] >= t[a])
+        {
+          upper[t[a]].push_back(t[b]);
+        }
+      }
+    }
+  }
+  return upper;
+}
+
+void
+SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper, const std::string & who)
+{
+  const std::size_t N = upper.size();
+  std::vector<char> used(N, 0);
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    auto & v = upper[n];
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    used[n] = !v.empty();
+  }
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    if (!used[n])
+    {
+      std::ostringstream msg;
+      msg << "node " << n << " belongs to no element (its stiffness would be singular)";
+      Fail(who, msg.str());
+    }
+  }
+}
+
+std::size_t
+LowerPattern::EntryIndex(std::size_t row, std::size_t col) const
+{
+  const auto first = rowIndex.begin() + colStart[col];
+  const auto last = rowIndex.begin() + colStart[col + 1];
+  return static_cast<std::size_t>(std::lower_bound(first, last, static_cast<std::int32_t>(row)) - rowIndex.begin());
+}
+
+std::size_t
+NumberFreeDofs(const std::vector<char> & constrained, std::vector<std::int32_t> & freeIndex)
+{
+  freeIndex.assign(constrained.size(), -1);
+  std::size_t nfree = 0;
+  for (std::size_t i = 0; i < constrained.size(); ++i)
+  {
+    if (!constrained[i])
+    {
+      freeIndex[i] = static_cast<std::int32_t>(nfree++);
+    }
+  }
+  return nfree;
+}
+
+Eigen::SparseMatrix<double>
+FreeBlock(const LowerPattern &              pattern,
+          const std::vector<double> &       values,
+          const std::vector<std::int32_t> & freeIndex,
+          std::size_t                       nfree,
+          std::vector<std::int64_t> *       positions)
+{
+  // Built column by column in pattern order, so that the compressed matrix holds the kept entries in the
+  // same order and a running counter is each entry's position.
+  Eigen::SparseMatrix<double> block(static_cast<Eigen::Index>(nfree), static_cast<Eigen::Index>(nfree));
+  std::vector<Eigen::Index>   perColumn(nfree, 0);
+  for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
+  {
+    if (freeIndex[col] < 0)
+    {
+      continue;
+    }
+    for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
+    {
+      perColumn[freeIndex[col]] += freeIndex[pattern.rowIndex[k]] >= 0;
+    }
+  }
+  block.reserve(perColumn);
+  if (positions)
+  {
+    positions->assign(pattern.Size(), -1);
+  }
+  for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
+  {
+    const std::int32_t fc = freeIndex[col];
+    if (fc < 0)
+    {
+      continue;
+    }
+    for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
+    {
+      const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
+      if (fr >= 0)
+      {
+        block.insert(fr, fc) = values[k];
+      }
+    }
+  }
+  block.makeCompressed();
+  if (positions)
+  {
+    std::int64_t next = 0;
+    for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
+    {
+      if (freeIndex[col] < 0)
+      {
+        continue;
+      }
+      for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
+      {
+        if (freeIndex[pattern.rowIndex[k]] >= 0)
+        {
+          (*positions)[k] = next++;
+        }
+      }
+    }
+  }
+  return block;
+}
+
+// Column 3n+c holds rows 3m+r >= 3n+c for every neighbor m >= n.
+LowerPattern
+BuildColumnPattern(const NodeAdjacency & upper)
+{
+  const std::size_t N = upper.size();
+  const std::size_t ndof = 3 * N;
+  LowerPattern      pattern;
+  auto &            colStart = pattern.colStart;
+  auto &            rowIndex = pattern.rowIndex;
+  colStart.assign(ndof + 1, 0);
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      colStart[3 * n + c + 1] = colStart[3 * n + c] + static_cast<std::int64_t>(3 * upper[n].size() - c);
+    }
+  }
+  rowIndex.resize(static_cast<std::size_t>(colStart[ndof]));
+  for (std::size_t n = 0; n < N; ++n)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      std::int64_t k = colStart[3 * n + c];
+      for (std::int32_t m : upper[n])
+      {
+        for (int r = 0; r < 3; ++r)
+        {
+          const std::size_t row = 3 * static_cast<std::size_t>(m) + r;
+          if (row >= 3 * n + c)
+          {
+            rowIndex[k++] = static_cast<std::int32_t>(row);
+          }
+        }
+      }
+    }
+  }
+  return pattern;
+}
+
+void
+SymmetricProduct(const LowerPattern &        pattern,
+                 const std::vector<double> & vals,
+                 const std::vector<double> & x,
+                 std::vector<double> &       y)
+{
+  const auto &      start = pattern.colStart;
+  const auto &      rows = pattern.rowIndex;
+  const std::size_t n = start.size() - 1;
+  y.assign(n, 0.0);
+  for (std::size_t col = 0; col < n; ++col)
+  {
+    for (std::int64_t k = start[col]; k < start[col + 1]; ++k)
+    {
+      const std::size_t row = static_cast<std::size_t>(rows[k]);
+      y[row] += vals[k] * x[col];
+      if (row != col)
+      {
+        y[col] += vals[k] * x[row];
+      }
+    }
+  }
+}
+
+void
+CheckRigidBodyModes(const TetrahedralMesh & mesh, const std::vector<char> & constrained, const std::string & who)
+{
+  std::vector<std::int32_t> component;
+  const std::size_t         ncomp = ConnectedComponents(mesh, &component);
+  const std::size_t         N = mesh.GetNumberOfPoints();
+  for (std::size_t c = 0; c < ncomp; ++c)
+  {
+    // A component is held when its fully constrained nodes are not all on one line.
+    std::vector<std::size_t> held;
+    for (std::size_t n = 0; n < N; ++n)
+    {
+      if (component[n] == static_cast<std::int32_t>(c) && constrained[3 * n] && constrained[3 * n + 1] &&
+          constrained[3 * n + 2])
+      {
+        held.push_back(n);
+      }
+    }
+    bool ok = false;
+    if (held.size() >= 3)
+    {
+      const double * p0 = &mesh.points[3 * held[0]];
+      std::size_t    far = held[0];
+      double         best = -1;
+      for (std::size_t n : held)
+      {
+        const double * p = &mesh.points[3 * n];
+        const double   d = std::hypot(p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]);
+        if (d > best)
+        {
+          best = d;
+          far = n;
+        }
+      }
+      const double * p1 = &mesh.points[3 * far];
+      const double   axis[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+      for (std::size_t n : held)
+      {
+        const double * p = &mesh.points[3 * n];
+        const double   v[3] = { p[0] - p0[0], p[1] - p0[1], p[2] - p0[2] };
+        const double   cx = axis[1] * v[2] - axis[2] * v[1];
+        const double   cy = axis[2] * v[0] - axis[0] * v[2];
+        const double   cz = axis[0] * v[1] - axis[1] * v[0];
+        if (std::sqrt(cx * cx + cy * cy + cz * cz) > 1e-6 * best * best)
+        {
+          ok = true;
+          break;
+        }
+      }
+    }
+    if (!ok)
+    {
+      std::set<std::int32_t> labels;
+      for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+      {
+        if (component[mesh.tetrahedra[4 * e]] == static_cast<std::int32_t>(c))
+        {
+          labels.insert(mesh.labels[e]);
+        }
+      }
+      std::ostringstream msg;
+      msg << "nothing prevents rigid-body motion of the connected mesh component " << c << " (labels";
+      for (auto l : labels)
+      {
+        msg << ' ' << l;
+      }
+      msg << "): it has " << held.size()
+          << " fixed nodes, at least 3 not on one line are needed (add a fixed label or fix the ROI boundary)";
+      Fail(who, msg.str());
+    }
+  }
+}
+
+} // namespace fem
+} // namespace bmr

@@ -1,0 +1,109 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrFemAssembly_h
+#define bmrFemAssembly_h
+
+// What the finite element models of src/fem share (private to src/fem): element geometry, the sparse
+// pattern of the assembled 3N x 3N matrices, their products, the free block as an Eigen matrix, and the
+// checks that a model can be solved at all. The system Eigen 3.4 and CHOLMOD are used only in src/fem.
+#include "bmrTetrahedralMesh.h"
+
+#include <Eigen/SparseCore>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace bmr {
+namespace fem {
+
+/** Gradients g[a] of the four barycentric coordinates of element \a e (reference configuration) and its
+ * volume [mm^3]. */
+double
+ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3]);
+
+/** Lame parameters [kPa] of modulus E [kPa] and Poisson's ratio nu. */
+void
+LameParameters(double E, double nu, double & lambda, double & mu);
+
+/** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
+void
+PinBlasToOneThread();
+
+/** Each node with itself and its neighbors of higher or equal index. */
+using NodeAdjacency = std::vector<std::vector<std::int32_t>>;
+
+/** The node couplings of the elements of \a mesh (unsorted, with repeats). */
+NodeAdjacency
+ElementNodeAdjacency(const TetrahedralMesh & mesh);
+
+/** Sorts and deduplicates every row; throws (naming \a who and the node) when a node has no element. */
+void
+SortAdjacencyAndCheckNodesUsed(NodeAdjacency & upper, const std::string & who);
+
+/** Lower triangle of a symmetric 3N x 3N matrix, compressed by column: column 3n+c holds the rows
+ * 3m+r >= 3n+c of every neighbor m >= n. */
+struct LowerPattern
+{
+  std::vector<std::int64_t> colStart;
+  std::vector<std::int32_t> rowIndex;
+
+  /** Position of the entry (row >= col) in rowIndex and in every value array on this pattern. */
+  std::size_t
+  EntryIndex(std::size_t row, std::size_t col) const;
+  std::size_t
+  Size() const
+  {
+    return rowIndex.size();
+  }
+};
+
+LowerPattern
+BuildColumnPattern(const NodeAdjacency & upper);
+
+/** y = A x for the symmetric matrix whose lower triangle \a values holds on \a pattern. */
+void
+SymmetricProduct(const LowerPattern &        pattern,
+                 const std::vector<double> & values,
+                 const std::vector<double> & x,
+                 std::vector<double> &       y);
+
+/** Dof -> free index (or -1) for the dofs not \a constrained; the numbering is monotone, so the free block
+ * of a lower triangle stays lower triangular. Returns the number of free dofs. */
+std::size_t
+NumberFreeDofs(const std::vector<char> & constrained, std::vector<std::int32_t> & freeIndex);
+
+/** The free block of the matrix (lower triangle \a values on \a pattern) as a compressed Eigen matrix;
+ * \a positions (if not null) receives, for every pattern entry, its index in the result's value array or
+ * -1, so that later values can be copied in place without rebuilding the matrix. */
+Eigen::SparseMatrix<double>
+FreeBlock(const LowerPattern &              pattern,
+          const std::vector<double> &       values,
+          const std::vector<std::int32_t> & freeIndex,
+          std::size_t                       nfree,
+          std::vector<std::int64_t> *       positions = nullptr);
+
+/** Throws (naming \a who and the component's labels) when a connected component of the mesh has fewer
+ * than three fully \a constrained nodes not on one line: nothing holds it against rigid-body motion. */
+void
+CheckRigidBodyModes(const TetrahedralMesh & mesh, const std::vector<char> & constrained, const std::string & who);
+
+} // namespace fem
+} // namespace bmr
+
+#endif

@@ -1,0 +1,830 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The system Eigen 3.4 and CHOLMOD are used only in src/fem; no ITK header that bundles ITK's own Eigen may
+// be included here. Setup (constructor, SetConstrainedNodes), assembly (element loops), solve (Newton along
+// the load path) and the adjoint, in that order.
+#include "bmrNeoHookeanForwardModel.h"
+
+#include "bmrError.h"
+#include "bmrFemAssembly.h"
+#include "bmrNeoHookeanElement.h"
+#include "bmrStopwatch.h"
+
+#include <Eigen/CholmodSupport>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace bmr {
+
+namespace {
+const char * const kWho = "NeoHookeanForwardModel";
+
+double
+Norm(const std::vector<double> & v)
+{
+  double s = 0.0;
+  for (double x : v)
+  {
+    s += x * x;
+  }
+  return std::sqrt(s);
+}
+
+/** One trial of a load increment that did not work, and why (for the error message). */
+struct IncrementFailure
+{
+  std::string  reason;
+  std::int64_t worstElement{ -1 };
+  double       worstJ{ 0.0 };
+};
+} // namespace
+
+struct NeoHookeanForwardModel::Impl
+{
+  const TetrahedralMesh &                    mesh;
+  std::map<std::int32_t, MaterialParameters> materials;
+  NewtonSettings                             settings;
+  std::size_t                                ndof{ 0 };
+  // Reference geometry, per element.
+  std::vector<std::array<double, 12>> gradients; // g[a][i] at 3a+i
+  std::vector<double>                 volumes;
+  std::vector<double>                 mu, lambda; // per element [kPa], from its material
+  // The tangent on the full lower pattern, and where each element's 4x4 node blocks go in it.
+  fem::LowerPattern         pattern;
+  std::vector<std::int64_t> elementEntries; // 144 per element: position of K[3a+i][3b+k] or -1 (upper part)
+  std::vector<double>       tangent;
+  // The free block and its factorization.
+  std::vector<char>                                                      constrained;
+  std::vector<std::int32_t>                                              freeIndex;
+  std::size_t                                                            nfree{ 0 };
+  Eigen::SparseMatrix<double>                                            Kff;
+  std::vector<std::int64_t>                                              freePositions;
+  std::vector<std::int64_t>                                              freeDiagonal; // positions in Kff
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
+  bool                                                                   analyzed{ false };
+  bool                                                                   adjointReady{ false };
+  // The last equilibrium and its loads (the warm start), and the tangent's state.
+  bool                hasState{ false };
+  std::vector<double> state, stateForces, statePrescribed;
+  NewtonStatistics    statistics;
+
+  Impl(const TetrahedralMesh & m, const std::map<std::int32_t, MaterialParameters> & mats, const NewtonSettings & s);
+
+  // Setup.
+  void
+  ValidateMaterials() const;
+  void
+  ComputeGeometry();
+  void
+  UpdateLameParameters();
+  void
+  BuildPatternAndEntries();
+  // Assembly.
+  bool
+  Deform(std::size_t e, const std::vector<double> & u, fem::ElementDeformation & d) const;
+  double
+  Energy(const std::vector<double> & u, std::int64_t * worst = nullptr, double * worstJ = nullptr) const;
+  std::vector<double>
+  Forces(const std::vector<double> & u, std::int32_t onlyLabel = -1) const;
+  void
+  AssembleTangent(const std::vector<double> & u);
+  // Solve.
+  void
+  Factorize(bool allowShift);
+  std::vector<double>
+  SolveFree(const std::vector<double> & rhs) const;
+  bool
+  NewtonIncrement(std::vector<double> &       u,
+                  const std::vector<double> & f,
+                  const std::vector<double> & prescribed,
+                  IncrementFailure &          failure);
+  bool
+  FollowPath(std::vector<double> &       u,
+             const std::vector<double> & f0,
+             const std::vector<double> & g0,
+             const std::vector<double> & f1,
+             const std::vector<double> & g1,
+             double &                    reached,
+             IncrementFailure &          failure);
+};
+
+// ---------------------------------------------------------------------------------------------- setup
+
+NeoHookeanForwardModel::Impl::Impl(const TetrahedralMesh &                            m,
+                                   const std::map<std::int32_t, MaterialParameters> & mats,
+                                   const NewtonSettings &                             s)
+  : mesh(m)
+  , materials(mats)
+  , settings(s)
+  , ndof(3 * m.GetNumberOfPoints())
+{
+  ValidateMaterials();
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    if (materials.find(mesh.labels[e]) == materials.end())
+    {
+      std::ostringstream msg;
+      msg << "element " << e << " has label " << mesh.labels[e] << ", which has no material (E, nu) in the scene";
+      Fail(kWho, msg.str());
+    }
+  }
+  ValidateMesh(mesh);
+  ComputeGeometry();
+  UpdateLameParameters();
+  BuildPatternAndEntries();
+  constrained.assign(ndof, 0);
+  // A tangent that is not positive definite is expected (and shifted) here: no CHOLMOD warning on stdout.
+  solver.cholmod().print = 0;
+}
+
+void
+NeoHookeanForwardModel::Impl::ValidateMaterials() const
+{
+  for (const auto & kv : materials)
+  {
+    const MaterialParameters & m = kv.second;
+    std::ostringstream         msg;
+    if (!(std::isfinite(m.youngsModulus) && m.youngsModulus > 0.0))
+    {
+      msg << "label " << kv.first << ": Young's modulus must be positive and finite, got " << m.youngsModulus << " kPa";
+    }
+    else if (!(std::isfinite(m.poissonRatio) && m.poissonRatio > -1.0 && m.poissonRatio < 0.5))
+    {
+      msg << "label " << kv.first << ": Poisson's ratio must lie in (-1, 0.5), got " << m.poissonRatio;
+    }
+    else if (m.formulation != ElementFormulationEnum::Standard)
+    {
+      msg << "label " << kv.first << ": the neo-Hookean model has only the standard P1 formulation (got "
+          << m.formulation << "); use the linear model for the nodal-averaged pressure";
+    }
+    if (!msg.str().empty())
+    {
+      Fail(kWho, msg.str());
+    }
+  }
+  if (!(settings.residualTolerance > 0.0 && settings.energyTolerance >= 0.0 && settings.maximumIterations > 0 &&
+        settings.initialIncrement > 0.0 && settings.initialIncrement <= 1.0 && settings.minimumIncrement > 0.0 &&
+        settings.minimumIncrement <= settings.initialIncrement))
+  {
+    Fail(kWho, "Newton settings out of range (tolerances > 0, 0 < minimum increment <= initial increment <= 1)");
+  }
+}
+
+void
+NeoHookeanForwardModel::Impl::ComputeGeometry()
+{
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
+  gradients.resize(M);
+  volumes.resize(M);
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    double g[4][3];
+    volumes[e] = fem::ElementGradients(mesh, e, g);
+    std::copy(&g[0][0], &g[0][0] + 12, gradients[e].begin());
+  }
+}
+
+void
+NeoHookeanForwardModel::Impl::UpdateLameParameters()
+{
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
+  mu.resize(M);
+  lambda.resize(M);
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    const MaterialParameters & m = materials.at(mesh.labels[e]);
+    fem::LameParameters(m.youngsModulus, m.poissonRatio, lambda[e], mu[e]);
+  }
+}
+
+void
+NeoHookeanForwardModel::Impl::BuildPatternAndEntries()
+{
+  fem::NodeAdjacency upper = fem::ElementNodeAdjacency(mesh);
+  fem::SortAdjacencyAndCheckNodesUsed(upper, kWho);
+  pattern = fem::BuildColumnPattern(upper);
+  const std::size_t M = mesh.GetNumberOfTetrahedra();
+  elementEntries.assign(144 * M, -1);
+  for (std::size_t e = 0; e < M; ++e)
+  {
+    const std::int32_t * t = &mesh.tetrahedra[4 * e];
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = 0; b < 4; ++b)
+      {
+        for (int i = 0; i < 3; ++i)
+        {
+          for (int k = 0; k < 3; ++k)
+          {
+            const std::size_t row = 3 * static_cast<std::size_t>(t[a]) + i;
+            const std::size_t col = 3 * static_cast<std::size_t>(t[b]) + k;
+            if (row >= col)
+            {
+              elementEntries[144 * e + 12 * (3 * a + i) + 3 * b + k] =
+                static_cast<std::int64_t>(pattern.EntryIndex(row, col));
+            }
+          }
+        }
+      }
+    }
+  }
+  tangent.assign(pattern.Size(), 0.0);
+}
+
+// ------------------------------------------------------------------------------------------- assembly
+
+bool
+NeoHookeanForwardModel::Impl::Deform(std::size_t e, const std::vector<double> & u, fem::ElementDeformation & d) const
+{
+  const std::int32_t * t = &mesh.tetrahedra[4 * e];
+  const double * const ua[4] = { &u[3 * t[0]], &u[3 * t[1]], &u[3 * t[2]], &u[3 * t[3]] };
+  return fem::DeformElement(reinterpret_cast<const double(*)[3]>(gradients[e].data()), ua, d);
+}
+
+double
+NeoHookeanForwardModel::Impl::Energy(const std::vector<double> & u, std::int64_t * worst, double * worstJ) const
+{
+  double sum = 0.0, smallestJ = std::numeric_limits<double>::infinity();
+  for (std::size_t e = 0; e < volumes.size(); ++e)
+  {
+    fem::ElementDeformation d;
+    Deform(e, u, d);
+    if (d.J < smallestJ)
+    {
+      smallestJ = d.J;
+      if (worst)
+      {
+        *worst = static_cast<std::int64_t>(e);
+      }
+    }
+    sum += volumes[e] * fem::StoredEnergyDensity(d, mu[e], lambda[e]);
+  }
+  if (worstJ)
+  {
+    *worstJ = smallestJ;
+  }
+  return sum;
+}
+
+std::vector<double>
+NeoHookeanForwardModel::Impl::Forces(const std::vector<double> & u, std::int32_t onlyLabel) const
+{
+  std::vector<double> f(ndof, 0.0);
+  for (std::size_t e = 0; e < volumes.size(); ++e)
+  {
+    if (onlyLabel >= 0 && mesh.labels[e] != onlyLabel)
+    {
+      continue;
+    }
+    fem::ElementDeformation d;
+    if (!Deform(e, u, d))
+    {
+      std::ostringstream msg;
+      msg << "element " << e << " is inverted (J = " << d.J << "): no neo-Hookean internal forces";
+      Fail(kWho, msg.str());
+    }
+    double fe[4][3];
+    fem::ElementForces(d, reinterpret_cast<const double(*)[3]>(gradients[e].data()), volumes[e], mu[e], lambda[e], fe);
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int i = 0; i < 3; ++i)
+      {
+        f[3 * mesh.tetrahedra[4 * e + a] + i] += fe[a][i];
+      }
+    }
+  }
+  return f;
+}
+
+void
+NeoHookeanForwardModel::Impl::AssembleTangent(const std::vector<double> & u)
+{
+  std::fill(tangent.begin(), tangent.end(), 0.0);
+  for (std::size_t e = 0; e < volumes.size(); ++e)
+  {
+    fem::ElementDeformation d;
+    if (!Deform(e, u, d))
+    {
+      std::ostringstream msg;
+      msg << "element " << e << " is inverted (J = " << d.J << "): no neo-Hookean tangent";
+      Fail(kWho, msg.str());
+    }
+    double K[12][12];
+    fem::ElementTangent(d, reinterpret_cast<const double(*)[3]>(gradients[e].data()), volumes[e], mu[e], lambda[e], K);
+    const std::int64_t * entries = &elementEntries[144 * e];
+    for (int r = 0; r < 12; ++r)
+    {
+      for (int c = 0; c < 12; ++c)
+      {
+        if (entries[12 * r + c] >= 0)
+        {
+          tangent[entries[12 * r + c]] += K[r][c];
+        }
+      }
+    }
+  }
+  adjointReady = false;
+}
+
+// ---------------------------------------------------------------------------------------------- solve
+
+// Copies the tangent's free block into the factorized matrix and factorizes it; a block that is not positive
+// definite is shifted by tau * mean diagonal (tau = 1e-8, 1e-6, ... 1) when allowShift, else it fails.
+void
+NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
+{
+  double * values = Kff.valuePtr();
+  for (std::size_t k = 0; k < freePositions.size(); ++k)
+  {
+    if (freePositions[k] >= 0)
+    {
+      values[freePositions[k]] = tangent[k];
+    }
+  }
+  if (!analyzed)
+  {
+    solver.analyzePattern(Kff);
+    analyzed = true;
+  }
+  solver.factorize(Kff);
+  if (solver.info() == Eigen::Success)
+  {
+    return;
+  }
+  double meanDiagonal = 0.0;
+  for (std::int64_t p : freeDiagonal)
+  {
+    meanDiagonal += std::abs(values[p]) / static_cast<double>(freeDiagonal.size());
+  }
+  std::vector<double> diagonal(freeDiagonal.size());
+  for (std::size_t k = 0; k < freeDiagonal.size(); ++k)
+  {
+    diagonal[k] = values[freeDiagonal[k]];
+  }
+  for (double tau = 1e-8; allowShift && tau <= 1.0; tau *= 100.0)
+  {
+    for (std::size_t k = 0; k < freeDiagonal.size(); ++k)
+    {
+      values[freeDiagonal[k]] = diagonal[k] + tau * meanDiagonal;
+    }
+    solver.factorize(Kff);
+    if (solver.info() == Eigen::Success)
+    {
+      ++statistics.shiftedTangents;
+      return;
+    }
+  }
+  Fail(kWho,
+       allowShift ? "the tangent stiffness could not be factorized even after shifting its diagonal"
+                  : "the tangent stiffness at the equilibrium is not positive definite (an unstable "
+                    "equilibrium): no adjoint solve");
+}
+
+std::vector<double>
+NeoHookeanForwardModel::Impl::SolveFree(const std::vector<double> & rhs) const
+{
+  Eigen::VectorXd b(static_cast<Eigen::Index>(nfree));
+  for (std::size_t i = 0; i < ndof; ++i)
+  {
+    if (freeIndex[i] >= 0)
+    {
+      b[freeIndex[i]] = rhs[i];
+    }
+  }
+  const Eigen::VectorXd x = solver.solve(b);
+  std::vector<double>   out(ndof, 0.0);
+  for (std::size_t i = 0; i < ndof; ++i)
+  {
+    if (freeIndex[i] >= 0)
+    {
+      out[i] = x[freeIndex[i]];
+    }
+  }
+  return out;
+}
+
+namespace {
+double
+FreeDot(const std::vector<double> & a, const std::vector<double> & b, const std::vector<char> & constrained)
+{
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    s += constrained[i] ? 0.0 : a[i] * b[i];
+  }
+  return s;
+}
+} // namespace
+
+// Newton's method from u to the equilibrium under the loads (f, prescribed). The first iterations also move
+// the constrained dofs to their prescribed values (the step's prescribed part); the line search shortens the
+// whole step until no element is inverted, and, once the prescribed values are reached, until the total
+// potential decreases (Armijo, with a rounding allowance: near the solution Pi changes below its precision).
+bool
+NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
+                                              const std::vector<double> & f,
+                                              const std::vector<double> & prescribed,
+                                              IncrementFailure &          failure)
+{
+  if (nfree == 0)
+  {
+    // Everything prescribed: the state is the prescribed one, if no element is inverted there.
+    const bool feasible = std::isfinite(Energy(prescribed, &failure.worstElement, &failure.worstJ));
+    failure.reason = "the prescribed displacements invert an element";
+    u = prescribed;
+    return feasible;
+  }
+  std::vector<double> residuals;
+  double              firstDecrement = 0.0;
+  for (unsigned int it = 0; it < settings.maximumIterations; ++it)
+  {
+    std::vector<double> step(ndof, 0.0);
+    bool                jump = false;
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      if (constrained[i] && prescribed[i] != u[i])
+      {
+        step[i] = prescribed[i] - u[i];
+        jump = true;
+      }
+    }
+    const std::vector<double> internal = Forces(u);
+    std::vector<double>       r(ndof, 0.0);
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      r[i] = constrained[i] ? 0.0 : f[i] - internal[i];
+    }
+    const double scale = std::max(std::sqrt(FreeDot(f, f, constrained)), Norm(internal));
+    const double relative = scale > 0.0 ? Norm(r) / scale : 0.0;
+    residuals.push_back(relative);
+    if (!jump && relative <= settings.residualTolerance)
+    {
+      statistics.lastResiduals = residuals;
+      return true;
+    }
+    AssembleTangent(u);
+    Factorize(true);
+    ++statistics.iterations;
+    std::vector<double> rhs(r);
+    if (jump)
+    {
+      std::vector<double> Kstep;
+      fem::SymmetricProduct(pattern, tangent, step, Kstep);
+      for (std::size_t i = 0; i < ndof; ++i)
+      {
+        rhs[i] -= Kstep[i];
+      }
+    }
+    std::vector<double> du = SolveFree(rhs);
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      du[i] = constrained[i] ? step[i] : du[i];
+    }
+    const double decrement = FreeDot(du, r, constrained);
+    if (!jump && firstDecrement == 0.0)
+    {
+      firstDecrement = std::abs(decrement);
+    }
+    const double        energy = Energy(u);
+    const double        potential = energy - FreeDot(f, u, constrained);
+    const double        allowance = 1e-12 * std::abs(energy);
+    bool                accepted = false;
+    std::vector<double> trial(ndof);
+    for (int halving = 0; halving < 20 && !accepted; ++halving)
+    {
+      const double alpha = std::ldexp(1.0, -halving);
+      for (std::size_t i = 0; i < ndof; ++i)
+      {
+        trial[i] = u[i] + alpha * du[i];
+      }
+      const double trialEnergy = Energy(trial, &failure.worstElement, &failure.worstJ);
+      if (!std::isfinite(trialEnergy))
+      {
+        failure.reason = "every trial step inverts an element";
+        continue;
+      }
+      const double trialPotential = trialEnergy - FreeDot(f, trial, constrained);
+      accepted = jump || trialPotential <= potential - 1e-4 * alpha * decrement + allowance;
+      failure.reason = "the line search found no decrease of the potential energy";
+    }
+    if (!accepted)
+    {
+      return false;
+    }
+    u.swap(trial);
+    if (!jump && firstDecrement > 0.0 && std::abs(decrement) <= settings.energyTolerance * firstDecrement)
+    {
+      residuals.push_back(0.0); // converged on the energy criterion; the residual is not recomputed
+      statistics.lastResiduals = residuals;
+      return true;
+    }
+  }
+  failure.reason = "Newton did not converge in " + std::to_string(settings.maximumIterations) + " iterations";
+  return false;
+}
+
+// Applies the loads along (f0, g0) -> (f1, g1) from u in adaptive increments; \a reached is the fraction done.
+bool
+NeoHookeanForwardModel::Impl::FollowPath(std::vector<double> &       u,
+                                         const std::vector<double> & f0,
+                                         const std::vector<double> & g0,
+                                         const std::vector<double> & f1,
+                                         const std::vector<double> & g1,
+                                         double &                    reached,
+                                         IncrementFailure &          failure)
+{
+  reached = 0.0;
+  double              increment = settings.initialIncrement;
+  std::vector<double> f(ndof), g(ndof), trial;
+  while (reached < 1.0)
+  {
+    const double t = std::min(1.0, reached + increment);
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      f[i] = f0[i] + t * (f1[i] - f0[i]);
+      g[i] = t == 1.0 ? g1[i] : g0[i] + t * (g1[i] - g0[i]);
+    }
+    trial = u;
+    const unsigned int before = statistics.iterations;
+    if (NewtonIncrement(trial, f, g, failure))
+    {
+      u.swap(trial);
+      reached = t;
+      ++statistics.acceptedIncrements;
+      if (statistics.iterations - before <= settings.easyIterations)
+      {
+        increment = std::min(1.0, 2.0 * increment);
+      }
+      continue;
+    }
+    ++statistics.rejectedIncrements;
+    increment *= 0.5;
+    if (increment < settings.minimumIncrement)
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+// ------------------------------------------------------------------------------------------- interface
+
+NeoHookeanForwardModel::NeoHookeanForwardModel(const TetrahedralMesh &                            mesh,
+                                               const std::map<std::int32_t, MaterialParameters> & materials,
+                                               const NewtonSettings &                             settings)
+  : m_Impl(new Impl(mesh, materials, settings))
+{
+  m_Impl->AssembleTangent(std::vector<double>(m_Impl->ndof, 0.0));
+}
+
+NeoHookeanForwardModel::~NeoHookeanForwardModel() = default;
+
+const TetrahedralMesh &
+NeoHookeanForwardModel::GetMesh() const
+{
+  return m_Impl->mesh;
+}
+
+void
+NeoHookeanForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & nodes)
+{
+  Impl &            d = *m_Impl;
+  const std::size_t N = d.mesh.GetNumberOfPoints();
+  d.constrained.assign(d.ndof, 0);
+  for (std::int32_t n : nodes)
+  {
+    if (n < 0 || static_cast<std::size_t>(n) >= N)
+    {
+      Fail(kWho,
+           "constrained node index " + std::to_string(n) + " is outside the mesh (" + std::to_string(N) + " nodes)");
+    }
+    d.constrained[3 * n] = d.constrained[3 * n + 1] = d.constrained[3 * n + 2] = 1;
+  }
+  fem::CheckRigidBodyModes(d.mesh, d.constrained, kWho);
+  d.nfree = fem::NumberFreeDofs(d.constrained, d.freeIndex);
+  d.Kff = fem::FreeBlock(d.pattern, d.tangent, d.freeIndex, d.nfree, &d.freePositions);
+  d.freeDiagonal.clear();
+  for (std::size_t i = 0; i < d.ndof; ++i)
+  {
+    if (d.freeIndex[i] >= 0)
+    {
+      d.freeDiagonal.push_back(d.freePositions[d.pattern.EntryIndex(i, i)]);
+    }
+  }
+  fem::PinBlasToOneThread();
+  d.analyzed = false;
+  d.adjointReady = false;
+  d.hasState = false;
+}
+
+void
+NeoHookeanForwardModel::SetYoungsModulus(std::int32_t label, double youngsModulus)
+{
+  auto it = m_Impl->materials.find(label);
+  if (it == m_Impl->materials.end())
+  {
+    Fail(kWho, "label " + std::to_string(label) + " has no material");
+  }
+  if (!(std::isfinite(youngsModulus) && youngsModulus > 0.0))
+  {
+    std::ostringstream msg;
+    msg << "label " << label << ": Young's modulus must be positive and finite, got " << youngsModulus << " kPa";
+    Fail(kWho, msg.str());
+  }
+  if (it->second.youngsModulus != youngsModulus)
+  {
+    it->second.youngsModulus = youngsModulus;
+    m_Impl->UpdateLameParameters();
+    m_Impl->AssembleTangent(m_Impl->hasState ? m_Impl->state : std::vector<double>(m_Impl->ndof, 0.0));
+  }
+}
+
+double
+NeoHookeanForwardModel::GetYoungsModulus(std::int32_t label) const
+{
+  auto it = m_Impl->materials.find(label);
+  if (it == m_Impl->materials.end())
+  {
+    Fail(kWho, "label " + std::to_string(label) + " has no material");
+  }
+  return it->second.youngsModulus;
+}
+
+std::vector<double>
+NeoHookeanForwardModel::SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed)
+{
+  Impl & d = *m_Impl;
+  if ((!forces.empty() && forces.size() != d.ndof) || prescribed.size() != d.ndof)
+  {
+    Fail(kWho, "the force and prescribed displacement vectors must hold 3 values per node");
+  }
+  const auto          start = SteadyClock::now();
+  std::vector<double> f1(d.ndof, 0.0), g1(d.ndof, 0.0);
+  for (std::size_t i = 0; i < d.ndof; ++i)
+  {
+    const double value = d.constrained[i] ? prescribed[i] : (forces.empty() ? 0.0 : forces[i]);
+    if (!std::isfinite(value))
+    {
+      Fail(kWho, "load at degree of freedom " + std::to_string(i) + " is not finite");
+    }
+    (d.constrained[i] ? g1 : f1)[i] = value;
+  }
+  d.statistics = NewtonStatistics();
+  IncrementFailure    failure;
+  double              reached = 0.0;
+  std::vector<double> u;
+  bool                ok = false;
+  if (d.hasState)
+  {
+    u = d.state;
+    d.statistics.warmStart = true;
+    ok = d.FollowPath(u, d.stateForces, d.statePrescribed, f1, g1, reached, failure);
+  }
+  if (!ok)
+  {
+    d.statistics.warmStart = false;
+    u.assign(d.ndof, 0.0);
+    const std::vector<double> zero(d.ndof, 0.0);
+    ok = d.FollowPath(u, zero, zero, f1, g1, reached, failure);
+  }
+  if (!ok)
+  {
+    std::ostringstream msg;
+    msg << "the loads could not be applied: equilibrium reached up to load fraction " << reached << " of 1, then "
+        << failure.reason << " (smallest J " << failure.worstJ << " in element " << failure.worstElement
+        << ") with increments down to " << d.settings.minimumIncrement;
+    Fail(kWho, msg.str());
+  }
+  d.state = u;
+  d.stateForces = f1;
+  d.statePrescribed = g1;
+  d.hasState = true;
+  d.AssembleTangent(u);
+  d.statistics.seconds = SecondsSince(start);
+  return u;
+}
+
+std::vector<double>
+NeoHookeanForwardModel::SolveAdjoint(const std::vector<double> & g)
+{
+  Impl & d = *m_Impl;
+  if (g.size() != d.ndof)
+  {
+    Fail(kWho, "the adjoint right-hand side must hold 3 values per node");
+  }
+  if (!d.hasState)
+  {
+    Fail(kWho, "SolveAdjoint() needs an equilibrium: call SolveState() first");
+  }
+  if (d.nfree == 0)
+  {
+    return std::vector<double>(d.ndof, 0.0);
+  }
+  if (!d.adjointReady)
+  {
+    d.Factorize(false);
+    d.adjointReady = true;
+  }
+  return d.SolveFree(g);
+}
+
+std::vector<double>
+NeoHookeanForwardModel::ApplyTangent(const std::vector<double> & v) const
+{
+  if (v.size() != m_Impl->ndof)
+  {
+    Fail(kWho, "the vector must hold 3 values per node");
+  }
+  std::vector<double> y;
+  fem::SymmetricProduct(m_Impl->pattern, m_Impl->tangent, v, y);
+  return y;
+}
+
+std::vector<double>
+NeoHookeanForwardModel::InternalForces(const std::vector<double> & u) const
+{
+  if (u.size() != m_Impl->ndof)
+  {
+    Fail(kWho, "the displacement vector must hold 3 values per node");
+  }
+  return m_Impl->Forces(u);
+}
+
+std::vector<double>
+NeoHookeanForwardModel::ModulusDerivative(std::int32_t label, const std::vector<double> & u) const
+{
+  if (u.size() != m_Impl->ndof)
+  {
+    Fail(kWho, "the displacement vector must hold 3 values per node");
+  }
+  std::vector<double> f = m_Impl->Forces(u, label);
+  const double        E = GetYoungsModulus(label);
+  for (double & x : f)
+  {
+    x /= E;
+  }
+  return f;
+}
+
+double
+NeoHookeanForwardModel::StoredEnergy(const std::vector<double> & u) const
+{
+  if (u.size() != m_Impl->ndof)
+  {
+    Fail(kWho, "the displacement vector must hold 3 values per node");
+  }
+  return m_Impl->Energy(u);
+}
+
+std::vector<double>
+NeoHookeanForwardModel::FirstPiolaKirchhoffStress(const std::vector<double> & u) const
+{
+  const Impl & d = *m_Impl;
+  if (u.size() != d.ndof)
+  {
+    Fail(kWho, "the displacement vector must hold 3 values per node");
+  }
+  std::vector<double> stress(9 * d.volumes.size());
+  for (std::size_t e = 0; e < d.volumes.size(); ++e)
+  {
+    fem::ElementDeformation def;
+    if (!d.Deform(e, u, def))
+    {
+      Fail(kWho, "element " + std::to_string(e) + " is inverted: no stress");
+    }
+    fem::FirstPiolaStress(def, d.mu[e], d.lambda[e], reinterpret_cast<double(*)[3]>(&stress[9 * e]));
+  }
+  return stress;
+}
+
+void
+NeoHookeanForwardModel::ForgetState()
+{
+  m_Impl->hasState = false;
+}
+
+const NewtonStatistics &
+NeoHookeanForwardModel::GetStatistics() const
+{
+  return m_Impl->statistics;
+}
+
+} // namespace bmr
