@@ -33,6 +33,7 @@ const std::pair<const char *, const char *> commands[] = {
     "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
     "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
     "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F] [--fractions off|on]\n"
+    "                     [--model linear|neo_hookean]\n"
     "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
     "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
     "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"

@@ -4,14 +4,16 @@
 # fraction (`phantom --fractions on`), each registered twice with the default bootstrap interval: from the
 # fixed label map (the staircase) and from the fractions (`register --fixed-probabilities`, the 0.5 level as
 # the sub-voxel surface). Records the error of the stated estimate and the width of the 95 % interval.
-# Usage: benchmarks/run_partial_volume.sh [SEEDS (default "9101 9102")]   MODULI (default "100 300") kPa;
-#        bladder 6 mm and rectum 4 mm walls; THREADS resampling threads (default 2).
+# Usage: benchmarks/run_partial_volume.sh [SEEDS (default "9101 9102 9103")]   MODULI (default "100 300") kPa;
+#        bladder 6 mm and rectum 4 mm walls; THREADS resampling threads (default 2); PHANTOM_ARGS added to every
+#        phantom (default "--fixed-grid-shift-voxels 0.5": the fixed scan on its own grid, as two real scans are).
 # Writes benchmarks/results/partial_volume_runs.csv, partial_volume.csv, partial_volume.png and prints the
 # table (summarize_partial_volume.py).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
-seeds="${1:-9101 9102}"
+seeds="${1:-9101 9102 9103}"
+phantom_args="${PHANTOM_ARGS---fixed-grid-shift-voxels 0.5}"
 moduli="${MODULI:-100 300}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
@@ -25,7 +27,7 @@ for E in $moduli; do
     ph="$work/ph"
     rm -rf "$ph"
     "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" --bladder-mm 6 \
-      --rectum-mm 4 --seed "$s" --fractions on --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: $E $s"; tail -3 "$work/ph.log"; continue; }
+      --rectum-mm 4 --seed "$s" --fractions on $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: $E $s"; tail -3 "$work/ph.log"; continue; }
     probabilities=""
     for f in "$ph"/fixed_fraction_*.nrrd; do
       organ="$(basename "$f" .nrrd)"

@@ -73,7 +73,9 @@ public:
   SetYoungsModuli(const std::vector<double> & moduli);
 
   /** Phi(E, p) [mm^2]; fills the gradients when not null (with respect to p, and one per unknown label
-   * [mm^2 per unit log E]). */
+   * [mm^2 per unit log E]). When a nonlinear model cannot reach the loads of p (ForwardModel::TrySolveState()),
+   * p is infeasible: the value is 2 |Phi_last| + 1 above the last feasible value, the gradients zero, and
+   * GetNumberOfInfeasibleEvaluations() counts it, so that an optimizer's line search shortens its step. */
   double
   Evaluate(const std::vector<double> & p, std::vector<double> * gradientP, std::vector<double> * gradientLogE);
   /** Nodal displacement [mm] (3N) for the load parameters \a p. */
@@ -82,6 +84,12 @@ public:
   /** Elements turned inside out (deformed volume <= 0) by the displacement of the last Evaluate(). */
   std::size_t
   GetNumberOfInvertedElements() const;
+  /** Evaluations whose loads the model could not reach, since construction. */
+  std::size_t
+  GetNumberOfInfeasibleEvaluations() const
+  {
+    return m_Infeasible;
+  }
   /** The loads [mN] (3N) the boundary exerts on the tissue in the state \a u. */
   std::vector<double>
   ComputeBoundaryForces(const std::vector<double> & u) const;
@@ -115,11 +123,16 @@ public:
   }
 
 private:
+  double
+  InfeasibleValue(std::vector<double> * gradientP, std::vector<double> * gradientLogE);
+
   ForwardModel &                m_Model;
   LoadParameterization &        m_Loads;
   std::vector<const DataTerm *> m_Terms;
   std::vector<std::int32_t>     m_UnknownLabels;
   std::size_t                   m_Inverted{ 0 };
+  std::size_t                   m_Infeasible{ 0 };
+  double                        m_LastFeasibleValue{ 0.0 };
 };
 
 } // namespace bmr

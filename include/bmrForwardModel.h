@@ -59,6 +59,16 @@ public:
    * dofs) and prescribed displacements [mm] (3N, read on the constrained dofs only). */
   virtual std::vector<double>
   SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed) = 0;
+  /** As SolveState(), but returns false instead of throwing when no equilibrium can be reached for these
+   * loads (a nonlinear model whose every path inverts an element), leaving the last equilibrium as it was:
+   * for an optimizer, an infeasible trial point. The default (a model that always reaches its loads) calls
+   * SolveState(). */
+  virtual bool
+  TrySolveState(const std::vector<double> & forces, const std::vector<double> & prescribed, std::vector<double> & u)
+  {
+    u = SolveState(forces, prescribed);
+    return true;
+  }
   /** lambda with K_T lambda = g on the free dofs and lambda = 0 on the constrained ones, K_T the tangent
    * at the last state (3N in, 3N out). */
   virtual std::vector<double>
@@ -72,6 +82,12 @@ public:
   /** \f$\partial f_{int}/\partial E_m\f$ at u [mN per kPa] (3N), m the material of \a label. */
   virtual std::vector<double>
   ModulusDerivative(std::int32_t label, const std::vector<double> & u) const = 0;
+  /** Drops what the model keeps from earlier solves to start the next SolveState() from (a nonlinear model's
+   * last equilibrium), so that the next state depends on its arguments alone and not on the order of earlier
+   * solves: bit-for-bit results when solves from several threads are serialized in any order. */
+  virtual void
+  ForgetState()
+  {}
   /** True when u is affine in the forces and prescribed displacements at fixed moduli, so that
    * du/dp can be computed once per modulus (the Gauss-Newton inner solver needs it). */
   virtual bool

@@ -88,6 +88,11 @@ struct BiomechanicalRegistration_EXPORT NewtonStatistics
  * equilibrium and then from u = 0, SolveState() throws an itk::ExceptionObject naming the load fraction
  * reached and the element with the smallest J of the last trial.
  *
+ * An element whose four nodes are all constrained cannot move: it takes no part in the free equilibrium, the
+ * line search or the tangent (ApplyTangent() omits it, which changes nothing for vectors that vanish on the
+ * constrained dofs, as adjoints do), and adds its internal forces (reactions) only while it is not inverted.
+ * Prescribed wall motion may flatten such a boundary sliver without making the tissue's state infeasible.
+ *
  * SolveAdjoint() and ApplyTangent() use the tangent at the last equilibrium (assembled there, unshifted; an
  * adjoint at an unstable equilibrium, where it is not positive definite, throws).
  * Units: u in mm, f in mN, E and stress in kPa, energy in kPa mm^3 = mN mm (= microjoule).
@@ -113,6 +118,10 @@ public:
   GetYoungsModulus(std::int32_t label) const override;
   std::vector<double>
   SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed) override;
+  bool
+  TrySolveState(const std::vector<double> & forces,
+                const std::vector<double> & prescribed,
+                std::vector<double> &       u) override;
   std::vector<double>
   SolveAdjoint(const std::vector<double> & g) override;
   std::vector<double>
@@ -133,9 +142,16 @@ public:
   /** First Piola-Kirchhoff stress of every element at u [kPa], 9 per element, row-major \f$P_{iJ}\f$. */
   std::vector<double>
   FirstPiolaKirchhoffStress(const std::vector<double> & u) const;
+  /** Von Mises stress of the Cauchy stress \f$\sigma = J^{-1} P F^T\f$ of every element at u [kPa]; 0 for an
+   * inverted element (only a passive one, all of whose nodes are prescribed, can be inverted at equilibrium). */
+  std::vector<double>
+  VonMisesStress(const std::vector<double> & u) const;
+  /** Why the last TrySolveState() failed: the load fraction reached, the reason, the worst element. */
+  const std::string &
+  GetLastFailure() const;
   /** Forgets the last equilibrium: the next SolveState() starts from u = 0. */
   void
-  ForgetState();
+  ForgetState() override;
   const NewtonStatistics &
   GetStatistics() const;
 

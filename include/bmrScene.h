@@ -38,6 +38,15 @@ enum class LabelRoleEnum
   Outside          ///< air / background: left out
 };
 
+/** The tissue model of a scene (Scene::model). */
+enum class MaterialModelEnum : std::uint8_t
+{
+  Linear,
+  NeoHookean
+};
+BiomechanicalRegistration_EXPORT std::ostream &
+                                 operator<<(std::ostream & os, MaterialModelEnum value);
+
 struct BiomechanicalRegistration_EXPORT SceneLabel
 {
   std::string   name;
@@ -109,6 +118,10 @@ struct BiomechanicalRegistration_EXPORT Scene
   /** "formulation": "nodal_averaged_pressure" — the locking-free element formulation for every material
    * (bmr::LinearElasticModel); "standard" (default): plain P1 tetrahedra. */
   ElementFormulationEnum formulation{ ElementFormulationEnum::Standard };
+  /** "model": "linear" (default; bmr::LinearForwardModel) or "neo_hookean" (geometrically nonlinear,
+   * bmr::NeoHookeanForwardModel, standard P1 only): the tissue model of every simulation, estimation and
+   * phantom of the scene. Both take the labels' E and nu and agree for small loads. */
+  MaterialModelEnum model{ MaterialModelEnum::Linear };
 
   /** Warnings about the scene that are not errors: nu > 0.45 on standard P1 tetrahedra (volumetric
    * locking; use the nodal-averaged pressure formulation). */

@@ -18,6 +18,7 @@
 #ifndef bmrSimulation_h
 #define bmrSimulation_h
 
+#include "bmrForwardModel.h"
 #include "bmrLinearElasticModel.h"
 #include "bmrScene.h"
 
@@ -75,10 +76,32 @@ struct BiomechanicalRegistration_EXPORT ForwardSimulation
   std::vector<double>        vonMises;
   std::vector<double>        youngsModulus;
   std::vector<double>        poissonRatio;
-  SolverTimings              timings;
+  SolverTimings              timings;               ///< neo-Hookean: the whole Newton solve counts as "solve"
+  unsigned int               newtonIterations{ 0 }; ///< neo-Hookean only (0 for the linear model)
+  unsigned int               loadIncrements{ 0 };   ///< neo-Hookean only: accepted load increments
 };
 
-/** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels). */
+/** The forward model of the scene's tissue model (Scene::model: LinearForwardModel or
+ * NeoHookeanForwardModel) on \a mesh, which must outlive it, with \a materials (SceneMaterials() or
+ * estimated moduli). */
+BiomechanicalRegistration_EXPORT std::unique_ptr<ForwardModel>
+                                 MakeForwardModel(const Scene &                                      scene,
+                                                  const TetrahedralMesh &                            mesh,
+                                                  const std::map<std::int32_t, MaterialParameters> & materials);
+
+/** Von Mises stress [kPa] of every element in the state \a u [mm] under the scene's model: of the linear
+ * stress, or of the Cauchy stress of the neo-Hookean model. */
+BiomechanicalRegistration_EXPORT std::vector<double>
+                                 SceneVonMisesStress(const Scene &                                      scene,
+                                                     const TetrahedralMesh &                            mesh,
+                                                     const std::map<std::int32_t, MaterialParameters> & materials,
+                                                     const std::vector<double> &                        u);
+
+/** The prescribed displacements of \a bc as a full nodal vector (3N [mm], zero off the Dirichlet nodes). */
+BiomechanicalRegistration_EXPORT std::vector<double>
+                                 PrescribedDisplacements(const BoundaryConditions & bc, std::size_t numberOfNodes);
+
+/** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels) with the scene's model. */
 BiomechanicalRegistration_EXPORT ForwardSimulation
 SimulateScene(const Scene & scene, const TetrahedralMesh & mesh);
 

@@ -43,14 +43,14 @@ namespace detail {
 struct BiomechanicalRegistration_EXPORT SceneObjectiveParts
 {
   SceneObjectiveParts(const TetrahedralMesh & mesh, const Scene & scene, std::vector<ObjectiveSurface> surfaces);
-  std::unique_ptr<LinearForwardModel>  model;
+  std::unique_ptr<ForwardModel>        model;
   std::unique_ptr<WallLoads>           loads;
   std::unique_ptr<SurfaceDistanceTerm> surfaceDistance;
 };
 } // namespace detail
 
-/** \brief The registration objective of a scene (dissertation chapter 3): the linear-elastic model of
- * the scene's materials (LinearForwardModel), the wall displacements of its force surfaces as the unknown
+/** \brief The registration objective of a scene (dissertation chapter 3): the tissue model of the scene
+ * (Scene::model: LinearForwardModel or NeoHookeanForwardModel) with its materials, the wall displacements of its force surfaces as the unknown
  * loads (WallLoads; u = 0 on fixed walls) and the surface distance of its objective surfaces
  * (SurfaceDistanceTerm), composed by EstimationObjective.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation

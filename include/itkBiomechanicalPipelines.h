@@ -263,6 +263,8 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
    * two scans are not aligned to the voxel. 0 (default): the same grid, whose quantization then partly cancels
    * between the scans where the tissue moves little. */
   double fixedGridShiftVoxels{ 0.0 };
+  /** The tissue model of the truth and of the scene handed to the estimator (bmr::Scene::model). */
+  bmr::MaterialModelEnum model{ bmr::MaterialModelEnum::Linear };
 
   /** The defaults of an anatomy: the pelvis as above; the spheres on their own 96^3 grid of 1 mm, the outer
    * surface pressed 1.5 mm inwards (bladderMM). */

@@ -79,8 +79,12 @@ EstimationObjective::Evaluate(const std::vector<double> & p,
                               std::vector<double> *       gradientP,
                               std::vector<double> *       gradientLogE)
 {
-  const BoundaryLoad        load = m_Loads.Apply(p);
-  const std::vector<double> u = m_Model.SolveState(load.forces, load.prescribed);
+  const BoundaryLoad  load = m_Loads.Apply(p);
+  std::vector<double> u;
+  if (!m_Model.TrySolveState(load.forces, load.prescribed, u))
+  {
+    return InfeasibleValue(gradientP, gradientLogE);
+  }
   m_Inverted = CountInvertedElements(m_Model.GetMesh(), u);
   const bool          wantGradient = gradientP != nullptr || gradientLogE != nullptr;
   std::vector<double> g(wantGradient ? u.size() : 0, 0.0);
@@ -90,6 +94,7 @@ EstimationObjective::Evaluate(const std::vector<double> & p,
     value += term->Evaluate(u, wantGradient ? &g : nullptr);
   }
   value += m_Loads.EvaluatePrior(p);
+  m_LastFeasibleValue = value;
   if (!wantGradient)
   {
     return value;
@@ -125,6 +130,24 @@ EstimationObjective::Evaluate(const std::vector<double> & p,
     }
   }
   return value;
+}
+
+// A nonlinear model could not reach the loads of p: a value above the last feasible one (which fails any line
+// search's sufficient decrease, so that the optimizer shortens its step) and a zero gradient.
+double
+EstimationObjective::InfeasibleValue(std::vector<double> * gradientP, std::vector<double> * gradientLogE)
+{
+  ++m_Infeasible;
+  m_Inverted = m_Model.GetMesh().GetNumberOfTetrahedra();
+  if (gradientP != nullptr)
+  {
+    gradientP->assign(GetNumberOfParameters(), 0.0);
+  }
+  if (gradientLogE != nullptr)
+  {
+    gradientLogE->assign(m_UnknownLabels.size(), 0.0);
+  }
+  return 2.0 * std::abs(m_LastFeasibleValue) + 1.0;
 }
 
 std::vector<double>

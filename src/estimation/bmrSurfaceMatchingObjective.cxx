@@ -111,7 +111,7 @@ SceneObjectiveParts::SceneObjectiveParts(const TetrahedralMesh &       mesh,
   BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
   loads.reset(
     new WallLoads(mesh, bc.dirichletNodes, bc.dirichletValues, std::move(bc.forces), SceneLoadedWalls(scene, mesh)));
-  model.reset(new LinearForwardModel(mesh, SceneMaterials(scene)));
+  model = MakeForwardModel(scene, mesh, SceneMaterials(scene));
 }
 } // namespace detail
 

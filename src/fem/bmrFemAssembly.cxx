@@ -94,6 +94,22 @@ LameParameters(double E, double nu, double & lambda, double & mu)
   mu = E / (2.0 * (1.0 + nu));
 }
 // Node adjacency (each node with itself and its element neighbors of higher or equal index).
+double
+VonMises(const double sigma[3][3])
+{
+  const double p = (sigma[0][0] + sigma[1][1] + sigma[2][2]) / 3.0;
+  double       j2 = 0.0;
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      const double dev = sigma[i][j] - (i == j ? p : 0.0);
+      j2 += dev * dev;
+    }
+  }
+  return std::sqrt(1.5 * j2);
+}
+
 NodeAdjacency
 ElementNodeAdjacency(const TetrahedralMesh & mesh)
 {

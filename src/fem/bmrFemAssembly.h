@@ -41,6 +41,10 @@ ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3]);
 void
 LameParameters(double E, double nu, double & lambda, double & mu);
 
+/** The von Mises stress sqrt(3/2 s:s) of the symmetric stress \a sigma [kPa], s its deviator. */
+double
+VonMises(const double sigma[3][3]);
+
 /** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
 void
 PinBlasToOneThread();

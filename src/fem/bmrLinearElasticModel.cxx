@@ -604,17 +604,7 @@ LinearElasticModel::ComputeVonMisesStress(const std::vector<double> & u) const
         s[i][j] = mu * (grad[i][j] + grad[j][i]) + (i == j ? lambda * tr : 0.0);
       }
     }
-    const double p = (s[0][0] + s[1][1] + s[2][2]) / 3.0;
-    double       j2 = 0.0;
-    for (int i = 0; i < 3; ++i)
-    {
-      for (int j = 0; j < 3; ++j)
-      {
-        const double dev = s[i][j] - (i == j ? p : 0.0);
-        j2 += dev * dev;
-      }
-    }
-    vm[e] = std::sqrt(1.5 * j2);
+    vm[e] = fem::VonMises(s);
   }
   return vm;
 }

@@ -67,6 +67,10 @@ struct NeoHookeanForwardModel::Impl
   std::vector<std::array<double, 12>> gradients; // g[a][i] at 3a+i
   std::vector<double>                 volumes;
   std::vector<double>                 mu, lambda; // per element [kPa], from its material
+  // Elements whose four nodes are all constrained: they cannot move, so they take no part in the free
+  // equilibrium (no residual, no tangent on free dofs) and in the line search; one that the prescribed motion
+  // alone inverts (a boundary sliver) would otherwise make every state infeasible.
+  std::vector<char> passive;
   // The tangent on the full lower pattern, and where each element's 4x4 node blocks go in it.
   fem::LowerPattern         pattern;
   std::vector<std::int64_t> elementEntries; // 144 per element: position of K[3a+i][3b+k] or -1 (upper part)
@@ -85,6 +89,7 @@ struct NeoHookeanForwardModel::Impl
   bool                hasState{ false };
   std::vector<double> state, stateForces, statePrescribed;
   NewtonStatistics    statistics;
+  std::string         lastFailure;
 
   Impl(const TetrahedralMesh & m, const std::map<std::int32_t, MaterialParameters> & mats, const NewtonSettings & s);
 
@@ -107,7 +112,7 @@ struct NeoHookeanForwardModel::Impl
   void
   AssembleTangent(const std::vector<double> & u);
   // Solve.
-  void
+  bool
   Factorize(bool allowShift);
   std::vector<double>
   SolveFree(const std::vector<double> & rhs) const;
@@ -151,6 +156,7 @@ NeoHookeanForwardModel::Impl::Impl(const TetrahedralMesh &                      
   UpdateLameParameters();
   BuildPatternAndEntries();
   constrained.assign(ndof, 0);
+  passive.assign(mesh.GetNumberOfTetrahedra(), 0);
   // A tangent that is not positive definite is expected (and shifted) here: no CHOLMOD warning on stdout.
   solver.cholmod().print = 0;
 }
@@ -265,6 +271,10 @@ NeoHookeanForwardModel::Impl::Energy(const std::vector<double> & u, std::int64_t
   double sum = 0.0, smallestJ = std::numeric_limits<double>::infinity();
   for (std::size_t e = 0; e < volumes.size(); ++e)
   {
+    if (passive[e])
+    {
+      continue;
+    }
     fem::ElementDeformation d;
     Deform(e, u, d);
     if (d.J < smallestJ)
@@ -295,7 +305,11 @@ NeoHookeanForwardModel::Impl::Forces(const std::vector<double> & u, std::int32_t
       continue;
     }
     fem::ElementDeformation d;
-    if (!Deform(e, u, d))
+    if (!Deform(e, u, d) && passive[e])
+    {
+      continue; // inverted by the prescribed motion alone: no reaction to report
+    }
+    if (d.J <= 0.0)
     {
       std::ostringstream msg;
       msg << "element " << e << " is inverted (J = " << d.J << "): no neo-Hookean internal forces";
@@ -320,6 +334,10 @@ NeoHookeanForwardModel::Impl::AssembleTangent(const std::vector<double> & u)
   std::fill(tangent.begin(), tangent.end(), 0.0);
   for (std::size_t e = 0; e < volumes.size(); ++e)
   {
+    if (passive[e])
+    {
+      continue;
+    }
     fem::ElementDeformation d;
     if (!Deform(e, u, d))
     {
@@ -347,8 +365,9 @@ NeoHookeanForwardModel::Impl::AssembleTangent(const std::vector<double> & u)
 // ---------------------------------------------------------------------------------------------- solve
 
 // Copies the tangent's free block into the factorized matrix and factorizes it; a block that is not positive
-// definite is shifted by tau * mean diagonal (tau = 1e-8, 1e-6, ... 1) when allowShift, else it fails.
-void
+// definite is shifted by tau * mean diagonal (tau = 1e-8, 1e-6, ... 1e4) when allowShift (false when even that
+// fails), else it throws.
+bool
 NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
 {
   double * values = Kff.valuePtr();
@@ -367,7 +386,7 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
   solver.factorize(Kff);
   if (solver.info() == Eigen::Success)
   {
-    return;
+    return true;
   }
   double meanDiagonal = 0.0;
   for (std::int64_t p : freeDiagonal)
@@ -379,7 +398,7 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
   {
     diagonal[k] = values[freeDiagonal[k]];
   }
-  for (double tau = 1e-8; allowShift && tau <= 1.0; tau *= 100.0)
+  for (double tau = 1e-8; allowShift && tau <= 1e4; tau *= 100.0)
   {
     for (std::size_t k = 0; k < freeDiagonal.size(); ++k)
     {
@@ -389,14 +408,18 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
     if (solver.info() == Eigen::Success)
     {
       ++statistics.shiftedTangents;
-      return;
+      return true;
     }
   }
+  if (allowShift)
+  {
+    return false;
+  }
   Fail(kWho,
-       allowShift ? "the tangent stiffness could not be factorized even after shifting its diagonal"
-                  : "the tangent stiffness at the equilibrium is not positive definite (an unstable "
-                    "equilibrium): no adjoint solve");
+       "the tangent stiffness at the equilibrium is not positive definite (an unstable equilibrium): no "
+       "adjoint solve");
 }
+
 
 std::vector<double>
 NeoHookeanForwardModel::Impl::SolveFree(const std::vector<double> & rhs) const
@@ -481,8 +504,12 @@ NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
       return true;
     }
     AssembleTangent(u);
-    Factorize(true);
     ++statistics.iterations;
+    if (!Factorize(true))
+    {
+      failure.reason = "the tangent stiffness could not be factorized even after shifting its diagonal";
+      return false;
+    }
     std::vector<double> rhs(r);
     if (jump)
     {
@@ -619,6 +646,12 @@ NeoHookeanForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & no
     d.constrained[3 * n] = d.constrained[3 * n + 1] = d.constrained[3 * n + 2] = 1;
   }
   fem::CheckRigidBodyModes(d.mesh, d.constrained, kWho);
+  for (std::size_t e = 0; e < d.passive.size(); ++e)
+  {
+    const std::int32_t * t = &d.mesh.tetrahedra[4 * e];
+    d.passive[e] =
+      d.constrained[3 * t[0]] && d.constrained[3 * t[1]] && d.constrained[3 * t[2]] && d.constrained[3 * t[3]];
+  }
   d.nfree = fem::NumberFreeDofs(d.constrained, d.freeIndex);
   d.Kff = fem::FreeBlock(d.pattern, d.tangent, d.freeIndex, d.nfree, &d.freePositions);
   d.freeDiagonal.clear();
@@ -671,6 +704,19 @@ NeoHookeanForwardModel::GetYoungsModulus(std::int32_t label) const
 std::vector<double>
 NeoHookeanForwardModel::SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed)
 {
+  std::vector<double> u;
+  if (!TrySolveState(forces, prescribed, u))
+  {
+    Fail(kWho, m_Impl->lastFailure);
+  }
+  return u;
+}
+
+bool
+NeoHookeanForwardModel::TrySolveState(const std::vector<double> & forces,
+                                      const std::vector<double> & prescribed,
+                                      std::vector<double> &       u)
+{
   Impl & d = *m_Impl;
   if ((!forces.empty() && forces.size() != d.ndof) || prescribed.size() != d.ndof)
   {
@@ -688,10 +734,9 @@ NeoHookeanForwardModel::SolveState(const std::vector<double> & forces, const std
     (d.constrained[i] ? g1 : f1)[i] = value;
   }
   d.statistics = NewtonStatistics();
-  IncrementFailure    failure;
-  double              reached = 0.0;
-  std::vector<double> u;
-  bool                ok = false;
+  IncrementFailure failure;
+  double           reached = 0.0;
+  bool             ok = false;
   if (d.hasState)
   {
     u = d.state;
@@ -705,21 +750,26 @@ NeoHookeanForwardModel::SolveState(const std::vector<double> & forces, const std
     const std::vector<double> zero(d.ndof, 0.0);
     ok = d.FollowPath(u, zero, zero, f1, g1, reached, failure);
   }
+  d.statistics.seconds = SecondsSince(start);
   if (!ok)
   {
     std::ostringstream msg;
     msg << "the loads could not be applied: equilibrium reached up to load fraction " << reached << " of 1, then "
         << failure.reason << " (smallest J " << failure.worstJ << " in element " << failure.worstElement
         << ") with increments down to " << d.settings.minimumIncrement;
-    Fail(kWho, msg.str());
+    d.lastFailure = msg.str();
+    if (d.hasState)
+    {
+      d.AssembleTangent(d.state); // the tangent belongs to the last equilibrium again
+    }
+    return false;
   }
   d.state = u;
   d.stateForces = f1;
   d.statePrescribed = g1;
   d.hasState = true;
   d.AssembleTangent(u);
-  d.statistics.seconds = SecondsSince(start);
-  return u;
+  return true;
 }
 
 std::vector<double>
@@ -815,10 +865,42 @@ NeoHookeanForwardModel::FirstPiolaKirchhoffStress(const std::vector<double> & u)
   return stress;
 }
 
+std::vector<double>
+NeoHookeanForwardModel::VonMisesStress(const std::vector<double> & u) const
+{
+  const Impl &        d = *m_Impl;
+  std::vector<double> vonMises(d.volumes.size());
+  for (std::size_t e = 0; e < d.volumes.size(); ++e)
+  {
+    fem::ElementDeformation def;
+    if (!d.Deform(e, u, def))
+    {
+      continue; // 0: an element inverted by prescribed motion alone (see the class documentation)
+    }
+    double P[3][3], sigma[3][3];
+    fem::FirstPiolaStress(def, d.mu[e], d.lambda[e], P);
+    for (int i = 0; i < 3; ++i)
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        sigma[i][j] = (P[i][0] * def.F[j][0] + P[i][1] * def.F[j][1] + P[i][2] * def.F[j][2]) / def.J;
+      }
+    }
+    vonMises[e] = fem::VonMises(sigma);
+  }
+  return vonMises;
+}
+
 void
 NeoHookeanForwardModel::ForgetState()
 {
   m_Impl->hasState = false;
+}
+
+const std::string &
+NeoHookeanForwardModel::GetLastFailure() const
+{
+  return m_Impl->lastFailure;
 }
 
 const NewtonStatistics &

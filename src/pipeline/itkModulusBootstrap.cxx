@@ -21,7 +21,7 @@
 
 #include "bmrDisplacementFieldRasterizer.h"
 #include "bmrError.h"
-#include "bmrLinearElasticModel.h"
+#include "bmrSimulation.h"
 #include "bmrSurfaceMatchingObjective.h"
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkGridGeometryConversion.h"
@@ -226,15 +226,15 @@ struct SmoothAnatomy
 
 /** The forward model of the resamples: the moving labels meshed finer than the estimation (another mesh, not a
  * refinement of it), the estimated moduli, u = 0 on fixed walls and the estimated wall motion on the loaded
- * walls, factorized once. */
+ * walls (solved once here, which factorizes a linear model for every resample). */
 struct Resimulation
 {
-  bmr::TetrahedralMesh                     mesh;
-  std::unique_ptr<bmr::LinearElasticModel> model;
-  std::vector<double>                      forces;
-  std::vector<double>                      prescribed; ///< 3N [mm]: held walls, estimated wall motion
-  std::vector<std::int32_t>                wallNodes;
-  std::mutex                               solver; ///< CHOLMOD's workspace is shared by the solves
+  bmr::TetrahedralMesh               mesh;
+  std::unique_ptr<bmr::ForwardModel> model;
+  std::vector<double>                forces;
+  std::vector<double>                prescribed; ///< 3N [mm]: held walls, estimated wall motion
+  std::vector<std::int32_t>          wallNodes;
+  std::mutex                         solver; ///< CHOLMOD's workspace is shared by the solves
 };
 
 /** The estimated displacement [mm] at \a X: interpolated in the estimation mesh, or that of the nearest of
@@ -338,14 +338,9 @@ MakeResimulation(const EstimationSetup &             setup,
   }
   std::vector<std::int32_t> nodes = held.dirichletNodes;
   nodes.insert(nodes.end(), s->wallNodes.begin(), s->wallNodes.end());
-  std::vector<double> values;
-  for (std::int32_t n : nodes)
-  {
-    values.insert(values.end(), s->prescribed.begin() + 3 * n, s->prescribed.begin() + 3 * n + 3);
-  }
-  s->model = std::make_unique<bmr::LinearElasticModel>(s->mesh, materials);
-  s->model->SetDirichletConditions(nodes, values);
-  s->model->Factorize();
+  s->model = bmr::MakeForwardModel(scene, s->mesh, materials);
+  s->model->SetConstrainedNodes(nodes);
+  s->model->SolveState(s->forces, s->prescribed);
   clock.End(std::to_string(s->mesh.GetNumberOfTetrahedra()) + " tetrahedra");
   return s;
 }
@@ -562,7 +557,8 @@ Resample(unsigned int                        k,
     const std::vector<double> prescribed = PerturbedWallMotion(*sim, rng, u.tangentialWallFraction);
     deformed = sim->mesh;
     const std::lock_guard<std::mutex> lock(sim->solver);
-    deformed.displacement = sim->model->Solve(sim->forces, prescribed);
+    sim->model->ForgetState(); // the resamples' order varies with the threads; their states must not
+    deformed.displacement = sim->model->SolveState(sim->forces, prescribed);
   }
   const bmr::GridGeometry grid = ResampleGrid(crop, rng, u);
   const auto maps = RevoxelizedMaps(sim ? &deformed : nullptr, grid, anatomy, *setup.scene, setup.probabilityOrgans);

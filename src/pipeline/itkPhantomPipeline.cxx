@@ -308,6 +308,7 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
   clock.End();
 
   pair.truthScene = TruthScene(s, moving.grid);
+  pair.truthScene.model = s.model;
   pair.movingCT = MakeImageOnGrid<BiomechanicalCTImageType>(moving.grid, moving.ct);
   pair.movingLabels = MakeImageOnGrid<BiomechanicalLabelImageType>(moving.grid, moving.labels);
   BiomechanicalLabelImageType::Pointer truthLabels = pair.movingLabels;
@@ -342,6 +343,7 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
 
   MoveSeeds(pair, moving.seeds, truth.mesh);
   pair.scene = IsPelvis(s) ? bmr::PelvisPhantomScene(50.0, true) : bmr::SpherePhantomScene(50.0, true);
+  pair.scene.model = s.model;
   if (s.fractions)
   {
     clock.Begin("volume fractions of the fixed organs");

@@ -264,14 +264,18 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene)
       materials[l.value].youngsModulus = it->second;
     }
   }
-  const bmr::TetrahedralMesh &  mesh = r.state.mesh;
-  const bmr::LinearElasticModel model(mesh, materials);
-  bmr::ForwardSimulation &      s = r.state.simulation;
+  const bmr::TetrahedralMesh & mesh = r.state.mesh;
+  bmr::ForwardSimulation &     s = r.state.simulation;
   s.displacement = mesh.displacement;
   s.force = mesh.force;
-  s.vonMises = model.ComputeVonMisesStress(mesh.displacement);
-  s.youngsModulus = model.GetElementYoungsModuli();
-  s.poissonRatio = model.GetElementPoissonRatios();
+  s.vonMises = bmr::SceneVonMisesStress(scene, mesh, materials, mesh.displacement);
+  s.youngsModulus.clear();
+  s.poissonRatio.clear();
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    s.youngsModulus.push_back(materials.at(mesh.labels[e]).youngsModulus);
+    s.poissonRatio.push_back(materials.at(mesh.labels[e]).poissonRatio);
+  }
   s.dirichlet.assign(mesh.GetNumberOfPoints(), 0);
   for (std::int32_t n : bmr::SceneBoundaryConditions(scene, mesh).dirichletNodes)
   {

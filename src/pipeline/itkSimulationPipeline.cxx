@@ -155,6 +155,11 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
   }
   std::ostringstream fem;
   fem << "max |u| " << std::setprecision(2) << umax << " mm";
+  if (scene.model == bmr::MaterialModelEnum::NeoHookean)
+  {
+    fem << ", neo-Hookean: " << out.simulation.newtonIterations << " Newton iterations in "
+        << out.simulation.loadIncrements << " load increments";
+  }
   clock.End(fem.str());
   // The FEM stage in the solver's own parts.
   out.stages.pop_back();

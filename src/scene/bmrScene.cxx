@@ -243,14 +243,17 @@ Scene::Warnings() const
   {
     return warnings;
   }
+  const char * remedy = model == MaterialModelEnum::NeoHookean
+                          ? "the neo-Hookean model has no locking-free formulation: lower nu or use \"model\": "
+                            "\"linear\" with \"formulation\": \"nodal_averaged_pressure\""
+                          : "set \"formulation\": \"nodal_averaged_pressure\" in the scene";
   for (const SceneLabel & l : labels)
   {
     if ((l.role == LabelRoleEnum::Material || l.role == LabelRoleEnum::UnknownMaterial) && l.poissonRatio > 0.45)
     {
       std::ostringstream os;
       os << "label \"" << l.name << "\" has nu = " << l.poissonRatio
-         << " > 0.45: linear tetrahedra lock (too stiff) near incompressibility; set \"formulation\": "
-            "\"nodal_averaged_pressure\" in the scene";
+         << " > 0.45: linear tetrahedra lock (too stiff) near incompressibility; " << remedy;
       warnings.push_back(os.str());
     }
   }
@@ -447,6 +450,23 @@ Scene::Validate() const
                "\"fixed\", prescribe a displacement load, or estimate the loads of force_surfaces");
   }
   CheckMeshingParameters(mesh, src);
+  if (model == MaterialModelEnum::NeoHookean && formulation == ElementFormulationEnum::NodalAveragedPressure)
+  {
+    SceneError(src, "model", "the neo-Hookean model has only the standard P1 formulation, not nodal_averaged_pressure");
+  }
+}
+
+std::ostream &
+operator<<(std::ostream & os, MaterialModelEnum value)
+{
+  switch (value)
+  {
+    case MaterialModelEnum::Linear:
+      return os << "bmr::MaterialModelEnum::Linear";
+    case MaterialModelEnum::NeoHookean:
+      return os << "bmr::MaterialModelEnum::NeoHookean";
+  }
+  return os << "INVALID VALUE FOR bmr::MaterialModelEnum";
 }
 
 void
@@ -561,7 +581,7 @@ ParseLabel(const Json & j, const std::string & source, const std::string & entry
 }
 
 void
-ParseGaugeAndFormulation(const Json & root, const std::string & source, Scene & scene)
+ParseGaugeFormulationAndModel(const Json & root, const std::string & source, Scene & scene)
 {
   if (root.contains("gauge"))
   {
@@ -576,6 +596,15 @@ ParseGaugeAndFormulation(const Json & root, const std::string & source, Scene & 
     }
     scene.formulation =
       f == "nodal_averaged_pressure" ? ElementFormulationEnum::NodalAveragedPressure : ElementFormulationEnum::Standard;
+  }
+  if (root.contains("model"))
+  {
+    const std::string m = GetString(root, "model", source, "scene");
+    if (m != "linear" && m != "neo_hookean")
+    {
+      SceneError(source, "model", "\"" + m + "\" is not linear or neo_hookean");
+    }
+    scene.model = m == "neo_hookean" ? MaterialModelEnum::NeoHookean : MaterialModelEnum::Linear;
   }
 }
 
@@ -839,7 +868,8 @@ ParseScene(const std::string & text, const std::string & source)
               "landmarks",
               "region_of_interest",
               "mesh",
-              "formulation" },
+              "formulation",
+              "model" },
             source,
             "scene");
   if (root.contains("name"))
@@ -858,7 +888,7 @@ ParseScene(const std::string & text, const std::string & source)
   {
     scene.labels.push_back(ParseLabel(root["labels"][i], source, "labels[" + std::to_string(i) + "]"));
   }
-  ParseGaugeAndFormulation(root, source, scene);
+  ParseGaugeFormulationAndModel(root, source, scene);
   ParseLabelNameList(root, "force_surfaces", source, scene.forceSurfaces);
   if (root.contains("objective"))
   {
@@ -926,6 +956,7 @@ SceneToJson(const Scene & scene)
     root["gauge"] = scene.gauge;
   root["formulation"] =
     scene.formulation == ElementFormulationEnum::NodalAveragedPressure ? "nodal_averaged_pressure" : "standard";
+  root["model"] = scene.model == MaterialModelEnum::NeoHookean ? "neo_hookean" : "linear";
   if (!scene.forceSurfaces.empty())
     root["force_surfaces"] = scene.forceSurfaces;
   if (!scene.objective.empty())

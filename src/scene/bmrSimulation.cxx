@@ -18,6 +18,7 @@
 #include "bmrSimulation.h"
 
 #include "bmrError.h"
+#include "bmrNeoHookeanForwardModel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -365,24 +366,91 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
   return bc;
 }
 
+std::unique_ptr<ForwardModel>
+MakeForwardModel(const Scene &                                      scene,
+                 const TetrahedralMesh &                            mesh,
+                 const std::map<std::int32_t, MaterialParameters> & materials)
+{
+  if (scene.model == MaterialModelEnum::NeoHookean)
+  {
+    return std::make_unique<NeoHookeanForwardModel>(mesh, materials);
+  }
+  return std::make_unique<LinearForwardModel>(mesh, materials);
+}
+
+std::vector<double>
+SceneVonMisesStress(const Scene &                                      scene,
+                    const TetrahedralMesh &                            mesh,
+                    const std::map<std::int32_t, MaterialParameters> & materials,
+                    const std::vector<double> &                        u)
+{
+  if (scene.model == MaterialModelEnum::NeoHookean)
+  {
+    return NeoHookeanForwardModel(mesh, materials).VonMisesStress(u);
+  }
+  return LinearElasticModel(mesh, materials).ComputeVonMisesStress(u);
+}
+
+std::vector<double>
+PrescribedDisplacements(const BoundaryConditions & bc, std::size_t numberOfNodes)
+{
+  std::vector<double> prescribed(3 * numberOfNodes, 0.0);
+  for (std::size_t k = 0; k < bc.dirichletNodes.size(); ++k)
+  {
+    std::copy(&bc.dirichletValues[3 * k], &bc.dirichletValues[3 * k] + 3, &prescribed[3 * bc.dirichletNodes[k]]);
+  }
+  return prescribed;
+}
+
+namespace {
+// The neo-Hookean path of SimulateScene(): the same boundary conditions, Newton's equilibrium.
+ForwardSimulation
+SimulateNeoHookean(const Scene & scene, const TetrahedralMesh & mesh, const BoundaryConditions & bc)
+{
+  const auto             materials = SceneMaterials(scene);
+  NeoHookeanForwardModel model(mesh, materials);
+  model.SetConstrainedNodes(bc.dirichletNodes);
+  ForwardSimulation out;
+  out.displacement = model.SolveState(bc.forces, PrescribedDisplacements(bc, mesh.GetNumberOfPoints()));
+  out.force = model.InternalForces(out.displacement);
+  out.vonMises = model.VonMisesStress(out.displacement);
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    out.youngsModulus.push_back(materials.at(mesh.labels[e]).youngsModulus);
+    out.poissonRatio.push_back(materials.at(mesh.labels[e]).poissonRatio);
+  }
+  out.timings.solve = model.GetStatistics().seconds;
+  out.newtonIterations = model.GetStatistics().iterations;
+  out.loadIncrements = model.GetStatistics().acceptedIncrements;
+  return out;
+}
+} // namespace
+
 ForwardSimulation
 SimulateScene(const Scene & scene, const TetrahedralMesh & mesh)
 {
-  LinearElasticModel       model(mesh, SceneMaterials(scene));
   const BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
-  model.SetDirichletConditions(bc.dirichletNodes, bc.dirichletValues);
-  ForwardSimulation out;
-  out.displacement = model.Solve(bc.forces);
-  out.force = model.ComputeInternalForces(out.displacement);
+  ForwardSimulation        out;
+  if (scene.model == MaterialModelEnum::NeoHookean)
+  {
+    out = SimulateNeoHookean(scene, mesh, bc);
+  }
+  else
+  {
+    LinearElasticModel model(mesh, SceneMaterials(scene));
+    model.SetDirichletConditions(bc.dirichletNodes, bc.dirichletValues);
+    out.displacement = model.Solve(bc.forces);
+    out.force = model.ComputeInternalForces(out.displacement);
+    out.vonMises = model.ComputeVonMisesStress(out.displacement);
+    out.youngsModulus = model.GetElementYoungsModuli();
+    out.poissonRatio = model.GetElementPoissonRatios();
+    out.timings = model.GetTimings();
+  }
   out.dirichlet.assign(mesh.GetNumberOfPoints(), 0);
   for (std::int32_t node : bc.dirichletNodes)
   {
     out.dirichlet[node] = 1;
   }
-  out.vonMises = model.ComputeVonMisesStress(out.displacement);
-  out.youngsModulus = model.GetElementYoungsModuli();
-  out.poissonRatio = model.GetElementPoissonRatios();
-  out.timings = model.GetTimings();
   return out;
 }
 

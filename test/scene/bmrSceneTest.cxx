@@ -90,6 +90,12 @@ bmrSceneTest(int, char *[])
   // Round trip through SceneToJson.
   const bmr::Scene again = bmr::ParseScene(bmr::SceneToJson(s), "roundtrip");
   ok &= Expect(bmr::SceneToJson(again) == bmr::SceneToJson(s), "SceneToJson o ParseScene o SceneToJson round trip");
+  ok &= Expect(s.model == bmr::MaterialModelEnum::Linear, "the tissue model defaults to linear");
+  const bmr::Scene nh =
+    bmr::ParseScene(Replace(ValidScene, "\"gauge\"", "\"model\": \"neo_hookean\", \"gauge\""), "nh.json");
+  ok &= Expect(nh.model == bmr::MaterialModelEnum::NeoHookean &&
+                 bmr::ParseScene(bmr::SceneToJson(nh), "roundtrip").model == bmr::MaterialModelEnum::NeoHookean,
+               "\"model\": \"neo_hookean\" is read and survives the round trip");
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
   // A tube load: the axis is normalized on reading and survives the round trip.
   const std::string tube = Replace(ValidScene, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 2], \"magnitude_mm\": 6");
@@ -247,6 +253,18 @@ bmrSceneTest(int, char *[])
                         "labels[soft_tissue].youngs_modulus_kPa");
   ok &= ExpectException(
     "unknown key", parse(Replace(v, "\"gauge\"", "\"gauge_typo\": 1, \"gauge\"")), "scene.gauge_typo: unknown key");
+  ok &= ExpectException("unknown model",
+                        parse(Replace(v, "\"gauge\"", "\"model\": \"hyperelastic\", \"gauge\"")),
+                        "model: \"hyperelastic\" is not linear or neo_hookean");
+  ok &= ExpectException(
+    "neo-Hookean with nodal-averaged pressure",
+    [&] {
+      bmr::Scene bad = bmr::ParseScene(v, "bad.json");
+      bad.model = bmr::MaterialModelEnum::NeoHookean;
+      bad.formulation = bmr::ElementFormulationEnum::NodalAveragedPressure;
+      bad.Validate();
+    },
+    "only the standard P1 formulation");
   ok &= ExpectException("wrong type",
                         parse(Replace(v, "\"margin_mm\": 20", "\"margin_mm\": \"20\"")),
                         "region_of_interest.margin_mm: must be a number");
