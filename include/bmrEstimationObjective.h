@@ -107,7 +107,9 @@ public:
    * \f$ (J^TJ + \mu\,\mathrm{diag}(J^TJ))\,\delta = -J^T r - \nabla R \f$ with \f$ J = \partial r/\partial u\, A \f$.
    * Stops when \f$\|J^T r + \nabla R\| \le\f$ tolerance max(1, |p|), when Phi no longer decreases
    * (relative 1e-10), or after maximumIterations. Meant for reduced bases (tens to hundreds of parameters).
-   * The prior must be alpha/2 |p|^2 (its Hessian is taken as alpha I). */
+   * The prior must be alpha/2 |p|^2 (its Hessian is taken as alpha I). With a nonlinear model (the
+   * neo-Hookean) every trial p is a Newton solve (an infeasible one is rejected like a rise of Phi), and A =
+   * du/dp is recomputed from the tangent at each accepted p: one back-substitution per parameter. */
   LoadSolution
   SolveLoadsGaussNewton(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
 

@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace bmr {
 
@@ -243,17 +244,24 @@ struct AffineState
   std::vector<std::int32_t> rowOfDof;
 };
 
+std::vector<std::int32_t>
+RowsOfDofs(const std::vector<std::int32_t> & dofs, std::size_t ndof)
+{
+  std::vector<std::int32_t> rowOfDof(ndof, -1);
+  for (std::size_t i = 0; i < dofs.size(); ++i)
+  {
+    rowOfDof[dofs[i]] = static_cast<std::int32_t>(i);
+  }
+  return rowOfDof;
+}
+
 AffineState
 LinearizeState(ForwardModel & model, const LoadParameterization & loads, const std::vector<std::int32_t> & dofs)
 {
   AffineState        s;
   const BoundaryLoad zero = loads.Apply(std::vector<double>(loads.GetNumberOfParameters(), 0.0));
   s.u0 = model.SolveState(zero.forces, zero.prescribed);
-  s.rowOfDof.assign(s.u0.size(), -1);
-  for (std::size_t i = 0; i < dofs.size(); ++i)
-  {
-    s.rowOfDof[dofs[i]] = static_cast<std::int32_t>(i);
-  }
+  s.rowOfDof = RowsOfDofs(dofs, s.u0.size());
   const std::size_t np = loads.GetNumberOfParameters();
   s.A.resize(static_cast<Eigen::Index>(dofs.size()), static_cast<Eigen::Index>(np));
   for (std::size_t j = 0; j < np; ++j)
@@ -266,6 +274,43 @@ LinearizeState(ForwardModel & model, const LoadParameterization & loads, const s
     }
   }
   return s;
+}
+
+/** du/dp on \a dofs at a nonlinear model's last equilibrium, for an affine parameterization: the tangent's
+ * response to each direction's loads, \f$\Delta u = \Delta\bar u\f$ on the constrained dofs and
+ * \f$K_{ff}^{-1}(\Delta f - K_T \Delta\bar u)_f\f$ on the free ones (one back-substitution per parameter on the
+ * tangent's factorization, which the adjoint shares). */
+Eigen::MatrixXd
+TangentResponse(ForwardModel & model, const LoadParameterization & loads, const std::vector<std::int32_t> & dofs)
+{
+  const std::size_t ndof = 3 * model.GetMesh().GetNumberOfPoints();
+  std::vector<char> constrained(ndof, 0);
+  for (std::int32_t n : loads.GetConstrainedNodes())
+  {
+    constrained[3 * n] = constrained[3 * n + 1] = constrained[3 * n + 2] = 1;
+  }
+  const std::size_t np = loads.GetNumberOfParameters();
+  Eigen::MatrixXd   A(static_cast<Eigen::Index>(dofs.size()), static_cast<Eigen::Index>(np));
+  for (std::size_t j = 0; j < np; ++j)
+  {
+    const BoundaryLoad  direction = loads.Direction(j);
+    std::vector<double> prescribed(ndof, 0.0), rhs(ndof, 0.0);
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      prescribed[i] = constrained[i] ? direction.prescribed[i] : 0.0;
+    }
+    const std::vector<double> Kprescribed = model.ApplyTangent(prescribed);
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      rhs[i] = constrained[i] ? 0.0 : (direction.forces.empty() ? 0.0 : direction.forces[i]) - Kprescribed[i];
+    }
+    const std::vector<double> du = model.SolveAdjoint(rhs); // K_T is symmetric
+    for (std::size_t i = 0; i < dofs.size(); ++i)
+    {
+      A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = du[dofs[i]] + prescribed[dofs[i]];
+    }
+  }
+  return A;
 }
 } // namespace
 
@@ -280,9 +325,9 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
     Fail("EstimationObjective::SolveLoadsGaussNewton",
          "the start holds " + std::to_string(start.size()) + " values, expected " + std::to_string(np));
   }
-  if (!m_Model.IsLinear() || !m_Loads.IsAffine())
+  if (!m_Loads.IsAffine())
   {
-    Fail("EstimationObjective::SolveLoadsGaussNewton", "needs a linear model and an affine load parameterization");
+    Fail("EstimationObjective::SolveLoadsGaussNewton", "needs an affine load parameterization");
   }
   // The dofs the residuals read, from their Jacobian's pattern at the unloaded state.
   std::vector<double> r;
@@ -291,7 +336,18 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
   std::vector<std::int32_t> dofs = pattern.dofs;
   std::sort(dofs.begin(), dofs.end());
   dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
-  const AffineState state = LinearizeState(m_Model, m_Loads, dofs);
+  // A linear model's state is affine in p: computed once. A nonlinear one is solved at every p, and its
+  // derivative du/dp taken from the tangent at each point where the Jacobian is needed.
+  const bool  linear = m_Model.IsLinear();
+  AffineState state;
+  if (linear)
+  {
+    state = LinearizeState(m_Model, m_Loads, dofs);
+  }
+  else
+  {
+    state.rowOfDof = RowsOfDofs(dofs, 3 * m_Model.GetMesh().GetNumberOfPoints());
+  }
   // The prior's weight alpha from R(e_0) = alpha / 2 (exact in binary floating point).
   std::vector<double> unit(np, 0.0);
   if (np > 0)
@@ -301,12 +357,30 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
   const double alpha = np > 0 ? 2.0 * m_Loads.EvaluatePrior(unit) : 0.0;
 
   // Residuals r(p) and their Jacobian J = dr/du A; the prior alpha/2 |p|^2 is added to the value.
+  // An infeasible p (no nonlinear state follows its loads) has an infinite value, which LM rejects.
   const auto residuals = [&](const Eigen::VectorXd & p, Eigen::VectorXd & rp, Eigen::MatrixXd * J) {
-    const Eigen::VectorXd Ap = state.A * p;
-    std::vector<double>   u = state.u0;
-    for (std::size_t i = 0; i < dofs.size(); ++i)
+    std::vector<double> u;
+    if (linear)
     {
-      u[dofs[i]] += Ap[static_cast<Eigen::Index>(i)];
+      const Eigen::VectorXd Ap = state.A * p;
+      u = state.u0;
+      for (std::size_t i = 0; i < dofs.size(); ++i)
+      {
+        u[dofs[i]] += Ap[static_cast<Eigen::Index>(i)];
+      }
+    }
+    else
+    {
+      const BoundaryLoad load = m_Loads.Apply(std::vector<double>(p.data(), p.data() + p.size()));
+      if (!m_Model.TrySolveState(load.forces, load.prescribed, u))
+      {
+        ++m_Infeasible;
+        return std::numeric_limits<double>::infinity();
+      }
+      if (J)
+      {
+        state.A = TangentResponse(m_Model, m_Loads, dofs);
+      }
     }
     std::vector<double> rv;
     ResidualJacobian    jac;

@@ -94,6 +94,21 @@ LameParameters(double E, double nu, double & lambda, double & mu)
   mu = E / (2.0 * (1.0 + nu));
 }
 // Node adjacency (each node with itself and its element neighbors of higher or equal index).
+std::string
+MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio)
+{
+  std::ostringstream msg;
+  if (!(std::isfinite(youngsModulus) && youngsModulus > 0.0))
+  {
+    msg << "label " << label << ": Young's modulus must be positive and finite, got " << youngsModulus << " kPa";
+  }
+  else if (!(std::isfinite(poissonRatio) && poissonRatio > -1.0 && poissonRatio < 0.5))
+  {
+    msg << "label " << label << ": Poisson's ratio must lie in (-1, 0.5), got " << poissonRatio;
+  }
+  return msg.str();
+}
+
 double
 VonMises(const double sigma[3][3])
 {

@@ -45,6 +45,10 @@ LameParameters(double E, double nu, double & lambda, double & mu);
 double
 VonMises(const double sigma[3][3]);
 
+/** Why the material of \a label is not usable (E not positive and finite, nu outside (-1, 0.5)), or "" when it is. */
+std::string
+MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio);
+
 /** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
 void
 PinBlasToOneThread();

@@ -318,14 +318,7 @@ LinearElasticModel::LinearElasticModel(const TetrahedralMesh &                  
   {
     const MaterialParameters & m = kv.second;
     std::ostringstream         msg;
-    if (!(std::isfinite(m.youngsModulus) && m.youngsModulus > 0.0))
-    {
-      msg << "label " << kv.first << ": Young's modulus must be positive and finite, got " << m.youngsModulus << " kPa";
-    }
-    else if (!(std::isfinite(m.poissonRatio) && m.poissonRatio > -1.0 && m.poissonRatio < 0.5))
-    {
-      msg << "label " << kv.first << ": Poisson's ratio must lie in (-1, 0.5), got " << m.poissonRatio;
-    }
+    msg << fem::MaterialProblem(kv.first, m.youngsModulus, m.poissonRatio);
     if (!msg.str().empty())
     {
       Fail("LinearElasticModel", msg.str());

@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <sstream>
 
 namespace bmr {
@@ -40,12 +41,7 @@ const char * const kWho = "NeoHookeanForwardModel";
 double
 Norm(const std::vector<double> & v)
 {
-  double s = 0.0;
-  for (double x : v)
-  {
-    s += x * x;
-  }
-  return std::sqrt(s);
+  return std::sqrt(std::inner_product(v.begin(), v.end(), v.begin(), 0.0));
 }
 
 /** One trial of a load increment that did not work, and why (for the error message). */
@@ -168,15 +164,8 @@ NeoHookeanForwardModel::Impl::ValidateMaterials() const
   {
     const MaterialParameters & m = kv.second;
     std::ostringstream         msg;
-    if (!(std::isfinite(m.youngsModulus) && m.youngsModulus > 0.0))
-    {
-      msg << "label " << kv.first << ": Young's modulus must be positive and finite, got " << m.youngsModulus << " kPa";
-    }
-    else if (!(std::isfinite(m.poissonRatio) && m.poissonRatio > -1.0 && m.poissonRatio < 0.5))
-    {
-      msg << "label " << kv.first << ": Poisson's ratio must lie in (-1, 0.5), got " << m.poissonRatio;
-    }
-    else if (m.formulation != ElementFormulationEnum::Standard)
+    msg << fem::MaterialProblem(kv.first, m.youngsModulus, m.poissonRatio);
+    if (msg.str().empty() && m.formulation != ElementFormulationEnum::Standard)
     {
       msg << "label " << kv.first << ": the neo-Hookean model has only the standard P1 formulation (got "
           << m.formulation << "); use the linear model for the nodal-averaged pressure";
