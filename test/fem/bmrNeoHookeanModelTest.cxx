@@ -21,6 +21,7 @@
 // the linear model, adjoint gradients against the Taylor remainder, invariance under a rigid rotation, a
 // compression that no inverted element survives, and the error paths.
 #include "bmrLinearElasticModel.h"
+#include "bmrMesher.h"
 #include "bmrNeoHookeanForwardModel.h"
 #include "bmrTestUtilities.h"
 
@@ -206,6 +207,81 @@ struct LoadedCube
       forces[3 * n] = 0.5 * load;
       forces[3 * n + 2] = -load;
     }
+  }
+};
+
+// The thick hollow sphere A <= R <= B inflated by a prescribed inner radial displacement, outer surface free:
+// the radial solution r(R) of the compressible neo-Hookean ball, independently of the finite elements. With
+// lr = r', lt = r / R, J = lr lt^2, the radial and hoop first Piola-Kirchhoff stresses are
+// Pr = mu (lr - 1/lr) + lambda ln J / lr and Pt = mu (lt - 1/lt) + lambda ln J / lt, and equilibrium is
+// dPr/dR + 2 (Pr - Pt) / R = 0, i.e. r'' = -[2 (Pr - Pt) / R + dPr/dlt (r' - r/R) / R] / dPr/dlr.
+// RK4 in R for (r, r'), shooting on r'(A) (bisection) until Pr(B) = 0.
+struct HollowSphere
+{
+  double A{ 5.0 }, B{ 10.0 }, innerDisplacement{ 2.5 }, mu{ kMu1 }, lambda{ kLambda1 };
+
+  double
+  RadialStress(double r, double dr, double R) const
+  {
+    const double lt = r / R, J = dr * lt * lt;
+    return mu * (dr - 1.0 / dr) + lambda * std::log(J) / dr;
+  }
+  void
+  Derivative(double R, const double y[2], double dy[2]) const
+  {
+    const double r = y[0], lr = y[1], lt = r / R, lnJ = std::log(lr * lt * lt);
+    const double Pr = mu * (lr - 1.0 / lr) + lambda * lnJ / lr, Pt = mu * (lt - 1.0 / lt) + lambda * lnJ / lt;
+    const double dPrdlr = mu + (mu + lambda * (1.0 - lnJ)) / (lr * lr), dPrdlt = 2.0 * lambda / (lr * lt);
+    dy[0] = lr;
+    dy[1] = -(2.0 * (Pr - Pt) / R + dPrdlt * (lr - lt) / R) / dPrdlr;
+  }
+  // r at n + 1 equally spaced radii from A to B for the slope s = r'(A); false when the stretch turns <= 0.
+  bool
+  Integrate(double s, int n, std::vector<double> & r, double & slopeAtB) const
+  {
+    double       y[2] = { A + innerDisplacement, s };
+    const double h = (B - A) / n;
+    r.assign(1, y[0]);
+    for (int k = 0; k < n; ++k)
+    {
+      const double R = A + k * h;
+      double       k1[2], k2[2], k3[2], k4[2], t[2];
+      Derivative(R, y, k1);
+      for (int i = 0; i < 2; ++i)
+        t[i] = y[i] + 0.5 * h * k1[i];
+      Derivative(R + 0.5 * h, t, k2);
+      for (int i = 0; i < 2; ++i)
+        t[i] = y[i] + 0.5 * h * k2[i];
+      Derivative(R + 0.5 * h, t, k3);
+      for (int i = 0; i < 2; ++i)
+        t[i] = y[i] + h * k3[i];
+      Derivative(R + h, t, k4);
+      for (int i = 0; i < 2; ++i)
+        y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+      if (!(y[0] > 0.0 && y[1] > 0.0))
+      {
+        return false;
+      }
+      r.push_back(y[0]);
+    }
+    slopeAtB = y[1];
+    return true;
+  }
+  // The radii r(R_k) of the solution with Pr(B) = 0 on n steps.
+  std::vector<double>
+  Solve(int n) const
+  {
+    double              lo = 0.05, hi = 3.0; // Pr(B) < 0 at lo (the wall barely stretches), > 0 at hi
+    std::vector<double> r;
+    double              slope = 0.0;
+    for (int it = 0; it < 200 && hi - lo > 1e-15; ++it)
+    {
+      const double mid = 0.5 * (lo + hi);
+      const bool   ok = Integrate(mid, n, r, slope);
+      (ok && RadialStress(r.back(), slope, B) > 0.0 ? hi : lo) = mid;
+    }
+    Integrate(hi, n, r, slope);
+    return r;
   }
 };
 } // namespace
@@ -478,6 +554,84 @@ bmrNeoHookeanModelTest(int, char *[])
         model.SolveState({}, prescribed);
       },
       "could not be applied");
+  }
+  // 8. The thick hollow sphere (5 to 10 mm) inflated by 2.5 mm at its inner wall, outer surface free, against
+  // the radial solution of the 1-D equilibrium ODE (solved here to 1e-8 mm: RK4 on 4000 and 8000 steps agree).
+  {
+    const HollowSphere        sphere;
+    const std::vector<double> fine = sphere.Solve(8000), coarse = sphere.Solve(4000);
+    double                    odeError = 0.0;
+    for (std::size_t k = 0; k < coarse.size(); ++k)
+    {
+      odeError = std::max(odeError, std::abs(coarse[k] - fine[2 * k]));
+    }
+    ok &= Expect(odeError <= 1e-8, "the radial ODE converged to 1e-8 mm (got " + ToString(odeError) + ")");
+    const auto exactDisplacement = [&](double R) { // linear interpolation on the 8000-step solution
+      const double t = (R - sphere.A) / (sphere.B - sphere.A) * 8000.0;
+      const int    k = std::min(7999, std::max(0, static_cast<int>(t)));
+      return fine[k] + (t - k) * (fine[k + 1] - fine[k]) - R;
+    };
+    std::vector<double> errors, linearErrors;
+    for (double h : { 2.0, 1.0 })
+    {
+      bmr::MeshingParameters p;
+      p.cellSize = p.facetSize = h;
+      p.facetDistance = 0.1 * h;
+      auto labelAt = [&](double x, double y, double z) -> std::int32_t {
+        const double R = std::sqrt(x * x + y * y + z * z);
+        return R < sphere.A ? 3 : (R <= sphere.B ? 1 : 0);
+      };
+      const bmr::TetrahedralMesh mesh =
+        bmr::ExtractSubmesh(bmr::MeshImplicitLabels(labelAt, { { 0, 0, 0 } }, 11.0, p), { 3 });
+      const auto          inner = bmr::NodesOnBoundary(mesh, 3);
+      std::vector<double> prescribed(mesh.points.size(), 0.0);
+      for (std::int32_t n : inner)
+      {
+        const double * X = &mesh.points[3 * n];
+        const double   R = std::sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]);
+        for (int i = 0; i < 3; ++i)
+        {
+          prescribed[3 * n + i] = (sphere.A + sphere.innerDisplacement) * X[i] / R - X[i]; // onto the radius 7.5
+        }
+      }
+      bmr::NeoHookeanForwardModel model(mesh, { { 1, { 10.0, 0.3 } } });
+      model.SetConstrainedNodes(inner);
+      const std::vector<double> u = model.SolveState({}, prescribed);
+      bmr::LinearElasticModel   linear(mesh, { { 1, { 10.0, 0.3 } } });
+      linear.SetDirichletConditions(inner, {});
+      const std::vector<double> uLinear = linear.Solve({}, prescribed);
+      double                    sum = 0.0, sumLinear = 0.0;
+      for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
+      {
+        const double * X = &mesh.points[3 * n];
+        const double   R = std::sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]);
+        const double   exact = exactDisplacement(std::min(sphere.B, std::max(sphere.A, R)));
+        for (int i = 0; i < 3; ++i)
+        {
+          sum += std::pow(u[3 * n + i] - exact * X[i] / R, 2);
+          sumLinear += std::pow(uLinear[3 * n + i] - exact * X[i] / R, 2);
+        }
+      }
+      const double rms = std::sqrt(sum / mesh.GetNumberOfPoints());
+      linearErrors.push_back(std::sqrt(sumLinear / mesh.GetNumberOfPoints()) / sphere.innerDisplacement);
+      errors.push_back(rms / sphere.innerDisplacement);
+      std::cout << "hollow sphere, h " << h << " mm (" << mesh.GetNumberOfTetrahedra() << " tetrahedra, "
+                << model.GetStatistics().iterations << " Newton iterations): outer radius "
+                << sphere.B + exactDisplacement(sphere.B) << " mm exact, RMS nodal error " << rms
+                << " mm (linear model " << linearErrors.back() * sphere.innerDisplacement << " mm)" << std::endl;
+    }
+    const double order = std::log2(errors[0] / errors[1]);
+    // 1 %: P1 nodal errors fall as h^2 (and CGAL's surfaces approach the spheres as h^2); measured 0.57 % at
+    // h = 1 mm and order 2.2. The linear model on the same meshes stays 9 % off: the test tells the models apart.
+    ok &= Expect(errors[1] <= 0.01,
+                 "hollow sphere: RMS nodal error <= 1 % of the inflation at h = 1 mm (got " +
+                   ToString(100.0 * errors[1]) + " %)");
+    ok &= Expect(order >= 1.5,
+                 "hollow sphere: the error falls at least as h^1.5 from h = 2 to 1 mm (order " + ToString(order) + ")");
+    ok &=
+      Expect(linearErrors[1] >= 5.0 * errors[1],
+             "hollow sphere: the linear model misses the neo-Hookean solution by >= 5x the neo-Hookean error (got " +
+               ToString(linearErrors[1] / errors[1]) + "x)");
   }
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
