@@ -51,7 +51,9 @@ struct BiomechanicalRegistration_EXPORT NewtonStatistics
   unsigned int rejectedIncrements{ 0 }; ///< halved after an inverted trial, a failed line search or no convergence
   unsigned int iterations{ 0 };         ///< Newton iterations of the accepted and the rejected increments
   unsigned int shiftedTangents{ 0 };    ///< tangents that were not positive definite and were shifted
-  bool         warmStart{ false };      ///< the path started from the previous equilibrium (else from u = 0)
+  unsigned int factorizations{ 0 };     ///< numeric Cholesky factorizations (including the adjoints' since)
+  unsigned int conjugateGradientIterations{ 0 }; ///< preconditioned CG iterations that replaced factorizations
+  bool         warmStart{ false };               ///< the path started from the previous equilibrium (else from u = 0)
   /** Relative residual (NewtonSettings::residualTolerance's measure) before each Newton iteration of the last
    * accepted increment, and after it: the convergence history that shows Newton's quadratic rate. */
   std::vector<double> lastResiduals;
@@ -79,7 +81,9 @@ struct BiomechanicalRegistration_EXPORT NewtonStatistics
  * Equilibrium \f$f_{int}(u) = f\f$ on the free dofs (u prescribed on the constrained ones) is found by
  * Newton's method on the total potential \f$\Pi(u) = \sum_e V_e W(F_e) - f^T u\f$: each iteration solves
  * \f$K_T \Delta u = r\f$ (a sparse Cholesky factorization, CHOLMOD: the symbolic analysis once per
- * constrained set, the numeric factorization per iteration), then backtracks \f$u + \alpha \Delta u\f$ until
+ * constrained set; the numeric factorization only when needed: a solve first runs conjugate gradients on the
+ * current tangent preconditioned by the last factorization, which between nearby states converge in a few
+ * iterations, and factorizes when they do not, or after a slow one), then backtracks \f$u + \alpha \Delta u\f$ until
  * no element is inverted (J > 0) and \f$\Pi\f$ decreases (Armijo). A tangent that is not positive definite is
  * shifted by a multiple of its mean diagonal, which keeps \f$\Delta u\f$ a descent direction. The loads are
  * applied along a path from the last equilibrium (or from u = 0) in increments: the first one the whole path
@@ -149,7 +153,8 @@ public:
   /** Why the last TrySolveState() failed: the load fraction reached, the reason, the worst element. */
   const std::string &
   GetLastFailure() const;
-  /** Forgets the last equilibrium: the next SolveState() starts from u = 0. */
+  /** Forgets the last equilibrium and the factorization: the next SolveState() starts from u = 0 and its result
+   * depends on its arguments alone. */
   void
   ForgetState() override;
   const NewtonStatistics &

@@ -79,6 +79,7 @@ struct BiomechanicalRegistration_EXPORT ForwardSimulation
   SolverTimings              timings;               ///< neo-Hookean: the whole Newton solve counts as "solve"
   unsigned int               newtonIterations{ 0 }; ///< neo-Hookean only (0 for the linear model)
   unsigned int               loadIncrements{ 0 };   ///< neo-Hookean only: accepted load increments
+  unsigned int               factorizations{ 0 };   ///< neo-Hookean only: numeric Cholesky factorizations
 };
 
 /** The forward model of the scene's tissue model (Scene::model: LinearForwardModel or

@@ -80,7 +80,10 @@ struct NeoHookeanForwardModel::Impl
   std::vector<std::int64_t>                                              freeDiagonal; // positions in Kff
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
   bool                                                                   analyzed{ false };
-  bool                                                                   adjointReady{ false };
+  bool haveFactorization{ false };  // the solver holds a factorization of a recent tangent (this constrained set)
+  bool factorizationExact{ false }; // ... of the current tangent, unshifted: solves are direct
+  bool refactorNext{ false };       // the last preconditioned solve was slow: factorize before the next one
+  unsigned int iterationsAtThisTangent{ 0 }; // CG iterations spent on the current tangent (repeated solves)
   // The last equilibrium and its loads (the warm start), and the tangent's state.
   bool                hasState{ false };
   std::vector<double> state, stateForces, statePrescribed;
@@ -108,10 +111,14 @@ struct NeoHookeanForwardModel::Impl
   void
   AssembleTangent(const std::vector<double> & u);
   // Solve.
+  void
+  CopyTangentToFreeBlock();
   bool
   Factorize(bool allowShift);
-  std::vector<double>
-  SolveFree(const std::vector<double> & rhs) const;
+  bool
+  PreconditionedCG(const Eigen::VectorXd & b, Eigen::VectorXd & x, unsigned int & iterations) const;
+  bool
+  SolveTangent(const std::vector<double> & rhs, std::vector<double> & out, bool exact);
   bool
   NewtonIncrement(std::vector<double> &       u,
                   const std::vector<double> & f,
@@ -348,17 +355,20 @@ NeoHookeanForwardModel::Impl::AssembleTangent(const std::vector<double> & u)
       }
     }
   }
-  adjointReady = false;
+  CopyTangentToFreeBlock();
+  factorizationExact = false;
+  iterationsAtThisTangent = 0;
 }
 
 // ---------------------------------------------------------------------------------------------- solve
 
-// Copies the tangent's free block into the factorized matrix and factorizes it; a block that is not positive
-// definite is shifted by tau * mean diagonal (tau = 1e-8, 1e-6, ... 1e4) when allowShift (false when even that
-// fails), else it throws.
-bool
-NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
+void
+NeoHookeanForwardModel::Impl::CopyTangentToFreeBlock()
 {
+  if (Kff.nonZeros() == 0)
+  {
+    return; // no constrained set yet
+  }
   double * values = Kff.valuePtr();
   for (std::size_t k = 0; k < freePositions.size(); ++k)
   {
@@ -367,17 +377,29 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
       values[freePositions[k]] = tangent[k];
     }
   }
+}
+
+// Factorizes the free block of the current tangent; a block that is not positive definite is shifted by
+// tau * mean diagonal (tau = 1e-8, 1e-6, ... 1e4) when allowShift (false when even that fails), else it throws.
+// The free block itself keeps the unshifted tangent (the preconditioned solves multiply with it).
+bool
+NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
+{
   if (!analyzed)
   {
     solver.analyzePattern(Kff);
     analyzed = true;
   }
+  ++statistics.factorizations;
+  refactorNext = false;
   solver.factorize(Kff);
   if (solver.info() == Eigen::Success)
   {
+    haveFactorization = factorizationExact = true;
     return true;
   }
-  double meanDiagonal = 0.0;
+  double * values = Kff.valuePtr();
+  double   meanDiagonal = 0.0;
   for (std::int64_t p : freeDiagonal)
   {
     meanDiagonal += std::abs(values[p]) / static_cast<double>(freeDiagonal.size());
@@ -387,18 +409,26 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
   {
     diagonal[k] = values[freeDiagonal[k]];
   }
-  for (double tau = 1e-8; allowShift && tau <= 1e4; tau *= 100.0)
+  bool factorized = false;
+  for (double tau = 1e-8; allowShift && tau <= 1e4 && !factorized; tau *= 100.0)
   {
     for (std::size_t k = 0; k < freeDiagonal.size(); ++k)
     {
       values[freeDiagonal[k]] = diagonal[k] + tau * meanDiagonal;
     }
     solver.factorize(Kff);
-    if (solver.info() == Eigen::Success)
-    {
-      ++statistics.shiftedTangents;
-      return true;
-    }
+    factorized = solver.info() == Eigen::Success;
+  }
+  for (std::size_t k = 0; k < freeDiagonal.size(); ++k)
+  {
+    values[freeDiagonal[k]] = diagonal[k];
+  }
+  haveFactorization = factorized;
+  factorizationExact = false;
+  if (factorized)
+  {
+    ++statistics.shiftedTangents;
+    return true;
   }
   if (allowShift)
   {
@@ -409,11 +439,51 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
        "adjoint solve");
 }
 
-
-std::vector<double>
-NeoHookeanForwardModel::Impl::SolveFree(const std::vector<double> & rhs) const
+// Conjugate gradients on the current tangent's free block, preconditioned by the factorization of an earlier
+// tangent (the state moves little between Newton iterations and between the estimator's evaluations, so a
+// few iterations replace a factorization). False when it stalls or meets a direction of non-positive
+// curvature (an indefinite tangent); converged at a residual of 1e-12 of |b|.
+bool
+NeoHookeanForwardModel::Impl::PreconditionedCG(const Eigen::VectorXd & b,
+                                               Eigen::VectorXd &       x,
+                                               unsigned int &          iterations) const
 {
-  Eigen::VectorXd b(static_cast<Eigen::Index>(nfree));
+  const auto      A = Kff.selfadjointView<Eigen::Lower>();
+  const double    target = 1e-12 * b.norm();
+  Eigen::VectorXd r = b - A * (x = solver.solve(b));
+  Eigen::VectorXd z = solver.solve(r), p = z, Ap(b.size());
+  double          rz = r.dot(z);
+  for (iterations = 0; iterations < 30; ++iterations)
+  {
+    if (r.norm() <= target)
+    {
+      return true;
+    }
+    Ap = A * p;
+    const double curvature = p.dot(Ap);
+    if (!(curvature > 0.0))
+    {
+      return false;
+    }
+    const double alpha = rz / curvature;
+    x += alpha * p;
+    r -= alpha * Ap;
+    z = solver.solve(r);
+    const double rzNext = r.dot(z);
+    p = z + (rzNext / rz) * p;
+    rz = rzNext;
+  }
+  return r.norm() <= target;
+}
+
+// K_T out = rhs on the free dofs (out = 0 on the constrained ones): directly on a factorization of the current
+// tangent, else by conjugate gradients preconditioned with the last factorization, refactorizing when they
+// fail (or, after a slow solve, before the next one). \a exact: the unshifted tangent (adjoints); otherwise a
+// shifted one is acceptable (Newton steps, which only need a descent direction).
+bool
+NeoHookeanForwardModel::Impl::SolveTangent(const std::vector<double> & rhs, std::vector<double> & out, bool exact)
+{
+  Eigen::VectorXd b(static_cast<Eigen::Index>(nfree)), x;
   for (std::size_t i = 0; i < ndof; ++i)
   {
     if (freeIndex[i] >= 0)
@@ -421,8 +491,33 @@ NeoHookeanForwardModel::Impl::SolveFree(const std::vector<double> & rhs) const
       b[freeIndex[i]] = rhs[i];
     }
   }
-  const Eigen::VectorXd x = solver.solve(b);
-  std::vector<double>   out(ndof, 0.0);
+  // Several solves with one tangent (the Levenberg-Marquardt inner solve's du/dp, one per parameter): after
+  // the first slow one the factorization pays for itself.
+  const bool repeated = !factorizationExact && iterationsAtThisTangent > 3;
+  if ((!haveFactorization || refactorNext || repeated) && !Factorize(!exact))
+  {
+    return false;
+  }
+  unsigned int iterations = 0;
+  if (!factorizationExact)
+  {
+    const bool converged = PreconditionedCG(b, x, iterations);
+    statistics.conjugateGradientIterations += iterations;
+    iterationsAtThisTangent += iterations;
+    if (!converged)
+    {
+      if (!Factorize(!exact))
+      {
+        return false;
+      }
+    }
+    refactorNext = converged && iterations > 10;
+  }
+  if (factorizationExact || iterations == 0 || !std::isfinite(x.squaredNorm()) || x.size() != b.size())
+  {
+    x = solver.solve(b);
+  }
+  out.assign(ndof, 0.0);
   for (std::size_t i = 0; i < ndof; ++i)
   {
     if (freeIndex[i] >= 0)
@@ -430,7 +525,7 @@ NeoHookeanForwardModel::Impl::SolveFree(const std::vector<double> & rhs) const
       out[i] = x[freeIndex[i]];
     }
   }
-  return out;
+  return true;
 }
 
 namespace {
@@ -494,11 +589,6 @@ NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
     }
     AssembleTangent(u);
     ++statistics.iterations;
-    if (!Factorize(true))
-    {
-      failure.reason = "the tangent stiffness could not be factorized even after shifting its diagonal";
-      return false;
-    }
     std::vector<double> rhs(r);
     if (jump)
     {
@@ -509,7 +599,12 @@ NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
         rhs[i] -= Kstep[i];
       }
     }
-    std::vector<double> du = SolveFree(rhs);
+    std::vector<double> du;
+    if (!SolveTangent(rhs, du, false))
+    {
+      failure.reason = "the tangent stiffness could not be factorized even after shifting its diagonal";
+      return false;
+    }
     for (std::size_t i = 0; i < ndof; ++i)
     {
       du[i] = constrained[i] ? step[i] : du[i];
@@ -653,7 +748,7 @@ NeoHookeanForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & no
   }
   fem::PinBlasToOneThread();
   d.analyzed = false;
-  d.adjointReady = false;
+  d.haveFactorization = d.factorizationExact = d.refactorNext = false;
   d.hasState = false;
 }
 
@@ -777,12 +872,9 @@ NeoHookeanForwardModel::SolveAdjoint(const std::vector<double> & g)
   {
     return std::vector<double>(d.ndof, 0.0);
   }
-  if (!d.adjointReady)
-  {
-    d.Factorize(false);
-    d.adjointReady = true;
-  }
-  return d.SolveFree(g);
+  std::vector<double> lambda;
+  d.SolveTangent(g, lambda, true);
+  return lambda;
 }
 
 std::vector<double>
@@ -883,7 +975,9 @@ NeoHookeanForwardModel::VonMisesStress(const std::vector<double> & u) const
 void
 NeoHookeanForwardModel::ForgetState()
 {
+  // The factorization too: it preconditions the next solves, whose last bits would depend on it.
   m_Impl->hasState = false;
+  m_Impl->haveFactorization = m_Impl->factorizationExact = m_Impl->refactorNext = false;
 }
 
 const std::string &

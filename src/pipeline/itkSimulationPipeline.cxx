@@ -158,7 +158,7 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
   if (scene.model == bmr::MaterialModelEnum::NeoHookean)
   {
     fem << ", neo-Hookean: " << out.simulation.newtonIterations << " Newton iterations in "
-        << out.simulation.loadIncrements << " load increments";
+        << out.simulation.loadIncrements << " load increments, " << out.simulation.factorizations << " factorizations";
   }
   clock.End(fem.str());
   // The FEM stage in the solver's own parts.

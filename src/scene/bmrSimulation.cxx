@@ -422,6 +422,7 @@ SimulateNeoHookean(const Scene & scene, const TetrahedralMesh & mesh, const Boun
   out.timings.solve = model.GetStatistics().seconds;
   out.newtonIterations = model.GetStatistics().iterations;
   out.loadIncrements = model.GetStatistics().acceptedIncrements;
+  out.factorizations = model.GetStatistics().factorizations;
   return out;
 }
 } // namespace

@@ -616,9 +616,10 @@ bmrNeoHookeanModelTest(int, char *[])
       linearErrors.push_back(std::sqrt(sumLinear / mesh.GetNumberOfPoints()) / sphere.innerDisplacement);
       errors.push_back(rms / sphere.innerDisplacement);
       std::cout << "hollow sphere, h " << h << " mm (" << mesh.GetNumberOfTetrahedra() << " tetrahedra, "
-                << model.GetStatistics().iterations << " Newton iterations): outer radius "
-                << sphere.B + exactDisplacement(sphere.B) << " mm exact, RMS nodal error " << rms
-                << " mm (linear model " << linearErrors.back() * sphere.innerDisplacement << " mm)" << std::endl;
+                << model.GetStatistics().iterations << " Newton iterations, " << model.GetStatistics().factorizations
+                << " factorizations): outer radius " << sphere.B + exactDisplacement(sphere.B)
+                << " mm exact, RMS nodal error " << rms << " mm (linear model "
+                << linearErrors.back() * sphere.innerDisplacement << " mm)" << std::endl;
     }
     const double order = std::log2(errors[0] / errors[1]);
     // 1 %: P1 nodal errors fall as h^2 (and CGAL's surfaces approach the spheres as h^2); measured 0.57 % at
