@@ -84,7 +84,8 @@ struct BiomechanicalRegistration_EXPORT NewtonStatistics
  * constrained set; the numeric factorization only when needed: a solve first runs conjugate gradients on the
  * current tangent preconditioned by the last factorization, which between nearby states converge in a few
  * iterations, and factorizes when they do not, or after a slow one), then backtracks \f$u + \alpha \Delta u\f$ until
- * no element is inverted (J > 0) and \f$\Pi\f$ decreases (Armijo). A tangent that is not positive definite is
+ * no element is inverted (J > 0) and \f$\Pi\f$ decreases (Armijo); the first step of an increment, which moves
+ * the prescribed dofs, is taken whole, or the increment is halved. A tangent that is not positive definite is
  * shifted by a multiple of its mean diagonal, which keeps \f$\Delta u\f$ a descent direction. The loads are
  * applied along a path from the last equilibrium (or from u = 0) in increments: the first one the whole path
  * (NewtonSettings::initialIncrement), an increment that fails is halved, an easy one doubles the next. No

@@ -541,9 +541,9 @@ FreeDot(const std::vector<double> & a, const std::vector<double> & b, const std:
 }
 } // namespace
 
-// Newton's method from u to the equilibrium under the loads (f, prescribed). The first iterations also move
-// the constrained dofs to their prescribed values (the step's prescribed part); the line search shortens the
-// whole step until no element is inverted, and, once the prescribed values are reached, until the total
+// Newton's method from u to the equilibrium under the loads (f, prescribed). The first iteration also moves
+// the constrained dofs to their prescribed values (the step's prescribed part), whole or not at all (an
+// inverted element fails the increment); later steps are shortened until no element is inverted and the total
 // potential decreases (Armijo, with a rounding allowance: near the solution Pi changes below its precision).
 bool
 NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
@@ -619,7 +619,11 @@ NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
     const double        allowance = 1e-12 * std::abs(energy);
     bool                accepted = false;
     std::vector<double> trial(ndof);
-    for (int halving = 0; halving < 20 && !accepted; ++halving)
+    // A step that moves the prescribed dofs is taken whole or not at all: when it inverts an element the load
+    // increment is too large, and halving the increment (one solve) is cheaper than creeping towards the
+    // prescribed values over many iterations.
+    const int halvings = jump ? 1 : 20;
+    for (int halving = 0; halving < halvings && !accepted; ++halving)
     {
       const double alpha = std::ldexp(1.0, -halving);
       for (std::size_t i = 0; i < ndof; ++i)
@@ -629,7 +633,8 @@ NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
       const double trialEnergy = Energy(trial, &failure.worstElement, &failure.worstJ);
       if (!std::isfinite(trialEnergy))
       {
-        failure.reason = "every trial step inverts an element";
+        failure.reason =
+          jump ? "the increment's prescribed motion inverts an element" : "every trial step inverts an element";
         continue;
       }
       const double trialPotential = trialEnergy - FreeDot(f, trial, constrained);
