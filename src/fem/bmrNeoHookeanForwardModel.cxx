@@ -120,6 +120,18 @@ struct NeoHookeanForwardModel::Impl
   bool
   SolveTangent(const std::vector<double> & rhs, std::vector<double> & out, bool exact);
   bool
+  NewtonStep(const std::vector<double> & u,
+             const std::vector<double> & r,
+             const std::vector<double> & step,
+             std::vector<double> &       du);
+  bool
+  LineSearch(std::vector<double> &       u,
+             const std::vector<double> & du,
+             const std::vector<double> & f,
+             double                      decrement,
+             bool                        jump,
+             IncrementFailure &          failure) const;
+  bool
   NewtonIncrement(std::vector<double> &       u,
                   const std::vector<double> & f,
                   const std::vector<double> & prescribed,
@@ -541,10 +553,76 @@ FreeDot(const std::vector<double> & a, const std::vector<double> & b, const std:
 }
 } // namespace
 
-// Newton's method from u to the equilibrium under the loads (f, prescribed). The first iteration also moves
-// the constrained dofs to their prescribed values (the step's prescribed part), whole or not at all (an
-// inverted element fails the increment); later steps are shortened until no element is inverted and the total
-// potential decreases (Armijo, with a rounding allowance: near the solution Pi changes below its precision).
+// The Newton step at u for the residual r (zero on the constrained dofs) and the prescribed part \a step:
+// K_T du = r - K_T step on the free dofs, du = step on the constrained ones.
+bool
+NeoHookeanForwardModel::Impl::NewtonStep(const std::vector<double> & u,
+                                         const std::vector<double> & r,
+                                         const std::vector<double> & step,
+                                         std::vector<double> &       du)
+{
+  AssembleTangent(u);
+  ++statistics.iterations;
+  std::vector<double> Kstep, rhs(r);
+  fem::SymmetricProduct(pattern, tangent, step, Kstep);
+  for (std::size_t i = 0; i < ndof; ++i)
+  {
+    rhs[i] -= Kstep[i];
+  }
+  if (!SolveTangent(rhs, du, false))
+  {
+    return false;
+  }
+  for (std::size_t i = 0; i < ndof; ++i)
+  {
+    du[i] = constrained[i] ? step[i] : du[i];
+  }
+  return true;
+}
+
+// u += alpha du for the largest alpha = 2^-k with no inverted element and an Armijo decrease of the total
+// potential (with a rounding allowance: near the solution Pi changes below its own precision). A step that
+// moves the prescribed dofs (\a jump) is taken whole or not at all: when it inverts an element the load
+// increment is too large, and halving the increment (one solve) is cheaper than creeping towards the
+// prescribed values over many iterations.
+bool
+NeoHookeanForwardModel::Impl::LineSearch(std::vector<double> &       u,
+                                         const std::vector<double> & du,
+                                         const std::vector<double> & f,
+                                         double                      decrement,
+                                         bool                        jump,
+                                         IncrementFailure &          failure) const
+{
+  const double        energy = Energy(u);
+  const double        potential = energy - FreeDot(f, u, constrained);
+  const double        allowance = 1e-12 * std::abs(energy);
+  std::vector<double> trial(ndof);
+  for (int halving = 0; halving < (jump ? 1 : 20); ++halving)
+  {
+    const double alpha = std::ldexp(1.0, -halving);
+    for (std::size_t i = 0; i < ndof; ++i)
+    {
+      trial[i] = u[i] + alpha * du[i];
+    }
+    const double trialEnergy = Energy(trial, &failure.worstElement, &failure.worstJ);
+    if (!std::isfinite(trialEnergy))
+    {
+      failure.reason =
+        jump ? "the increment's prescribed motion inverts an element" : "every trial step inverts an element";
+      continue;
+    }
+    if (jump || trialEnergy - FreeDot(f, trial, constrained) <= potential - 1e-4 * alpha * decrement + allowance)
+    {
+      u.swap(trial);
+      return true;
+    }
+    failure.reason = "the line search found no decrease of the potential energy";
+  }
+  return false;
+}
+
+// Newton's method from u to the equilibrium under the loads (f, prescribed): the first iteration also moves
+// the constrained dofs to their prescribed values; converged on the residual or the Newton decrement.
 bool
 NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
                                               const std::vector<double> & f,
@@ -587,65 +665,21 @@ NeoHookeanForwardModel::Impl::NewtonIncrement(std::vector<double> &       u,
       statistics.lastResiduals = residuals;
       return true;
     }
-    AssembleTangent(u);
-    ++statistics.iterations;
-    std::vector<double> rhs(r);
-    if (jump)
-    {
-      std::vector<double> Kstep;
-      fem::SymmetricProduct(pattern, tangent, step, Kstep);
-      for (std::size_t i = 0; i < ndof; ++i)
-      {
-        rhs[i] -= Kstep[i];
-      }
-    }
     std::vector<double> du;
-    if (!SolveTangent(rhs, du, false))
+    if (!NewtonStep(u, r, step, du))
     {
       failure.reason = "the tangent stiffness could not be factorized even after shifting its diagonal";
       return false;
-    }
-    for (std::size_t i = 0; i < ndof; ++i)
-    {
-      du[i] = constrained[i] ? step[i] : du[i];
     }
     const double decrement = FreeDot(du, r, constrained);
     if (!jump && firstDecrement == 0.0)
     {
       firstDecrement = std::abs(decrement);
     }
-    const double        energy = Energy(u);
-    const double        potential = energy - FreeDot(f, u, constrained);
-    const double        allowance = 1e-12 * std::abs(energy);
-    bool                accepted = false;
-    std::vector<double> trial(ndof);
-    // A step that moves the prescribed dofs is taken whole or not at all: when it inverts an element the load
-    // increment is too large, and halving the increment (one solve) is cheaper than creeping towards the
-    // prescribed values over many iterations.
-    const int halvings = jump ? 1 : 20;
-    for (int halving = 0; halving < halvings && !accepted; ++halving)
-    {
-      const double alpha = std::ldexp(1.0, -halving);
-      for (std::size_t i = 0; i < ndof; ++i)
-      {
-        trial[i] = u[i] + alpha * du[i];
-      }
-      const double trialEnergy = Energy(trial, &failure.worstElement, &failure.worstJ);
-      if (!std::isfinite(trialEnergy))
-      {
-        failure.reason =
-          jump ? "the increment's prescribed motion inverts an element" : "every trial step inverts an element";
-        continue;
-      }
-      const double trialPotential = trialEnergy - FreeDot(f, trial, constrained);
-      accepted = jump || trialPotential <= potential - 1e-4 * alpha * decrement + allowance;
-      failure.reason = "the line search found no decrease of the potential energy";
-    }
-    if (!accepted)
+    if (!LineSearch(u, du, f, decrement, jump, failure))
     {
       return false;
     }
-    u.swap(trial);
     if (!jump && firstDecrement > 0.0 && std::abs(decrement) <= settings.energyTolerance * firstDecrement)
     {
       residuals.push_back(0.0); // converged on the energy criterion; the residual is not recomputed
