@@ -878,8 +878,20 @@ NeoHookeanForwardModel::TrySolveState(const std::vector<double> & forces,
   {
     std::ostringstream msg;
     msg << "the loads could not be applied: equilibrium reached up to load fraction " << reached << " of 1, then "
-        << failure.reason << " (smallest J " << failure.worstJ << " in element " << failure.worstElement
-        << ") with increments down to " << d.settings.minimumIncrement;
+        << failure.reason << " (smallest J " << failure.worstJ << " in element " << failure.worstElement;
+    if (failure.worstElement >= 0)
+    {
+      // Which element, and whether its free nodes could have saved it: what a user needs to change the loads.
+      const std::int32_t * t = &d.mesh.tetrahedra[4 * failure.worstElement];
+      int                  prescribedNodes = 0;
+      for (int a = 0; a < 4; ++a)
+      {
+        prescribedNodes += d.constrained[3 * t[a]];
+      }
+      msg << ", label " << d.mesh.labels[failure.worstElement] << ", " << prescribedNodes
+          << " of its 4 nodes prescribed";
+    }
+    msg << ") with increments down to " << d.settings.minimumIncrement;
     d.lastFailure = msg.str();
     if (d.hasState)
     {
