@@ -166,6 +166,13 @@ private:
   std::unique_ptr<Impl> m_Impl;
 };
 
+/** The von Mises stress of the Cauchy stress of every element of \a mesh in the state \a u [mm] under the
+ * neo-Hookean \a materials [kPa] (0 for an inverted element), element by element: no model is assembled. */
+BiomechanicalRegistration_EXPORT std::vector<double>
+                                 NeoHookeanVonMisesStress(const TetrahedralMesh &                            mesh,
+                                                          const std::map<std::int32_t, MaterialParameters> & materials,
+                                                          const std::vector<double> &                        u);
+
 } // namespace bmr
 
 #endif

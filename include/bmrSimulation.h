@@ -102,6 +102,12 @@ BiomechanicalRegistration_EXPORT std::vector<double>
 BiomechanicalRegistration_EXPORT std::vector<double>
                                  PrescribedDisplacements(const BoundaryConditions & bc, std::size_t numberOfNodes);
 
+/** Fills the per-element E [kPa] and nu of \a simulation from \a materials. */
+BiomechanicalRegistration_EXPORT void
+SetElementMaterials(const TetrahedralMesh &                            mesh,
+                    const std::map<std::int32_t, MaterialParameters> & materials,
+                    ForwardSimulation &                                simulation);
+
 /** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels) with the scene's model. */
 BiomechanicalRegistration_EXPORT ForwardSimulation
 SimulateScene(const Scene & scene, const TetrahedralMesh & mesh);

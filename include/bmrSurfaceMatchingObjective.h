@@ -50,8 +50,8 @@ struct BiomechanicalRegistration_EXPORT SceneObjectiveParts
 } // namespace detail
 
 /** \brief The registration objective of a scene (dissertation chapter 3): the tissue model of the scene
- * (Scene::model: LinearForwardModel or NeoHookeanForwardModel) with its materials, the wall displacements of its force surfaces as the unknown
- * loads (WallLoads; u = 0 on fixed walls) and the surface distance of its objective surfaces
+ * (Scene::model: LinearForwardModel or NeoHookeanForwardModel) with its materials, the wall displacements of its force
+ * surfaces as the unknown loads (WallLoads; u = 0 on fixed walls) and the surface distance of its objective surfaces
  * (SurfaceDistanceTerm), composed by EstimationObjective.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
  */

@@ -1000,17 +1000,33 @@ NeoHookeanForwardModel::FirstPiolaKirchhoffStress(const std::vector<double> & u)
 std::vector<double>
 NeoHookeanForwardModel::VonMisesStress(const std::vector<double> & u) const
 {
-  const Impl &        d = *m_Impl;
-  std::vector<double> vonMises(d.volumes.size());
-  for (std::size_t e = 0; e < d.volumes.size(); ++e)
+  return NeoHookeanVonMisesStress(m_Impl->mesh, m_Impl->materials, u);
+}
+
+std::vector<double>
+NeoHookeanVonMisesStress(const TetrahedralMesh &                            mesh,
+                         const std::map<std::int32_t, MaterialParameters> & materials,
+                         const std::vector<double> &                        u)
+{
+  if (u.size() != 3 * mesh.GetNumberOfPoints())
   {
+    Fail(kWho, "the displacement vector must hold 3 values per node");
+  }
+  std::vector<double> vonMises(mesh.GetNumberOfTetrahedra(), 0.0);
+  for (std::size_t e = 0; e < vonMises.size(); ++e)
+  {
+    double                  g[4][3], mu, lambda, P[3][3], sigma[3][3];
+    const std::int32_t *    t = &mesh.tetrahedra[4 * e];
+    const double * const    ua[4] = { &u[3 * t[0]], &u[3 * t[1]], &u[3 * t[2]], &u[3 * t[3]] };
     fem::ElementDeformation def;
-    if (!d.Deform(e, u, def))
+    fem::ElementGradients(mesh, e, g);
+    if (!fem::DeformElement(g, ua, def))
     {
       continue; // 0: an element inverted by prescribed motion alone (see the class documentation)
     }
-    double P[3][3], sigma[3][3];
-    fem::FirstPiolaStress(def, d.mu[e], d.lambda[e], P);
+    const MaterialParameters & m = materials.at(mesh.labels[e]);
+    fem::LameParameters(m.youngsModulus, m.poissonRatio, lambda, mu);
+    fem::FirstPiolaStress(def, mu, lambda, P);
     for (int i = 0; i < 3; ++i)
     {
       for (int j = 0; j < 3; ++j)

@@ -269,13 +269,7 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene)
   s.displacement = mesh.displacement;
   s.force = mesh.force;
   s.vonMises = bmr::SceneVonMisesStress(scene, mesh, materials, mesh.displacement);
-  s.youngsModulus.clear();
-  s.poissonRatio.clear();
-  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
-  {
-    s.youngsModulus.push_back(materials.at(mesh.labels[e]).youngsModulus);
-    s.poissonRatio.push_back(materials.at(mesh.labels[e]).poissonRatio);
-  }
+  bmr::SetElementMaterials(mesh, materials, s);
   s.dirichlet.assign(mesh.GetNumberOfPoints(), 0);
   for (std::int32_t n : bmr::SceneBoundaryConditions(scene, mesh).dirichletNodes)
   {

@@ -386,9 +386,23 @@ SceneVonMisesStress(const Scene &                                      scene,
 {
   if (scene.model == MaterialModelEnum::NeoHookean)
   {
-    return NeoHookeanForwardModel(mesh, materials).VonMisesStress(u);
+    return NeoHookeanVonMisesStress(mesh, materials, u);
   }
   return LinearElasticModel(mesh, materials).ComputeVonMisesStress(u);
+}
+
+void
+SetElementMaterials(const TetrahedralMesh &                            mesh,
+                    const std::map<std::int32_t, MaterialParameters> & materials,
+                    ForwardSimulation &                                simulation)
+{
+  simulation.youngsModulus.resize(mesh.GetNumberOfTetrahedra());
+  simulation.poissonRatio.resize(mesh.GetNumberOfTetrahedra());
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    simulation.youngsModulus[e] = materials.at(mesh.labels[e]).youngsModulus;
+    simulation.poissonRatio[e] = materials.at(mesh.labels[e]).poissonRatio;
+  }
 }
 
 std::vector<double>
@@ -414,11 +428,7 @@ SimulateNeoHookean(const Scene & scene, const TetrahedralMesh & mesh, const Boun
   out.displacement = model.SolveState(bc.forces, PrescribedDisplacements(bc, mesh.GetNumberOfPoints()));
   out.force = model.InternalForces(out.displacement);
   out.vonMises = model.VonMisesStress(out.displacement);
-  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
-  {
-    out.youngsModulus.push_back(materials.at(mesh.labels[e]).youngsModulus);
-    out.poissonRatio.push_back(materials.at(mesh.labels[e]).poissonRatio);
-  }
+  SetElementMaterials(mesh, materials, out);
   out.timings.solve = model.GetStatistics().seconds;
   out.newtonIterations = model.GetStatistics().iterations;
   out.loadIncrements = model.GetStatistics().acceptedIncrements;
