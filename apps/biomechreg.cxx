@@ -23,6 +23,9 @@
 //   biomechreg demons ...           the intensity-based baseline (ITK Demons, multi-resolution)
 //   biomechreg phantom-set ...      N phantom pairs with ground-truth seed landmarks
 //   biomechreg compare ...          FEM vs Demons vs identity on seed landmarks, with paired t-tests
+//   biomechreg phantom-cohort ...   N phantom patients x M fractions with their truth (stage, modulus, anatomy)
+//   biomechreg cohort ...           the cohort workflow on Snakemake: one registration per daily image, statistics
+//   biomechreg cohort-stats ...     the statistics of a cohort's registrations (the workflow's last step)
 //   biomechreg help [SUB], biomechreg SUB --help, biomechreg --version
 // Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
 // written to temporary names and renamed when complete.
@@ -32,34 +35,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 namespace {
 using namespace bmrcli;
 
 // ----------------------------------------------------------------- phantom
-
-bmr::GridGeometry
-GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults)
-{
-  const std::array<double, 3> size =
-    args.Triple("--size", { { double(defaults.size[0]), double(defaults.size[1]), double(defaults.size[2]) } });
-  std::array<std::size_t, 3> voxels;
-  for (int i = 0; i < 3; ++i)
-  {
-    if (!(size[i] >= 1.0 && size[i] <= 4096.0 && size[i] == std::floor(size[i])))
-    {
-      throw UsageError("--size must be three integers in [1, 4096]");
-    }
-    voxels[i] = static_cast<std::size_t>(size[i]);
-  }
-  // Centred on the physical origin unless an origin is given; a rotation about z makes an oblique volume.
-  bmr::GridGeometry g = bmr::CenteredGrid(voxels,
-                                          args.Triple("--spacing", defaults.spacing),
-                                          args.Number("--rotate-z-deg", 0.0) * 3.14159265358979323846 / 180.0);
-  g.origin = args.Triple("--origin", g.origin);
-  g.Validate("phantom grid (--size/--spacing/--origin)");
-  return g;
-}
 
 itk::PhantomSettings
 ParsePhantomSettings(const Arguments & args)
@@ -295,6 +276,18 @@ main(int argc, char * argv[])
     if (command == "phantom-set")
     {
       return bmrcli::PhantomSetCommand(options);
+    }
+    if (command == "phantom-cohort")
+    {
+      return bmrcli::PhantomCohortCommand(options);
+    }
+    if (command == "cohort")
+    {
+      return bmrcli::CohortCommand(options, std::filesystem::canonical("/proc/self/exe").string());
+    }
+    if (command == "cohort-stats")
+    {
+      return bmrcli::CohortStatsCommand(options);
     }
     throw UsageError("unknown command \"" + command + "\"");
   }

@@ -204,4 +204,27 @@ Arguments::CheckAllUsed() const
   }
 }
 
+bmr::GridGeometry
+GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults)
+{
+  const std::array<double, 3> size =
+    args.Triple("--size", { { double(defaults.size[0]), double(defaults.size[1]), double(defaults.size[2]) } });
+  std::array<std::size_t, 3> voxels;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (!(size[i] >= 1.0 && size[i] <= 4096.0 && size[i] == std::floor(size[i])))
+    {
+      throw UsageError("--size must be three integers in [1, 4096]");
+    }
+    voxels[i] = static_cast<std::size_t>(size[i]);
+  }
+  // Centred on the physical origin unless an origin is given; a rotation about z makes an oblique volume.
+  bmr::GridGeometry g = bmr::CenteredGrid(voxels,
+                                          args.Triple("--spacing", defaults.spacing),
+                                          args.Number("--rotate-z-deg", 0.0) * 3.14159265358979323846 / 180.0);
+  g.origin = args.Triple("--origin", g.origin);
+  g.Validate("phantom grid (--size/--spacing/--origin)");
+  return g;
+}
+
 } // namespace bmrcli

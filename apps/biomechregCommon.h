@@ -212,6 +212,10 @@ RegisterCommand(const Arguments & args);
 
 // ---------------------------------------------------------------- phantom
 
+/** The phantom grid from --size, --spacing [mm], --origin [mm] and --rotate-z-deg (phantom, phantom-cohort). */
+bmr::GridGeometry
+GridFromArguments(const Arguments & args, const bmr::GridGeometry & defaults);
+
 /** Writes a phantom pair into \a out: the four images, truth_field.nrrd, scene.json, truth_scene.json,
  * truth.json and the landmark files. */
 void
@@ -232,6 +236,15 @@ int
 CompareCommand(const Arguments & args);
 int
 PhantomSetCommand(const Arguments & args);
+
+// ---------------------------------------------------------------- cohorts
+
+int
+PhantomCohortCommand(const Arguments & args);
+int
+CohortCommand(const Arguments & args, const std::string & executable);
+int
+CohortStatsCommand(const Arguments & args);
 
 } // namespace bmrcli
 

@@ -70,6 +70,23 @@ const std::pair<const char *, const char *> commands[] = {
     "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
     "                     [--flatten LABELS] [register's and demons' settings]\n"
     "    FEM vs Demons vs identity on seed landmarks, with paired t-tests\n" },
+  { "phantom-cohort",
+    "  biomechreg phantom-cohort --out DIR [--patients N (10)] [--fractions M (6)] [--seed S] [--size NX,NY,NZ]\n"
+    "                            [--spacing SX,SY,SZ mm] [--noise-HU S] [--truth-mesh-scale F]\n"
+    "                            [--fixed-grid-shift-voxels S (0.5)] [--model linear|neo_hookean]\n"
+    "    N pelvis phantom patients (own anatomy, T-stage, stage-linked prostate modulus) x M fractions:\n"
+    "    cohort.csv for biomechreg cohort, truth.csv, truth_fractions.csv, truth_correlations.csv\n" },
+  { "cohort",
+    "  biomechreg cohort --cohort FILE.csv --out DIR [--cores N (all)] [--threads-per-job T (1)]\n"
+    "                    [--mem-mb M (3000) --runtime-min T (30): per job, for a cluster profile]\n"
+    "                    [--profile DIR (a Snakemake profile, e.g. workflows/cohort/profiles/slurm)]\n"
+    "                    [--register-options \"OPTIONS\" (for every register; default --outputs report)]\n"
+    "                    [--dry-run off|on]\n"
+    "    the cohort workflow on Snakemake: one registration per daily image (results/, logs/), then the\n"
+    "    statistics (cohort_report.md, cohort_*.csv, cohort_*.png); a re-run does only missing or failed jobs\n" },
+  { "cohort-stats",
+    "  biomechreg cohort-stats --cohort FILE.csv --study DIR\n"
+    "    per-patient moduli and their correlation with the covariates from DIR/results (the workflow's last step)\n" },
 };
 
 const char * const footer =

@@ -23,6 +23,7 @@
 
 #include <iosfwd>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace bmr {
@@ -66,6 +67,34 @@ struct BiomechanicalRegistration_EXPORT PhantomVolume
   std::vector<Seed>         seeds;
 };
 
+/** \brief How one patient's organs differ from the default pelvis phantom (the cohort generator draws it; every
+ * other command uses the default).
+ *
+ * The prostate keeps its center (plus \c offset) and scales; the bladder and the rectum are moved by as much as
+ * the prostate and the bladder grow towards them, so the soft tissue between the organs keeps about its default
+ * thickness. MeasurePelvisClearance() tells whether a drawn anatomy keeps the organs apart. */
+struct BiomechanicalRegistration_EXPORT PelvisAnatomy
+{
+  double                prostateScale{ 1.0 };  ///< the prostate's semi-axes 20 x 16 x 18 mm times this
+  double                bladderScale{ 1.0 };   ///< the bladder's semi-axes 34 x 28 x 24 mm times this
+  double                rectumRadius{ 13.0 };  ///< mm
+  std::array<double, 3> offset{ { 0, 0, 0 } }; ///< of prostate, bladder and rectum together [mm, LPS]
+};
+
+/** The smallest distances [mm, between 1 mm voxel centers, at most 6] of an anatomy's organs to each other and
+ * to the bones or the body outline, with the names of the closest pair. */
+struct BiomechanicalRegistration_EXPORT PelvisClearance
+{
+  double      organToOrgan{ 6.0 };
+  std::string closestOrgans;
+  double      organToBoneOrOutline{ 6.0 };
+  std::string closestToBoneOrOutline;
+};
+
+/** Voxelizes \a anatomy at 1 mm (no seeds) and measures its clearances. */
+BiomechanicalRegistration_EXPORT PelvisClearance
+MeasurePelvisClearance(const PelvisAnatomy & anatomy);
+
 /** \brief Parameters of the pelvis phantom.
  *
  * The anatomy is defined in patient LPS coordinates (x towards the patient's
@@ -82,6 +111,7 @@ struct BiomechanicalRegistration_EXPORT PelvisPhantomParameters
   unsigned int          numberOfSeeds{ 3 };
   double                noiseSigmaHU{ 0.0 }; ///< Gaussian noise added to the CT (0: none)
   std::uint64_t         noiseSeed{ 7 };
+  PelvisAnatomy         anatomy; ///< the organs (default: the phantom every command but the cohort uses)
 
   PelvisPhantomParameters();
 };

@@ -265,6 +265,11 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   double fixedGridShiftVoxels{ 0.0 };
   /** The tissue model of the truth and of the scene handed to the estimator (bmr::Scene::model). */
   bmr::MaterialModelEnum model{ bmr::MaterialModelEnum::Linear };
+  /** The patient's organs (pelvis only; the default anatomy unless a cohort draws another). */
+  bmr::PelvisAnatomy organs;
+  /** Seeds the moving (planning) scan: its implant positions and its CT noise; 0 (default): \c seed. The fractions
+   * of one patient share it, so that they are all registered from one planning scan. */
+  std::uint64_t planningSeed{ 0 };
 
   /** The defaults of an anatomy: the pelvis as above; the spheres on their own 96^3 grid of 1 mm, the outer
    * surface pressed 1.5 mm inwards (bladderMM). */

@@ -19,11 +19,14 @@
 
 #include "bmrError.h"
 
+#include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <numeric>
 #include <string>
 
 namespace bmr {
@@ -106,6 +109,304 @@ PairedTTest(const std::vector<double> & a, const std::vector<double> & b)
   const boost::math::students_t distribution(r.degreesOfFreedom);
   r.pValue = 2.0 * boost::math::cdf(boost::math::complement(distribution, std::abs(r.t)));
   return r;
+}
+
+std::vector<double>
+AverageRanks(const std::vector<double> & values)
+{
+  for (double v : values)
+  {
+    if (!std::isfinite(v))
+    {
+      Fail("bmr::AverageRanks", "a value is not finite");
+    }
+  }
+  std::vector<std::size_t> order(values.size());
+  std::iota(order.begin(), order.end(), std::size_t{ 0 });
+  std::stable_sort(
+    order.begin(), order.end(), [&values](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+  std::vector<double> ranks(values.size());
+  for (std::size_t begin = 0; begin < order.size();)
+  {
+    std::size_t end = begin + 1;
+    while (end < order.size() && values[order[end]] == values[order[begin]])
+    {
+      ++end;
+    }
+    // Sorted positions begin + 1, ..., end (1-based) share their average.
+    const double rank = 0.5 * (double(begin + 1) + double(end));
+    for (std::size_t k = begin; k < end; ++k)
+    {
+      ranks[order[k]] = rank;
+    }
+    begin = end;
+  }
+  return ranks;
+}
+
+const char *
+ToString(CorrelationEnum value)
+{
+  switch (value)
+  {
+    case CorrelationEnum::Pearson:
+      return "pearson";
+    case CorrelationEnum::Spearman:
+      return "spearman";
+    case CorrelationEnum::KendallTauB:
+      return "kendall_tau_b";
+  }
+  return "unknown";
+}
+
+std::ostream &
+operator<<(std::ostream & os, CorrelationEnum value)
+{
+  return os << ToString(value);
+}
+
+namespace {
+
+constexpr const char * CorrelationWhere = "bmr::CorrelationTest";
+
+/** Sizes of the groups of equal values (groups of one included). */
+std::vector<double>
+TieGroupSizes(std::vector<double> values)
+{
+  std::sort(values.begin(), values.end());
+  std::vector<double> sizes;
+  for (std::size_t begin = 0; begin < values.size();)
+  {
+    std::size_t end = begin + 1;
+    while (end < values.size() && values[end] == values[begin])
+    {
+      ++end;
+    }
+    sizes.push_back(double(end - begin));
+    begin = end;
+  }
+  return sizes;
+}
+
+/** Pearson r with its permutation count: r = sum a_i b_i / sqrt(sum a_i^2 sum b_i^2) of the centred values.
+ * The denominator does not change when b is permuted, so the permutations compare numerators; the identity
+ * permutation repeats the observed sum term by term and so always counts. */
+void
+PearsonTest(const std::vector<double> & x,
+            const std::vector<double> & y,
+            bool                        enumerate,
+            CorrelationTestResult &     result)
+{
+  const std::size_t   n = x.size();
+  const double        meanX = std::accumulate(x.begin(), x.end(), 0.0) / double(n);
+  const double        meanY = std::accumulate(y.begin(), y.end(), 0.0) / double(n);
+  std::vector<double> a(n);
+  std::vector<double> b(n);
+  double              saa = 0.0;
+  double              sbb = 0.0;
+  double              sab = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    a[i] = x[i] - meanX;
+    b[i] = y[i] - meanY;
+    saa += a[i] * a[i];
+    sbb += b[i] * b[i];
+    sab += a[i] * b[i];
+  }
+  double denominator = std::sqrt(saa * sbb);
+  if (!std::isfinite(denominator) || denominator == 0.0)
+  {
+    denominator = std::sqrt(saa) * std::sqrt(sbb); // saa * sbb over- or underflows
+  }
+  if (!(denominator > 0.0) || !std::isfinite(denominator) || !std::isfinite(sab))
+  {
+    Fail(CorrelationWhere, "the sums of squares of the centred values are not finite and positive");
+  }
+  const double r = std::clamp(sab / denominator, -1.0, 1.0);
+  result.coefficient = r;
+  const double degreesOfFreedom = double(n - 2);
+  if (std::abs(r) == 1.0)
+  {
+    result.statistic = std::copysign(std::numeric_limits<double>::infinity(), r);
+    result.pValueApproximate = 0.0;
+  }
+  else
+  {
+    result.statistic = r * std::sqrt(degreesOfFreedom / ((1.0 - r) * (1.0 + r)));
+    const boost::math::students_t distribution(degreesOfFreedom);
+    result.pValueApproximate =
+      2.0 * boost::math::cdf(boost::math::complement(distribution, std::abs(result.statistic)));
+  }
+  if (!enumerate)
+  {
+    return;
+  }
+  const double             threshold = std::abs(sab) * (1.0 - 1e-12);
+  std::vector<std::size_t> permutation(n);
+  std::iota(permutation.begin(), permutation.end(), std::size_t{ 0 });
+  std::uint64_t reached = 0;
+  std::uint64_t total = 0;
+  do
+  {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      sum += a[i] * b[permutation[i]];
+    }
+    reached += std::abs(sum) >= threshold ? 1 : 0;
+    ++total;
+  } while (std::next_permutation(permutation.begin(), permutation.end()));
+  result.pValuePermutation = double(reached) / double(total);
+  result.permutationExact = true;
+}
+
+/** Kendall tau-b with its permutation count. Permuting y keeps its groups of ties, so tau-b's denominator is
+ * fixed and the permutations compare the integer n_c - n_d exactly. */
+void
+KendallTest(const std::vector<double> & x,
+            const std::vector<double> & y,
+            bool                        enumerate,
+            CorrelationTestResult &     result)
+{
+  const std::size_t n = x.size();
+  auto              sign = [](double a, double b) { return int(a > b) - int(a < b); };
+  // signX[i n + j] and signY[i n + j]: sign(x_i - x_j) and sign(y_i - y_j).
+  std::vector<int> signX(n * n);
+  std::vector<int> signY(n * n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    for (std::size_t j = 0; j < n; ++j)
+    {
+      signX[i * n + j] = sign(x[i], x[j]);
+      signY[i * n + j] = sign(y[i], y[j]);
+    }
+  }
+  long long difference = 0; // n_c - n_d
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    for (std::size_t j = i + 1; j < n; ++j)
+    {
+      difference += signX[i * n + j] * signY[i * n + j];
+    }
+  }
+  const double nn = double(n);
+  const double n0 = nn * (nn - 1.0) / 2.0;
+  double       n1 = 0.0;
+  double       n2 = 0.0;
+  double       vt = 0.0;
+  double       vu = 0.0;
+  double       t1 = 0.0; // sum t(t-1)
+  double       u1 = 0.0;
+  double       t2 = 0.0; // sum t(t-1)(t-2)
+  double       u2 = 0.0;
+  for (double t : TieGroupSizes(x))
+  {
+    n1 += t * (t - 1.0) / 2.0;
+    vt += t * (t - 1.0) * (2.0 * t + 5.0);
+    t1 += t * (t - 1.0);
+    t2 += t * (t - 1.0) * (t - 2.0);
+  }
+  for (double u : TieGroupSizes(y))
+  {
+    n2 += u * (u - 1.0) / 2.0;
+    vu += u * (u - 1.0) * (2.0 * u + 5.0);
+    u1 += u * (u - 1.0);
+    u2 += u * (u - 1.0) * (u - 2.0);
+  }
+  const double s = double(difference);
+  result.coefficient = std::clamp(s / std::sqrt((n0 - n1) * (n0 - n2)), -1.0, 1.0);
+  const double v0 = nn * (nn - 1.0) * (2.0 * nn + 5.0);
+  const double variance =
+    (v0 - vt - vu) / 18.0 + t1 * u1 / (2.0 * nn * (nn - 1.0)) + t2 * u2 / (9.0 * nn * (nn - 1.0) * (nn - 2.0));
+  if (!(variance > 0.0))
+  {
+    Fail(CorrelationWhere, "the variance of Kendall's n_c - n_d is not positive (" + std::to_string(variance) + ")");
+  }
+  result.statistic = s / std::sqrt(variance);
+  const boost::math::normal distribution(0.0, 1.0);
+  result.pValueApproximate = 2.0 * boost::math::cdf(boost::math::complement(distribution, std::abs(result.statistic)));
+  if (!enumerate)
+  {
+    return;
+  }
+  const long long          observed = difference < 0 ? -difference : difference;
+  std::vector<std::size_t> permutation(n);
+  std::iota(permutation.begin(), permutation.end(), std::size_t{ 0 });
+  std::uint64_t reached = 0;
+  std::uint64_t total = 0;
+  do
+  {
+    long long sum = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const int * rowX = &signX[i * n];
+      const int * rowY = &signY[permutation[i] * n];
+      for (std::size_t j = i + 1; j < n; ++j)
+      {
+        sum += rowX[j] * rowY[permutation[j]];
+      }
+    }
+    reached += (sum < 0 ? -sum : sum) >= observed ? 1 : 0;
+    ++total;
+  } while (std::next_permutation(permutation.begin(), permutation.end()));
+  result.pValuePermutation = double(reached) / double(total);
+  result.permutationExact = true;
+}
+
+} // namespace
+
+CorrelationTestResult
+CorrelationTest(const std::vector<double> & x,
+                const std::vector<double> & y,
+                CorrelationEnum             method,
+                std::size_t                 maxExactPermutationCount)
+{
+  if (x.size() != y.size() || x.size() < 3)
+  {
+    Fail(CorrelationWhere,
+         "needs two samples of equal length >= 3 (got " + std::to_string(x.size()) + " and " +
+           std::to_string(y.size()) + ")");
+  }
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    if (!std::isfinite(x[i]) || !std::isfinite(y[i]))
+    {
+      Fail(CorrelationWhere, "pair " + std::to_string(i) + " holds a value that is not finite");
+    }
+  }
+  auto constant = [](const std::vector<double> & v) {
+    return std::all_of(v.begin(), v.end(), [&v](double e) { return e == v.front(); });
+  };
+  if (constant(x) || constant(y))
+  {
+    Fail(CorrelationWhere,
+         std::string(constant(x) ? "x" : "y") + " is constant: the " + ToString(method) + " correlation is undefined");
+  }
+  const bool enumerate = x.size() <= maxExactPermutationCount;
+  if (enumerate && x.size() > 20)
+  {
+    Fail(CorrelationWhere,
+         "an exact permutation test of " + std::to_string(x.size()) +
+           " pairs would enumerate more than 20! permutations (lower maxExactPermutationCount)");
+  }
+  CorrelationTestResult result;
+  result.method = method;
+  result.count = x.size();
+  switch (method)
+  {
+    case CorrelationEnum::Pearson:
+      PearsonTest(x, y, enumerate, result);
+      break;
+    case CorrelationEnum::Spearman:
+      PearsonTest(AverageRanks(x), AverageRanks(y), enumerate, result);
+      break;
+    case CorrelationEnum::KendallTauB:
+      KendallTest(x, y, enumerate, result);
+      break;
+    default:
+      Fail(CorrelationWhere, "unknown correlation method");
+  }
+  return result;
 }
 
 } // namespace bmr

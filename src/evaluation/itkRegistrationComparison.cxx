@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkRegistrationComparison.h"
 
+#include "bmrCsvTable.h"
 #include "bmrError.h"
 #include "bmrStatistics.h"
 #include "itkBiomechanicalImageIO.h"
@@ -37,12 +38,6 @@ namespace {
 const std::vector<std::string> RequiredColumns = { "name",     "moving_ct",    "moving_labels",
                                                    "fixed_ct", "fixed_labels", "scene" };
 const std::vector<std::string> OptionalColumns = { "moving_landmarks", "fixed_landmarks", "fem_field", "demons_field" };
-
-std::string
-Resolve(const std::string & base, const std::string & path)
-{
-  return path.empty() || path[0] == '/' ? path : base + "/" + path;
-}
 
 
 double
@@ -79,104 +74,43 @@ TTestRow(const std::string & what, const std::vector<double> & a, const std::vec
 std::vector<ImagePairEntry>
 ReadImagePairList(const std::string & path)
 {
-  std::ifstream in(path);
-  if (!in)
-  {
-    bmr::Fail("ReadImagePairList", "cannot open the pair list \"" + path + "\"");
-  }
-  const std::size_t           slash = path.find_last_of('/');
-  const std::string           base = slash == std::string::npos ? "." : path.substr(0, slash);
-  std::vector<std::string>    header;
+  const bmr::CsvTable table = bmr::CsvTable::Read(path, "pair list");
+  table.CheckColumns(RequiredColumns, OptionalColumns);
   std::vector<ImagePairEntry> pairs;
-  std::string                 line;
-  std::size_t                 number = 0;
-  while (std::getline(in, line))
+  for (const bmr::CsvRow & row : table.Rows())
   {
-    ++number;
-    if (!line.empty() && line.back() == '\r')
-    {
-      line.pop_back();
-    }
-    if (line.empty() || line[0] == '#')
-    {
-      continue;
-    }
-    std::vector<std::string> fields;
-    std::istringstream       row(line);
-    std::string              field;
-    while (std::getline(row, field, ','))
-    {
-      fields.push_back(field);
-    }
-    if (line.back() == ',')
-    {
-      fields.emplace_back();
-    }
-    if (header.empty())
-    {
-      header = fields;
-      for (const auto & c : RequiredColumns)
-      {
-        if (std::find(header.begin(), header.end(), c) == header.end())
-        {
-          bmr::Fail("ReadImagePairList", "pair list \"" + path + "\": the header lacks the column \"" + c + "\"");
-        }
-      }
-      for (const auto & c : header)
-      {
-        if (std::find(RequiredColumns.begin(), RequiredColumns.end(), c) == RequiredColumns.end() &&
-            std::find(OptionalColumns.begin(), OptionalColumns.end(), c) == OptionalColumns.end())
-        {
-          bmr::Fail("ReadImagePairList", "pair list \"" + path + "\": unknown column \"" + c + "\"");
-        }
-      }
-      continue;
-    }
-    if (fields.size() != header.size())
-    {
-      bmr::Fail("ReadImagePairList",
-                "pair list \"" + path + "\" line " + std::to_string(number) + ": " + std::to_string(fields.size()) +
-                  " fields, the header has " + std::to_string(header.size()));
-    }
     ImagePairEntry p;
-    for (std::size_t i = 0; i < header.size(); ++i)
-    {
-      if (header[i] == "name")
-      {
-        p.name = fields[i];
-      }
-      else
-      {
-        p.paths[header[i]] = Resolve(base, fields[i]);
-      }
-    }
+    p.name = table.Field(row, "name");
     if (p.name.empty() || p.name.find_first_of("/\\ ") != std::string::npos)
     {
-      bmr::Fail("ReadImagePairList",
-                "pair list \"" + path + "\" line " + std::to_string(number) +
-                  ": the name must be non-empty, without spaces or slashes");
+      table.FailAt(row, "name", "the name must be non-empty, without spaces or slashes");
+    }
+    for (const auto & column : table.Columns())
+    {
+      if (column != "name")
+      {
+        p.paths[column] = table.ResolvePath(table.Field(row, column));
+      }
     }
     for (std::size_t c = 1; c < RequiredColumns.size(); ++c)
     {
       if (p.paths[RequiredColumns[c]].empty())
       {
-        bmr::Fail("ReadImagePairList",
-                  "pair list \"" + path + "\" line " + std::to_string(number) + ": the column \"" + RequiredColumns[c] +
-                    "\" is empty");
+        table.FailAt(row, RequiredColumns[c], "is empty");
       }
     }
     for (const auto & other : pairs)
     {
       if (other.name == p.name)
       {
-        bmr::Fail("ReadImagePairList", "pair list \"" + path + "\": the name \"" + p.name + "\" appears twice");
+        table.FailAt(row, "name", "the name \"" + p.name + "\" appears twice");
       }
     }
     pairs.push_back(p);
   }
   if (pairs.empty())
   {
-    bmr::Fail("ReadImagePairList", "pair list \"" + path + "\" holds no image pair");
+    table.Fail("holds no image pair");
   }
   return pairs;
 }

@@ -216,6 +216,14 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
   j["truth_mesh"] = { { "tetrahedra", pair.truthTetrahedra },
                       { "nodes", pair.truthNodes },
                       { "cell_size_mm", pair.truthScene.mesh.cellSize } };
+  if (pelvis)
+  {
+    const bmr::PelvisAnatomy & a = settings.organs;
+    j["anatomy"] = { { "prostate_scale", a.prostateScale },
+                     { "bladder_scale", a.bladderScale },
+                     { "rectum_radius_mm", a.rectumRadius },
+                     { "organ_offset_mm", a.offset } };
+  }
   j["ct_noise_sigma_HU"] = settings.noiseHU;
   // The fixed grid's offset from the moving one: drawn within +- this many voxels per axis (its origin says where).
   j["fixed_grid_shift_voxels"] = settings.fixedGridShiftVoxels;

@@ -43,10 +43,12 @@ PelvisParameters(const PhantomSettings & s)
 {
   bmr::PelvisPhantomParameters p;
   p.grid = s.grid;
-  p.seedPlacementSeed = s.seed;
+  const std::uint64_t planning = s.planningSeed != 0 ? s.planningSeed : s.seed;
+  p.seedPlacementSeed = planning;
   p.numberOfSeeds = s.numberOfSeeds;
   p.noiseSigmaHU = s.noiseHU;
-  p.noiseSeed = 1000 + s.seed;
+  p.noiseSeed = 1000 + planning;
+  p.anatomy = s.organs;
   return p;
 }
 
@@ -60,7 +62,7 @@ MovingVolume(const PhantomSettings & s)
   bmr::SpherePhantomParameters p;
   p.grid = s.grid;
   bmr::PhantomVolume moving = bmr::MakeSpherePhantom(p);
-  bmr::AddGaussianNoise(moving.ct, s.noiseHU, 1000 + s.seed);
+  bmr::AddGaussianNoise(moving.ct, s.noiseHU, 1000 + (s.planningSeed != 0 ? s.planningSeed : s.seed));
   return moving;
 }
 

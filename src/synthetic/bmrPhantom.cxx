@@ -58,6 +58,14 @@ constexpr double RectumAxisY = 38.0;
 constexpr double RectumRadius = 13.0;
 constexpr double RectumTopZ = 15.0;
 
+/** The organs of one anatomy: the constants above for the default PelvisAnatomy. */
+struct OrganGeometry
+{
+  Vec3   prostateCenter, prostateSemiAxes;
+  Vec3   bladderCenter, bladderSemiAxes;
+  double rectumAxisX, rectumAxisY, rectumRadius, rectumTopZ;
+};
+
 constexpr Vec3 PubisCenter{ { 0.0, -42.0, -20.0 } };
 constexpr Vec3 PubisSemiAxes{ { 20.0, 8.0, 20.0 } };
 constexpr Vec3 LeftIliumCenter{ { 58.0, 10.0, 0.0 } };
@@ -274,6 +282,29 @@ SegmentDistance(const Vec3 & p0, const Vec3 & p1, const Vec3 & q0, const Vec3 & 
   return std::sqrt(Dot(closest, closest));
 }
 
+/** The organs of \a anatomy. A larger prostate pushes the bladder up and the rectum back by as much as it grows
+ * towards them, so the soft tissue between the organs keeps about its default thickness; a larger bladder also
+ * moves up (its bottom stays where it was) and pushes the rectum back by its posterior growth. */
+OrganGeometry
+Organs(const PelvisAnatomy & anatomy)
+{
+  const double  sp = anatomy.prostateScale;
+  const double  sb = anatomy.bladderScale;
+  const Vec3 &  d = anatomy.offset;
+  OrganGeometry g;
+  g.prostateCenter = Add(ProstateCenter, d);
+  g.prostateSemiAxes = Scale(ProstateSemiAxes, sp);
+  g.bladderCenter = Add(
+    BladderCenter, Vec3{ { d[0], d[1], d[2] + ProstateSemiAxes[2] * (sp - 1.0) + BladderSemiAxes[2] * (sb - 1.0) } });
+  g.bladderSemiAxes = Scale(BladderSemiAxes, sb);
+  g.rectumRadius = anatomy.rectumRadius;
+  g.rectumAxisX = d[0];
+  g.rectumAxisY = RectumAxisY + d[1] + std::max(ProstateSemiAxes[1] * (sp - 1.0), BladderSemiAxes[1] * (sb - 1.0)) +
+                  (anatomy.rectumRadius - RectumRadius);
+  g.rectumTopZ = RectumTopZ + d[2] + ProstateSemiAxes[2] * (sp - 1.0);
+  return g;
+}
+
 /** Places the seeds by rejection sampling inside the prostate.
  *
  * A seed is accepted when both end points of its axis satisfy
@@ -282,15 +313,19 @@ SegmentDistance(const Vec3 & p0, const Vec3 & p1, const Vec3 & q0, const Vec3 & 
  * axis (which contains the cylinder) at least \c margin from the prostate
  * surface, without computing true ellipsoid distances. */
 std::vector<Seed>
-PlaceSeeds(const Vec3 & phantomCenter, unsigned int numberOfSeeds, std::uint64_t randomSeed)
+PlaceSeeds(const Vec3 &          phantomCenter,
+           const OrganGeometry & organs,
+           unsigned int          numberOfSeeds,
+           std::uint64_t         randomSeed)
 {
   std::vector<Seed> seeds;
   if (numberOfSeeds == 0)
   {
     return seeds;
   }
-  const Ellipsoid prostate(ProstateCenter, ProstateSemiAxes);
-  const double    minSemiAxis = std::min({ ProstateSemiAxes[0], ProstateSemiAxes[1], ProstateSemiAxes[2] });
+  const Vec3 &    semiAxes = organs.prostateSemiAxes;
+  const Ellipsoid prostate(organs.prostateCenter, semiAxes);
+  const double    minSemiAxis = std::min({ semiAxes[0], semiAxes[1], semiAxes[2] });
   const double    maxLevel = 1.0 - (SeedSurfaceMargin + 0.5 * SeedDiameter) / minSemiAxis;
   const double    cosMaxTilt = std::cos(SeedMaxTiltDegrees * Pi / 180.0);
 
@@ -302,7 +337,7 @@ PlaceSeeds(const Vec3 & phantomCenter, unsigned int numberOfSeeds, std::uint64_t
   double       boxVolume = 1.0;
   for (unsigned int a = 0; a < 3; ++a)
   {
-    boxVolume *= 2.0 * (maxLevel * ProstateSemiAxes[a] + ballRadius);
+    boxVolume *= 2.0 * (maxLevel * semiAxes[a] + ballRadius);
   }
   const double maximumNumberOfSeeds = std::floor(boxVolume / (4.0 / 3.0 * Pi * ballRadius * ballRadius * ballRadius));
   if (static_cast<double>(numberOfSeeds) > maximumNumberOfSeeds)
@@ -324,7 +359,7 @@ PlaceSeeds(const Vec3 & phantomCenter, unsigned int numberOfSeeds, std::uint64_t
     Vec3 center{};
     for (unsigned int a = 0; a < 3; ++a)
     {
-      center[a] = ProstateCenter[a] + (2.0 * rng.Uniform() - 1.0) * ProstateSemiAxes[a];
+      center[a] = organs.prostateCenter[a] + (2.0 * rng.Uniform() - 1.0) * semiAxes[a];
     }
     // cos(tilt) uniform in [cos(max tilt), 1] spreads the axes uniformly over
     // the spherical cap around +z.
@@ -375,10 +410,11 @@ PlaceSeeds(const Vec3 & phantomCenter, unsigned int numberOfSeeds, std::uint64_t
 class PelvisModel
 {
 public:
-  PelvisModel(const Vec3 & center, const std::vector<Seed> & seeds)
+  PelvisModel(const Vec3 & center, const OrganGeometry & organs, const std::vector<Seed> & seeds)
     : m_Center(center)
-    , m_Prostate(ProstateCenter, ProstateSemiAxes)
-    , m_Bladder(BladderCenter, BladderSemiAxes)
+    , m_Organs(organs)
+    , m_Prostate(organs.prostateCenter, organs.prostateSemiAxes)
+    , m_Bladder(organs.bladderCenter, organs.bladderSemiAxes)
     , m_Pubis(PubisCenter, PubisSemiAxes)
     , m_LeftIlium(LeftIliumCenter, IliumSemiAxes)
     , m_RightIlium(RightIliumCenter, IliumSemiAxes)
@@ -445,24 +481,27 @@ public:
   }
 
 private:
-  static bool
-  InRectum(const Vec3 & q)
+  bool
+  InRectum(const Vec3 & q) const
   {
-    const double dy = q[1] - RectumAxisY;
-    if (std::abs(q[0]) > RectumRadius || std::abs(dy) > RectumRadius || q[2] > RectumTopZ + RectumRadius)
+    const double dx = q[0] - m_Organs.rectumAxisX;
+    const double dy = q[1] - m_Organs.rectumAxisY;
+    const double radius = m_Organs.rectumRadius;
+    if (std::abs(dx) > radius || std::abs(dy) > radius || q[2] > m_Organs.rectumTopZ + radius)
     {
       return false;
     }
-    double r2 = q[0] * q[0] + dy * dy;
-    if (q[2] > RectumTopZ)
+    double r2 = dx * dx + dy * dy;
+    if (q[2] > m_Organs.rectumTopZ)
     {
-      const double dz = q[2] - RectumTopZ;
+      const double dz = q[2] - m_Organs.rectumTopZ;
       r2 += dz * dz;
     }
-    return r2 <= RectumRadius * RectumRadius;
+    return r2 <= radius * radius;
   }
 
   Vec3                      m_Center;
+  OrganGeometry             m_Organs;
   Ellipsoid                 m_Prostate;
   Ellipsoid                 m_Bladder;
   Ellipsoid                 m_Pubis;
@@ -778,9 +817,10 @@ MakePelvisPhantom(const PelvisPhantomParameters & parameters)
 
   PhantomVolume volume;
   volume.grid = parameters.grid;
-  volume.seeds = PlaceSeeds(center, parameters.numberOfSeeds, parameters.seedPlacementSeed);
+  const OrganGeometry organs = Organs(parameters.anatomy);
+  volume.seeds = PlaceSeeds(center, organs, parameters.numberOfSeeds, parameters.seedPlacementSeed);
 
-  const PelvisModel model(center, volume.seeds);
+  const PelvisModel model(center, organs, volume.seeds);
   Rasterize(volume.grid, model, SeedIndexBoxes(volume.grid, volume.seeds), volume.labels, volume.ct);
 
   if (parameters.noiseSigmaHU > 0.0)
@@ -799,14 +839,113 @@ PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<dou
   {
     Fail(where, "expected 3 coordinates per point");
   }
-  const Vec3                center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
-  const PelvisModel         model(center, PlaceSeeds(center, parameters.numberOfSeeds, parameters.seedPlacementSeed));
+  const Vec3          center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
+  const OrganGeometry organs = Organs(parameters.anatomy);
+  const PelvisModel   model(
+    center, organs, PlaceSeeds(center, organs, parameters.numberOfSeeds, parameters.seedPlacementSeed));
   std::vector<std::int32_t> labels(points.size() / 3);
   for (std::size_t n = 0; n < labels.size(); ++n)
   {
     labels[n] = PelvisTissueLabel[model.Classify({ { points[3 * n], points[3 * n + 1], points[3 * n + 2] } })];
   }
   return labels;
+}
+
+namespace {
+/** Offsets of the voxels within \a radius voxels of the origin, nearest first. */
+std::vector<std::array<int, 4>>
+BallOffsets(int radius)
+{
+  std::vector<std::array<int, 4>> ball; // dx, dy, dz, squared length
+  for (int z = -radius; z <= radius; ++z)
+    for (int y = -radius; y <= radius; ++y)
+      for (int x = -radius; x <= radius; ++x)
+      {
+        const int d2 = x * x + y * y + z * z;
+        if (d2 > 0 && d2 <= radius * radius)
+        {
+          ball.push_back({ { x, y, z, d2 } });
+        }
+      }
+  std::stable_sort(ball.begin(), ball.end(), [](const auto & a, const auto & b) { return a[3] < b[3]; });
+  return ball;
+}
+
+const char *
+PelvisLabelName(std::int32_t label)
+{
+  switch (label)
+  {
+    case PelvisProstate:
+      return "prostate";
+    case PelvisBladder:
+      return "bladder";
+    case PelvisRectum:
+      return "rectum";
+    case PelvisBone:
+      return "bone";
+    default:
+      return "body outline";
+  }
+}
+} // namespace
+
+PelvisClearance
+MeasurePelvisClearance(const PelvisAnatomy & anatomy)
+{
+  constexpr int           Reach = 6; // mm = voxels
+  PelvisPhantomParameters parameters;
+  parameters.grid = AxisAlignedCenteredGrid({ { 172, 132, 150 } }, { { 1.0, 1.0, 1.0 } });
+  parameters.numberOfSeeds = 0;
+  parameters.anatomy = anatomy;
+  const PhantomVolume                   volume = MakePelvisPhantom(parameters);
+  const std::array<std::size_t, 3> &    n = volume.grid.size;
+  const std::vector<std::array<int, 4>> ball = BallOffsets(Reach);
+  const auto isOrgan = [](std::int32_t l) { return l == PelvisProstate || l == PelvisBladder || l == PelvisRectum; };
+  PelvisClearance clearance;
+  double          organ2 = Reach * Reach, other2 = Reach * Reach;
+  for (std::size_t z = 0; z < n[2]; ++z)
+    for (std::size_t y = 0; y < n[1]; ++y)
+      for (std::size_t x = 0; x < n[0]; ++x)
+      {
+        const std::int32_t own = volume.labels[x + n[0] * (y + n[1] * z)];
+        if (!isOrgan(own))
+        {
+          continue;
+        }
+        // The nearest voxel of another structure within reach; soft tissue and the grid's edge do not count.
+        for (const auto & o : ball)
+        {
+          if (o[3] >= std::max(organ2, other2))
+          {
+            break;
+          }
+          const long X = long(x) + o[0], Y = long(y) + o[1], Z = long(z) + o[2];
+          if (X < 0 || Y < 0 || Z < 0 || X >= long(n[0]) || Y >= long(n[1]) || Z >= long(n[2]))
+          {
+            continue;
+          }
+          const std::int32_t other = volume.labels[std::size_t(X) + n[0] * (std::size_t(Y) + n[1] * std::size_t(Z))];
+          if (other == own || other == PelvisSoftTissue)
+          {
+            continue;
+          }
+          const std::string pair = std::string(PelvisLabelName(own)) + "-" + PelvisLabelName(other);
+          if (isOrgan(other) && o[3] < organ2)
+          {
+            organ2 = o[3];
+            clearance.closestOrgans = pair;
+          }
+          else if (!isOrgan(other) && o[3] < other2)
+          {
+            other2 = o[3];
+            clearance.closestToBoneOrOutline = pair;
+          }
+        }
+      }
+  clearance.organToOrgan = std::sqrt(organ2);
+  clearance.organToBoneOrOutline = std::sqrt(other2);
+  return clearance;
 }
 
 std::vector<std::int32_t>
@@ -889,14 +1028,18 @@ PelvisFillingLoads(const PelvisPhantomParameters & parameters,
   const auto at = [&c](const Vec3 & offset) {
     return Vec3{ { c[0] + offset[0], c[1] + offset[1], c[2] + offset[2] } };
   };
+  const OrganGeometry    organs = Organs(parameters.anatomy);
   std::vector<SceneLoad> loads = {
-    { "bladder", SceneLoad::TypeEnum::RadialDisplacement, at(BladderCenter), bladderMM },
-    { "rectum", SceneLoad::TypeEnum::RadialDisplacement, at({ { 0.0, RectumAxisY, 0.0 } }), rectumMM }
+    { "bladder", SceneLoad::TypeEnum::RadialDisplacement, at(organs.bladderCenter), bladderMM },
+    { "rectum",
+      SceneLoad::TypeEnum::RadialDisplacement,
+      at({ { organs.rectumAxisX, organs.rectumAxisY, 0.0 } }),
+      rectumMM }
   };
   if (filling == WallFillingEnum::AlongNormals)
   {
-    loads[0].semiAxes = BladderSemiAxes;
-    loads[1].center = at({ { 0.0, RectumAxisY, RectumTopZ } });
+    loads[0].semiAxes = organs.bladderSemiAxes;
+    loads[1].center = at({ { organs.rectumAxisX, organs.rectumAxisY, organs.rectumTopZ } });
     loads[1].axis = { { 0, 0, 1 } };
   }
   return loads;
