@@ -80,6 +80,10 @@ struct BiomechanicalRegistration_EXPORT Cohort
   /** Reads and checks \a cohortPath (see the class description); throws itk::ExceptionObject. */
   static Cohort
   Read(const std::string & cohortPath);
+
+  /** The patient called \a name; throws naming the cohort when there is none. */
+  const CohortPatient &
+  Patient(const std::string & name) const;
 };
 
 /** A covariate's value: a decimal number, or a T-stage (T0 ... T4, optional letter a-c) as its number. Returns

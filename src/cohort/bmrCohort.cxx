@@ -18,6 +18,7 @@
 #include "bmrCohort.h"
 
 #include "bmrCsvTable.h"
+#include "bmrError.h"
 
 #include <algorithm>
 #include <cctype>
@@ -180,6 +181,19 @@ Cohort::Read(const std::string & cohortPath)
     table.Fail("holds no fraction");
   }
   return cohort;
+}
+
+const CohortPatient &
+Cohort::Patient(const std::string & name) const
+{
+  for (const CohortPatient & p : patients)
+  {
+    if (p.name == name)
+    {
+      return p;
+    }
+  }
+  Fail("bmr::Cohort", "cohort \"" + path + "\" has no patient \"" + name + "\"");
 }
 
 } // namespace bmr

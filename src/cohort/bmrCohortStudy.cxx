@@ -262,12 +262,11 @@ CohortStudy::FractionsCsv() const
   for (const CohortFractionResult & r : fractions)
   {
     const CohortFraction & f = cohort.fractions[r.fraction];
-    const auto             patient = std::find_if(
-      cohort.patients.begin(), cohort.patients.end(), [&f](const CohortPatient & p) { return p.name == f.patient; });
+    const CohortPatient &  patient = cohort.Patient(f.patient);
     o << f.fraction << "," << f.patient;
     for (const auto & c : cohort.covariateNames)
     {
-      o << "," << Number(patient->covariates.at(c));
+      o << "," << Number(patient.covariates.at(c));
     }
     o << "," << (r.available ? "done" : "missing");
     for (const auto & m : materials)
@@ -298,8 +297,7 @@ CohortStudy::PatientsCsv() const
        "mean_interval_68_width_kPa\n";
   for (const CohortPatientModulus & p : patients)
   {
-    const auto & patient = *std::find_if(
-      cohort.patients.begin(), cohort.patients.end(), [&p](const CohortPatient & q) { return q.name == p.patient; });
+    const CohortPatient & patient = cohort.Patient(p.patient);
     o << p.patient;
     for (const auto & c : cohort.covariateNames)
     {
@@ -357,8 +355,7 @@ CohortStudy::ReportMarkdown() const
   o << "\n";
   for (const CohortPatientModulus & p : patients)
   {
-    const auto & patient = *std::find_if(
-      cohort.patients.begin(), cohort.patients.end(), [&p](const CohortPatient & q) { return q.name == p.patient; });
+    const CohortPatient & patient = cohort.Patient(p.patient);
     o << "| " << p.patient << " |";
     for (const auto & c : cohort.covariateNames)
     {
