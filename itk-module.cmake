@@ -19,6 +19,8 @@ itk_module(BiomechanicalRegistration
     ITKThresholding
     ITKImageIntensity
     ITKIOImageBase
+  PRIVATE_DEPENDS
+    ITKGDCM
   COMPILE_DEPENDS
     ITKImageSources
   TEST_DEPENDS

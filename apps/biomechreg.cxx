@@ -26,6 +26,7 @@
 //   biomechreg phantom-cohort ...   N phantom patients x M fractions with their truth (stage, modulus, anatomy)
 //   biomechreg cohort ...           the cohort workflow on Snakemake: one registration per daily image, statistics
 //   biomechreg cohort-stats ...     the statistics of a cohort's registrations (the workflow's last step)
+//   biomechreg dose ...             per-organ DVHs, D95/D2/Dmean, V-doses and gEUD of a dose or a synthetic plan
 //   biomechreg help [SUB], biomechreg SUB --help, biomechreg --version
 // Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
 // written to temporary names and renamed when complete.
@@ -210,6 +211,9 @@ DemoCommand()
 } // namespace
 
 namespace bmrcli {
+int
+DoseCommand(const Arguments & args); // biomechregDose.cxx
+
 void
 WritePhantom(const std::string &          out,
              const itk::PhantomPair &     pair,
@@ -288,6 +292,10 @@ main(int argc, char * argv[])
     if (command == "cohort-stats")
     {
       return bmrcli::CohortStatsCommand(options);
+    }
+    if (command == "dose")
+    {
+      return bmrcli::DoseCommand(options);
     }
     throw UsageError("unknown command \"" + command + "\"");
   }

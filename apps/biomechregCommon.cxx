@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "biomechregCommon.h"
 #include "itkBiomechanicalReports.h"
+#include "itkDicomRT.h"
 
 #include <cmath>
 
@@ -201,6 +202,41 @@ Arguments::CheckAllUsed() const
     {
       throw UsageError("unknown option " + kv.first);
     }
+  }
+}
+
+LabelImageType::Pointer
+ReadLabelsOrRTStruct(const std::string &       path,
+                     const std::string &       what,
+                     const itk::ImageBase<3> * ctGrid,
+                     const bmr::Scene &        scene)
+{
+  if (itk::ReadDicomModality(path) != "RTSTRUCT")
+  {
+    return ReadImage<LabelImageType>(path, what);
+  }
+  std::map<std::string, std::int32_t> roiNameToLabel;
+  itk::RTStructRasterizationOptions   options;
+  bool                                backgroundSet = false;
+  for (const auto & label : scene.labels)
+  {
+    if (label.role != bmr::LabelRoleEnum::Outside)
+    {
+      roiNameToLabel[label.name] = label.value;
+    }
+    else if (!backgroundSet)
+    {
+      options.backgroundLabel = label.value;
+      backgroundSet = true;
+    }
+  }
+  try
+  {
+    return itk::ReadRTStructAsLabelImage(path, ctGrid, roiNameToLabel, options);
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    bmr::Fail("ReadLabelsOrRTStruct", what + ": " + e.GetDescription());
   }
 }
 

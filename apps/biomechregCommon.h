@@ -150,6 +150,17 @@ ReadImage(const std::string & path, const std::string & what)
   return itk::ReadBiomechanicalImage<TImage>(path, what);
 }
 
+/** A label map from \a path: a DICOM RTSTRUCT (a file whose Modality is RTSTRUCT) rasterized onto \a ctGrid (the
+ * CT of the same scan) by itk::ReadRTStructAsLabelImage(), its ROI names mapped to the names of \a scene's labels
+ * other than the outside ones (case-insensitively; every one must be in the file, and every ROI of the file
+ * must be one of them; voxels outside every ROI get the scene's first outside label, or 0); any other path is
+ * read as a label image (ReadImage). Errors name \a what and the file. */
+LabelImageType::Pointer
+ReadLabelsOrRTStruct(const std::string &       path,
+                     const std::string &       what,
+                     const itk::ImageBase<3> * ctGrid,
+                     const bmr::Scene &        scene);
+
 // ------------------------------------------------------------ argument parsing
 
 class Arguments

@@ -81,9 +81,10 @@ ReadPair(const itk::ImagePairEntry & pair, const CompareOptions & o, const std::
   timer.Begin("read inputs");
   d.scene = bmr::ReadScene(pair.paths.at("scene"));
   d.movingCT = ReadImage<CTImageType>(pair.paths.at("moving_ct"), "moving CT");
-  d.movingLabels = ReadImage<LabelImageType>(pair.paths.at("moving_labels"), "moving label image");
+  // A label input may be an RTSTRUCT, rasterized on the grid of the CT of the same scan.
+  d.movingLabels = ReadLabelsOrRTStruct(pair.paths.at("moving_labels"), "moving label image", d.movingCT, d.scene);
   d.fixedCT = ReadImage<CTImageType>(pair.paths.at("fixed_ct"), "fixed CT");
-  d.fixedLabels = ReadImage<LabelImageType>(pair.paths.at("fixed_labels"), "fixed label image");
+  d.fixedLabels = ReadLabelsOrRTStruct(pair.paths.at("fixed_labels"), "fixed label image", d.fixedCT, d.scene);
   timer.End();
   const auto unknown = d.scene.UnknownLabels();
   d.organ = !o.seedOrgan.empty() ? o.seedOrgan : unknown.empty() ? std::string() : unknown.front()->name;

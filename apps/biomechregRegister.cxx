@@ -195,10 +195,11 @@ RegisterCommand(const Arguments & args)
   timer.Begin("read inputs");
   const bmr::Scene scene = bmr::ReadScene(scenePath);
   const auto       moving = ReadImage<CTImageType>(movingCT, "moving CT");
-  const auto       movingMap = ReadImage<LabelImageType>(movingLabels, "moving label image");
-  // The fixed CT is read to check it; the fixed label image defines the output grid.
-  ReadImage<CTImageType>(fixedCT, "fixed CT");
-  const auto fixedMap = ReadImage<LabelImageType>(fixedLabels, "fixed label image");
+  // A label input may be an RTSTRUCT, rasterized on the grid of the CT of the same scan.
+  const auto movingMap = ReadLabelsOrRTStruct(movingLabels, "moving label image", moving, scene);
+  // The fixed CT is read to check it (and to grid an RTSTRUCT); the fixed label image defines the output grid.
+  const auto fixed = ReadImage<CTImageType>(fixedCT, "fixed CT");
+  const auto fixedMap = ReadLabelsOrRTStruct(fixedLabels, "fixed label image", fixed, scene);
   const auto fixedProbabilities = ReadProbabilityImages(probabilities);
   timer.End();
   const auto result =

@@ -87,10 +87,21 @@ const std::pair<const char *, const char *> commands[] = {
   { "cohort-stats",
     "  biomechreg cohort-stats --cohort FILE.csv --study DIR\n"
     "    per-patient moduli and their correlation with the covariates from DIR/results (the workflow's last step)\n" },
+  { "dose",
+    "  biomechreg dose --labels FILE --scene FILE --out DIR (--dose FILE [Gy] | --plan-margin MM)\n"
+    "                  [--field FILE (warp the dose first: out(x) = dose(x + d(x)), linear)]\n"
+    "                  [--prescription-Gy RX (78)] [--penumbra-mm W (6, 80-20 %)] [--bath-fraction F (0)]\n"
+    "                  [--eud-a ORGAN=A,... (defaults: prostate -10, rectum and its wall 8, bladder 2, others 1)]\n"
+    "                  [--v-doses GY,... (50,60,65,70,75)] [--bin-width-Gy W (0.1)] [--prostate NAME (prostate)]\n"
+    "                  [--rectum NAME (rectum)] [--plot on|off]\n"
+    "    per organ and for the anterior rectal wall (rectum shell of 3 mm within 15 mm of the prostate): the\n"
+    "    cumulative and differential DVH (dvh.csv, dvh.png), gEUD, Dmean, D95, D2, D98, V-doses\n"
+    "    (dose_metrics.csv) and the dose on the label grid (dose.nrrd); --plan-margin makes a conformal plan\n"
+    "    (PTV = prostate + margin, Rx with an erfc penumbra) instead of reading a dose\n" },
 };
 
 const char * const footer =
-  "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN.\n"
+  "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN, Gy.\n"
   "Exit status: 0 success, 1 error (bad input, failed computation), 2 usage error.\n";
 
 } // namespace

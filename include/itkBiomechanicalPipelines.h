@@ -257,6 +257,7 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   double               noiseHU{ 10.0 };
   std::uint64_t        seed{ 1 };
   unsigned int         numberOfSeeds{ 3 };
+  double               trackingNoiseMM{ 0.5 }; ///< sigma of the tracked treatment markers' noise [mm] per axis
   bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
   /** The fixed scan's grid is the moving one shifted by U(-this, this) voxels along each axis (seeded by seed):
@@ -289,6 +290,9 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
   bmr::Scene                           scene;      ///< what the estimator sees (prostate modulus unknown)
   bmr::Scene                           truthScene; ///< known moduli and wall loads
   std::vector<bmr::Landmark>           movingLandmarks, fixedLandmarks; ///< seed centers [mm, LPS]
+  /** The fixed seed centers as a tracking system reports them: with Gaussian noise of
+   * PhantomSettings::trackingNoiseMM per axis, seeded by the phantom's seed (itk::AddTrackingNoise). */
+  std::vector<bmr::Landmark> trackedLandmarks;
   OrganProbabilityImages               fixedFractions; ///< per objective organ, with PhantomSettings::fractions
   std::size_t                          truthTetrahedra{ 0 }, truthNodes{ 0 };
   std::vector<PipelineStage>           stages;

@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "itkBiomechanicalReports.h"
 
+#include "itkMarkerPipeline.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -39,6 +41,21 @@ Json
 Compact(double x)
 {
   return std::isfinite(x) && x == std::round(x) && std::abs(x) < 1e15 ? Json(static_cast<std::int64_t>(x)) : Json(x);
+}
+
+/** Every stage's wall time [s] and their total. */
+Json
+WallTimes(const std::vector<PipelineStage> & stages)
+{
+  Json   times = Json::object();
+  double total = 0.0;
+  for (const PipelineStage & s : stages)
+  {
+    times[s.name] = s.seconds;
+    total += s.seconds;
+  }
+  times["total"] = total;
+  return times;
 }
 
 Json
@@ -116,15 +133,48 @@ RegistrationReportJson(const RegistrationResult &         r,
   j["warnings"] = r.state.warnings;
   j["mesh"] = { { "tetrahedra", r.state.mesh.GetNumberOfTetrahedra() }, { "nodes", r.state.mesh.GetNumberOfPoints() } };
   j["iterations"] = { { "sweep", r.estimation.sweep.size() }, { "fine", r.estimation.history.size() } };
-  Json   times = Json::object();
-  double total = 0.0;
-  for (const PipelineStage & s : wallTimes)
+  j["wall_time_s"] = WallTimes(wallTimes);
+  return j.dump(2) + "\n";
+}
+
+std::string
+MarkerReportJson(const MarkerResult & r, const MarkerSettings & settings)
+{
+  Json j;
+  j["units"] = Units();
+  j["markers"] = r.markerIds;
+  Json methods = Json::object();
+  for (const MarkerMethodResult & m : r.methods)
   {
-    times[s.name] = s.seconds;
-    total += s.seconds;
+    Json entry = { { "fit_residual_mm", m.fitResidual } };
+    if (m.leaveOneOutRms >= 0.0)
+    {
+      entry["leave_one_out_error_mm"] = m.leaveOneOutError;
+      entry["leave_one_out_rms_mm"] = m.leaveOneOutRms;
+    }
+    if (m.intersectionOverUnion >= 0.0)
+    {
+      entry["intersection_over_union"] = m.intersectionOverUnion;
+      entry["mean_surface_distance_mm"] = Number(m.meanSurfaceDistance);
+    }
+    methods[m.method] = entry;
   }
-  times["total"] = total;
-  j["wall_time_s"] = times;
+  j["methods"] = methods;
+  j["model"] = { { "organ", settings.organ },
+                 { "box_margin_mm", settings.boxMargin },
+                 { "control_spacing_mm", settings.controlSpacing },
+                 { "regularization", settings.regularization },
+                 { "load_parameters", r.loadParameters },
+                 { "surface_nodes", r.surfaceNodes },
+                 { "held_nodes", r.heldNodes },
+                 { "force_scale_mN", r.forceScale },
+                 { "iterations", r.iterations },
+                 { "youngs_modulus_kPa", r.moduli },
+                 { "tetrahedra", r.state.mesh.GetNumberOfTetrahedra() },
+                 { "nodes", r.state.mesh.GetNumberOfPoints() } };
+  j["inverted_elements"] = r.state.invertedElements;
+  j["warnings"] = r.warnings;
+  j["wall_time_s"] = WallTimes(r.stages);
   return j.dump(2) + "\n";
 }
 
@@ -228,6 +278,8 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
   // The fixed grid's offset from the moving one: drawn within +- this many voxels per axis (its origin says where).
   j["fixed_grid_shift_voxels"] = settings.fixedGridShiftVoxels;
   j["landmarks"] = landmarks;
+  // landmarks_tracked.csv: the fixed landmarks with this Gaussian noise per axis (a tracking system's report).
+  j["tracking_noise_sigma_mm"] = settings.trackingNoiseMM;
   return j.dump(2) + "\n";
 }
 

@@ -221,6 +221,7 @@ WritePhantomPair(const std::string & directory, const PhantomPair & pair, const 
   {
     bmr::WriteLandmarks(directory + "/" + pair.scene.movingLandmarks, pair.movingLandmarks);
     bmr::WriteLandmarks(directory + "/" + pair.scene.fixedLandmarks, pair.fixedLandmarks);
+    bmr::WriteLandmarks(directory + "/landmarks_tracked.csv", pair.trackedLandmarks);
   }
   bmr::WriteTextFileAtomically(directory + "/truth.json", PhantomTruthJson(pair, settings));
 }

@@ -17,6 +17,7 @@
  *=========================================================================*/
 // The phantom pipeline: a moving/fixed pair with known moduli and wall loads, made without inverse crime.
 #include "itkPipelineStages.h"
+#include "itkMarkerPipeline.h"
 
 #include "bmrError.h"
 #include "bmrDisplacementFieldRasterizer.h"
@@ -344,6 +345,7 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
   clock.End();
 
   MoveSeeds(pair, moving.seeds, truth.mesh);
+  pair.trackedLandmarks = AddTrackingNoise(pair.fixedLandmarks, s.trackingNoiseMM, s.seed);
   pair.scene = IsPelvis(s) ? bmr::PelvisPhantomScene(50.0, true) : bmr::SpherePhantomScene(50.0, true);
   pair.scene.model = s.model;
   if (s.fractions)

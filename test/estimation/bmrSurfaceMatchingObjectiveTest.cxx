@@ -66,37 +66,6 @@ SphereMap(const double c[3], double r)
   return std::make_shared<bmr::SignedDistanceSampler>(g, v, "test map");
 }
 
-/** Slopes log2(r(h)/r(h/2)) of the Taylor remainder along direction v, for h = h0 ... h0/16. */
-template<typename TPhi>
-bool
-CheckTaylor(const char * name, TPhi phiAt, double phi0, double slope0, double h0)
-{
-  double previous = 0.0;
-  bool   ok = true;
-  for (int k = 0; k <= 4; ++k)
-  {
-    const double h = h0 / std::pow(2.0, k);
-    const double remainder = std::abs(phiAt(h) - phi0 - h * slope0);
-    const double central = (phiAt(h) - phiAt(-h)) / (2.0 * h);
-    std::cout << name << ": h " << h << " remainder " << remainder << " central difference " << central << " adjoint "
-              << slope0;
-    if (k > 0)
-    {
-      const double slope = std::log2(previous / remainder);
-      std::cout << " slope " << slope;
-      // Tolerance: a consistent first derivative leaves an O(h^2) remainder (slope 2);
-      // [1.9, 2.1] allows the O(h^3) term at the largest step, an inconsistent gradient gives slope 1.
-      if (!(slope >= 1.9 && slope <= 2.1))
-      {
-        std::cout << "  <-- FAIL";
-        ok = false;
-      }
-    }
-    std::cout << std::endl;
-    previous = remainder;
-  }
-  return ok;
-}
 } // namespace
 
 int
@@ -168,7 +137,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
   {
     slopeD += gd[i] * v[i];
   }
-  ok &= CheckTaylor(
+  ok &= bmr::test::CheckTaylor(
     "d",
     [&](double h) {
       std::vector<double> dh(d);
@@ -179,7 +148,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     phi0,
     slopeD,
     0.1);
-  ok &= CheckTaylor(
+  ok &= bmr::test::CheckTaylor(
     "log E",
     [&](double h) {
       objective.SetYoungsModuli({ 40.0 * std::exp(h) });
@@ -252,7 +221,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
       slopeNH += gdNH[i] * v[i];
     }
     std::cout << "neo-Hookean: Phi " << phiNH << " mm^2 (linear " << phi0 << ")" << std::endl;
-    ok &= CheckTaylor(
+    ok &= bmr::test::CheckTaylor(
       "d (neo-Hookean)",
       [&](double h) {
         std::vector<double> dh(d);
@@ -263,7 +232,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
       phiNH,
       slopeNH,
       0.1);
-    ok &= CheckTaylor(
+    ok &= bmr::test::CheckTaylor(
       "log E (neo-Hookean)",
       [&](double h) {
         nh.SetYoungsModuli({ 40.0 * std::exp(h) });

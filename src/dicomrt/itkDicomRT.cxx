@@ -1,0 +1,1150 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// DICOM-RT input: RTSTRUCT -> label map on a CT grid, RTDOSE -> dose image [Gy]. GDCM is used only in this
+// unit; attributes are read from the raw element values (strings parsed here) rather than through
+// gdcm::Attribute, whose conversions assume well-formed values, so that a corrupt file gives an error.
+#include "itkDicomRT.h"
+
+#include "bmrError.h"
+#include "itkBiomechanicalImageIO.h"
+
+#include "gdcmDataSet.h"
+#include "gdcmImage.h"
+#include "gdcmImageReader.h"
+#include "gdcmItem.h"
+#include "gdcmReader.h"
+#include "gdcmSequenceOfItems.h"
+#include "gdcmTag.h"
+#include "gdcmTrace.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+namespace itk {
+namespace {
+
+// ------------------------------------------------------------------------------------------ tags
+
+const gdcm::Tag ModalityTag(0x0008, 0x0060);
+const gdcm::Tag SeriesInstanceUIDTag(0x0020, 0x000e);
+const gdcm::Tag ImagePositionPatientTag(0x0020, 0x0032);
+const gdcm::Tag ImageOrientationPatientTag(0x0020, 0x0037);
+const gdcm::Tag PixelSpacingTag(0x0028, 0x0030);
+const gdcm::Tag DoseUnitsTag(0x3004, 0x0002);
+const gdcm::Tag GridFrameOffsetVectorTag(0x3004, 0x000c);
+const gdcm::Tag DoseGridScalingTag(0x3004, 0x000e);
+const gdcm::Tag ReferencedFrameOfReferenceSequenceTag(0x3006, 0x0010);
+const gdcm::Tag RTReferencedStudySequenceTag(0x3006, 0x0012);
+const gdcm::Tag RTReferencedSeriesSequenceTag(0x3006, 0x0014);
+const gdcm::Tag StructureSetROISequenceTag(0x3006, 0x0020);
+const gdcm::Tag ROINumberTag(0x3006, 0x0022);
+const gdcm::Tag ROINameTag(0x3006, 0x0026);
+const gdcm::Tag ROIContourSequenceTag(0x3006, 0x0039);
+const gdcm::Tag ContourSequenceTag(0x3006, 0x0040);
+const gdcm::Tag ContourGeometricTypeTag(0x3006, 0x0042);
+const gdcm::Tag NumberOfContourPointsTag(0x3006, 0x0046);
+const gdcm::Tag ContourDataTag(0x3006, 0x0050);
+const gdcm::Tag ReferencedROINumberTag(0x3006, 0x0084);
+
+// ------------------------------------------------------------------------------------------ text
+
+std::string
+Trim(const std::string & text)
+{
+  const auto first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos)
+  {
+    return std::string();
+  }
+  const auto last = text.find_last_not_of(" \t\r\n");
+  return text.substr(first, last - first + 1);
+}
+
+/** The key under which ROI names are compared: trimmed, lower case. */
+std::string
+NameKey(const std::string & name)
+{
+  std::string key = Trim(name);
+  std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+  return key;
+}
+
+std::string
+Upper(std::string text)
+{
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::toupper(c); });
+  return text;
+}
+
+std::string
+Quote(const std::string & text)
+{
+  return "\"" + text + "\"";
+}
+
+std::string
+JoinQuoted(const std::vector<std::string> & names)
+{
+  std::string joined;
+  for (const auto & n : names)
+  {
+    joined += (joined.empty() ? "" : ", ") + Quote(n);
+  }
+  return joined.empty() ? "none" : joined;
+}
+
+/** Throws naming the file: `<kind> "<path>": <message>`. */
+[[noreturn]] void
+FailFile(const char * where, const std::string & kind, const std::string & path, const std::string & message)
+{
+  bmr::Fail(where, kind + " " + Quote(path) + ": " + message);
+}
+
+// ------------------------------------------------------------------------------------------ DICOM values
+
+bool
+HasPart10Preamble(const std::string & path)
+{
+  std::ifstream file(path, std::ios::binary);
+  char          header[132];
+  if (!file.read(header, sizeof(header)))
+  {
+    return false;
+  }
+  return std::memcmp(header + 128, "DICM", 4) == 0;
+}
+
+/** The value of a string attribute (CS, DS, IS, LO, UI, ...) without padding (spaces, NUL); empty when absent. */
+std::string
+StringValue(const gdcm::DataSet & ds, const gdcm::Tag & tag)
+{
+  if (!ds.FindDataElement(tag))
+  {
+    return std::string();
+  }
+  const gdcm::ByteValue * bytes = ds.GetDataElement(tag).GetByteValue();
+  if (!bytes || !bytes->GetPointer())
+  {
+    return std::string();
+  }
+  std::string text(bytes->GetPointer(), bytes->GetLength());
+  text.erase(std::find(text.begin(), text.end(), '\0'), text.end());
+  return Trim(text);
+}
+
+/** The backslash-separated numbers of a DS or IS value; false when one is not a finite number. */
+bool
+ParseNumbers(const std::string & text, std::vector<double> & values)
+{
+  values.clear();
+  if (Trim(text).empty())
+  {
+    return true;
+  }
+  std::size_t begin = 0;
+  while (true)
+  {
+    const std::size_t end = text.find('\\', begin);
+    const std::string item = Trim(text.substr(begin, end == std::string::npos ? std::string::npos : end - begin));
+    char *            parsedEnd = nullptr;
+    const double      value = std::strtod(item.c_str(), &parsedEnd);
+    if (item.empty() || parsedEnd != item.c_str() + item.size() || !std::isfinite(value))
+    {
+      return false;
+    }
+    values.push_back(value);
+    if (end == std::string::npos)
+    {
+      return true;
+    }
+    begin = end + 1;
+  }
+}
+
+/** The sequence at \a tag, or nullptr when it is absent, empty or cannot be decoded. */
+gdcm::SmartPointer<gdcm::SequenceOfItems>
+Sequence(const gdcm::DataSet & ds, const gdcm::Tag & tag)
+{
+  if (!ds.FindDataElement(tag))
+  {
+    return nullptr;
+  }
+  try
+  {
+    gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(tag).GetValueAsSQ();
+    if (sq && sq->GetNumberOfItems() > 0)
+    {
+      return sq;
+    }
+  }
+  catch (const std::exception &)
+  {
+    // An undecodable sequence is reported by the caller as missing.
+  }
+  return nullptr;
+}
+
+// ------------------------------------------------------------------------------------------ structure check
+
+/** Walks the data elements of a DICOM Part 10 file without interpreting them, to refuse a truncated or
+ * corrupt file before GDCM parses it: Debian's GDCM is built with assertions, and its reader, after a failed
+ * first pass over a truncated file, asserts on the exhausted stream (abort) instead of failing. Checks that
+ * every element's value (defined lengths) ends inside the file and that every undefined-length sequence, item
+ * and encapsulated pixel data reaches its delimiter. */
+class DicomStructureWalker
+{
+public:
+  explicit DicomStructureWalker(std::vector<unsigned char> bytes)
+    : m_Bytes(std::move(bytes))
+  {}
+
+  /** An empty string when the structure is complete, else what is wrong. */
+  std::string
+  Check()
+  {
+    if (m_Bytes.size() < 132 || std::memcmp(m_Bytes.data() + 128, "DICM", 4) != 0)
+    {
+      return "no DICOM preamble";
+    }
+    // The File Meta Information (group 0002) is explicit VR little endian; its transfer syntax says how the
+    // data set that follows is encoded.
+    std::size_t       pos = 132;
+    std::string       transferSyntax;
+    std::string       problem;
+    while (pos + 4 <= m_Bytes.size() && Uint16(pos, false) == 0x0002)
+    {
+      const std::size_t start = pos;
+      if (!SkipElement(pos, true, false, 0, problem))
+      {
+        return problem;
+      }
+      if (Uint16(start + 2, false) == 0x0010)
+      {
+        transferSyntax.assign(reinterpret_cast<const char *>(m_Bytes.data()) + pos - Uint16(start + 6, false),
+                              Uint16(start + 6, false));
+        transferSyntax = Trim(transferSyntax.substr(0, transferSyntax.find('\0')));
+      }
+    }
+    if (transferSyntax == "1.2.840.10008.1.2.1.99")
+    {
+      return std::string(); // deflated: the data set cannot be walked without inflating it; left to GDCM
+    }
+    const bool explicitVR = transferSyntax != "1.2.840.10008.1.2";
+    const bool bigEndian = transferSyntax == "1.2.840.10008.1.2.2";
+    while (pos < m_Bytes.size())
+    {
+      if (!SkipElement(pos, explicitVR, bigEndian, 0, problem))
+      {
+        return problem;
+      }
+    }
+    return std::string();
+  }
+
+private:
+  std::uint16_t
+  Uint16(std::size_t pos, bool bigEndian) const
+  {
+    const unsigned char * b = m_Bytes.data() + pos;
+    return bigEndian ? static_cast<std::uint16_t>(b[0] << 8 | b[1]) : static_cast<std::uint16_t>(b[1] << 8 | b[0]);
+  }
+  std::uint32_t
+  Uint32(std::size_t pos, bool bigEndian) const
+  {
+    const std::uint32_t lo = Uint16(pos, bigEndian), hi = Uint16(pos + 2, bigEndian);
+    return bigEndian ? (lo << 16 | hi) : (hi << 16 | lo);
+  }
+
+  /** Skips one element (or item, or delimiter) at \a pos; false with \a problem set when it does not fit. */
+  bool
+  SkipElement(std::size_t & pos, bool explicitVR, bool bigEndian, unsigned int depth, std::string & problem)
+  {
+    constexpr std::uint32_t undefinedLength = 0xffffffff;
+    if (depth > 64)
+    {
+      problem = "sequences nested deeper than 64 levels";
+      return false;
+    }
+    if (pos + 8 > m_Bytes.size())
+    {
+      problem = "ends inside an element header";
+      return false;
+    }
+    const std::uint16_t group = Uint16(pos, bigEndian);
+    std::uint32_t       length = 0;
+    bool                sequenceLike = false; // SQ, UN or an item: an undefined length holds nested elements
+    if (group == 0xfffe)
+    {
+      // Items and delimiters have no VR in any transfer syntax.
+      length = Uint32(pos + 4, bigEndian);
+      pos += 8;
+      sequenceLike = true;
+    }
+    else if (explicitVR)
+    {
+      const std::string vr(reinterpret_cast<const char *>(m_Bytes.data()) + pos + 4, 2);
+      static const std::set<std::string> longVRs{ "OB", "OD", "OF", "OL", "OV", "OW", "SQ",
+                                                  "SV", "UC", "UN", "UR", "UT", "UV" };
+      if (longVRs.count(vr))
+      {
+        if (pos + 12 > m_Bytes.size())
+        {
+          problem = "ends inside an element header";
+          return false;
+        }
+        length = Uint32(pos + 8, bigEndian);
+        pos += 12;
+      }
+      else
+      {
+        length = Uint16(pos + 6, bigEndian);
+        pos += 8;
+      }
+      sequenceLike = vr == "SQ" || vr == "UN" || vr == "OB" || vr == "OW"; // OB/OW: encapsulated pixel data
+    }
+    else
+    {
+      length = Uint32(pos + 4, bigEndian);
+      pos += 8;
+      sequenceLike = true; // implicit VR: an undefined length is a sequence
+    }
+    if (length != undefinedLength)
+    {
+      if (length > m_Bytes.size() - pos)
+      {
+        std::ostringstream os;
+        os << "the value of element (" << std::hex << group << "," << Uint16(pos - 8, bigEndian) << std::dec
+           << ") ends beyond the end of the file (truncated)";
+        problem = os.str();
+        return false;
+      }
+      pos += length;
+      return true;
+    }
+    if (!sequenceLike)
+    {
+      problem = "an element of undefined length that is not a sequence";
+      return false;
+    }
+    // Nested elements up to the item (E00D) or sequence (E0DD) delimiter.
+    while (pos + 8 <= m_Bytes.size())
+    {
+      const bool delimiter =
+        Uint16(pos, bigEndian) == 0xfffe && (Uint16(pos + 2, bigEndian) == 0xe00d || Uint16(pos + 2, bigEndian) == 0xe0dd);
+      if (!SkipElement(pos, explicitVR, bigEndian, depth + 1, problem))
+      {
+        return false;
+      }
+      if (delimiter)
+      {
+        return true;
+      }
+    }
+    problem = "a sequence or item of undefined length has no delimiter (truncated)";
+    return false;
+  }
+
+  std::vector<unsigned char> m_Bytes;
+};
+
+/** Turns GDCM's diagnostics (printed on std::cerr by Debian's build) off while it lives. */
+class QuietGDCM
+{
+public:
+  QuietGDCM()
+    : m_Warning(gdcm::Trace::GetWarningFlag())
+    , m_Error(gdcm::Trace::GetErrorFlag())
+  {
+    gdcm::Trace::WarningOff();
+    gdcm::Trace::ErrorOff();
+  }
+  ~QuietGDCM()
+  {
+    gdcm::Trace::SetWarning(m_Warning);
+    gdcm::Trace::SetError(m_Error);
+  }
+  QuietGDCM(const QuietGDCM &) = delete;
+  QuietGDCM &
+  operator=(const QuietGDCM &) = delete;
+
+private:
+  bool m_Warning;
+  bool m_Error;
+};
+
+/** Refuses, naming the file, what GDCM must not see: not a file, not DICOM Part 10, or an incomplete structure. */
+void
+CheckDicomFile(const char * where, const std::string & kind, const std::string & path)
+{
+  std::ifstream file(path, std::ios::binary);
+  if (!file || std::filesystem::is_directory(path))
+  {
+    FailFile(where, kind, path, "cannot be opened");
+  }
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (bytes.size() < 132 || std::memcmp(bytes.data() + 128, "DICM", 4) != 0)
+  {
+    FailFile(where, kind, path, "is not a DICOM file");
+  }
+  const std::string problem = DicomStructureWalker(std::move(bytes)).Check();
+  if (!problem.empty())
+  {
+    FailFile(where, kind, path, "is corrupt: " + problem);
+  }
+}
+
+/** Reads the whole data set of \a path; throws naming the file when it is not DICOM or cannot be parsed. */
+void
+ReadDataSet(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path)
+{
+  CheckDicomFile(where, kind, path);
+  QuietGDCM quiet;
+  bool      ok = false;
+  reader.SetFileName(path.c_str());
+  try
+  {
+    ok = reader.Read();
+  }
+  catch (const std::exception &)
+  {
+    ok = false;
+  }
+  if (!ok)
+  {
+    FailFile(where, kind, path, "cannot be read as DICOM (corrupt)");
+  }
+}
+
+void
+CheckModality(const gdcm::DataSet & ds, const std::string & expected, const char * where, const std::string & path)
+{
+  const std::string modality = Upper(StringValue(ds, ModalityTag));
+  if (modality != expected)
+  {
+    FailFile(where,
+             expected,
+             path,
+             "is not an " + expected + " (Modality " + (modality.empty() ? "missing" : Quote(modality)) + ")");
+  }
+}
+
+// ------------------------------------------------------------------------------------------ RTSTRUCT
+
+constexpr const char * RTStructWhere = "ReadRTStructAsLabelImage";
+
+struct Contour
+{
+  std::vector<ImageBase<3>::PointType> points; ///< LPS [mm]
+};
+
+struct ROI
+{
+  std::string          name;
+  long                 number{ 0 };
+  std::vector<Contour> contours;
+  bool                 mapped{ false };
+  std::int32_t         label{ 0 };
+};
+
+/** Requires a Referenced Frame of Reference Sequence naming at least one referenced series: the structures
+ * must say which images they were drawn on. */
+void
+CheckReferencedSeries(const gdcm::DataSet & ds, const std::string & path)
+{
+  const auto frames = Sequence(ds, ReferencedFrameOfReferenceSequenceTag);
+  if (!frames)
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", path, "has no Referenced Frame of Reference Sequence (3006,0010)");
+  }
+  for (gdcm::SequenceOfItems::SizeType f = 1; f <= frames->GetNumberOfItems(); ++f)
+  {
+    const auto studies = Sequence(frames->GetItem(f).GetNestedDataSet(), RTReferencedStudySequenceTag);
+    for (gdcm::SequenceOfItems::SizeType s = 1; studies && s <= studies->GetNumberOfItems(); ++s)
+    {
+      const auto series = Sequence(studies->GetItem(s).GetNestedDataSet(), RTReferencedSeriesSequenceTag);
+      for (gdcm::SequenceOfItems::SizeType r = 1; series && r <= series->GetNumberOfItems(); ++r)
+      {
+        if (!StringValue(series->GetItem(r).GetNestedDataSet(), SeriesInstanceUIDTag).empty())
+        {
+          return;
+        }
+      }
+    }
+  }
+  FailFile(RTStructWhere,
+           "RTSTRUCT",
+           path,
+           "references no image series (no Series Instance UID in the Referenced Frame of Reference Sequence)");
+}
+
+long
+ParseROINumber(const std::string & text, const std::string & path, const std::string & context)
+{
+  std::vector<double> values;
+  if (!ParseNumbers(text, values) || values.size() != 1 || values[0] != std::floor(values[0]))
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", path, context + " has no valid ROI number (" + Quote(text) + ")");
+  }
+  return static_cast<long>(values[0]);
+}
+
+/** The ROIs of the Structure Set ROI Sequence (number and name), in file order. */
+std::vector<ROI>
+ReadROIs(const gdcm::DataSet & ds, const std::string & path)
+{
+  const auto sq = Sequence(ds, StructureSetROISequenceTag);
+  if (!sq)
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", path, "has no Structure Set ROI Sequence (3006,0020)");
+  }
+  std::vector<ROI> rois;
+  for (gdcm::SequenceOfItems::SizeType i = 1; i <= sq->GetNumberOfItems(); ++i)
+  {
+    const gdcm::DataSet & item = sq->GetItem(i).GetNestedDataSet();
+    ROI                   roi;
+    roi.name = StringValue(item, ROINameTag);
+    roi.number = ParseROINumber(
+      StringValue(item, ROINumberTag), path, "ROI " + Quote(roi.name) + " (item " + std::to_string(i) + ")");
+    rois.push_back(roi);
+  }
+  return rois;
+}
+
+/** Marks the ROIs named in \a roiNameToLabel and gives them their label; every ROI must be mapped unless
+ * \a ignoreUnmapped, every map entry must name one ROI. */
+void
+MapROIs(std::vector<ROI> &                          rois,
+        const std::map<std::string, std::int32_t> & roiNameToLabel,
+        bool                                        ignoreUnmapped,
+        const std::string &                         path)
+{
+  std::map<std::string, std::pair<std::string, std::int32_t>> byKey; // key -> (name as given, label)
+  std::vector<std::string>                                    mapNames;
+  for (const auto & kv : roiNameToLabel)
+  {
+    if (!byKey.emplace(NameKey(kv.first), kv).second)
+    {
+      FailFile(RTStructWhere,
+               "RTSTRUCT",
+               path,
+               "the ROI names " + Quote(byKey.at(NameKey(kv.first)).first) + " and " + Quote(kv.first) +
+                 " of the label map are the same name");
+    }
+    mapNames.push_back(kv.first);
+  }
+  std::map<std::string, const ROI *> found;
+  for (auto & roi : rois)
+  {
+    const auto entry = byKey.find(NameKey(roi.name));
+    if (entry == byKey.end())
+    {
+      if (!ignoreUnmapped)
+      {
+        FailFile(RTStructWhere,
+                 "RTSTRUCT",
+                 path,
+                 "ROI " + Quote(roi.name) + " is not one of the known names (" + JoinQuoted(mapNames) + ")");
+      }
+      continue;
+    }
+    if (!found.emplace(entry->first, &roi).second)
+    {
+      FailFile(RTStructWhere, "RTSTRUCT", path, "two ROIs are named " + Quote(roi.name));
+    }
+    roi.mapped = true;
+    roi.label = entry->second.second;
+  }
+  std::vector<std::string> fileNames;
+  for (const auto & roi : rois)
+  {
+    fileNames.push_back(roi.name);
+  }
+  for (const auto & kv : byKey)
+  {
+    if (!found.count(kv.first))
+    {
+      FailFile(RTStructWhere,
+               "RTSTRUCT",
+               path,
+               "has no ROI named " + Quote(kv.second.first) + " (its ROIs: " + JoinQuoted(fileNames) + ")");
+    }
+  }
+}
+
+Contour
+ReadContour(const gdcm::DataSet & item, const ROI & roi, std::size_t index, const std::string & path)
+{
+  const std::string what = "ROI " + Quote(roi.name) + ", contour " + std::to_string(index);
+  const std::string type = Upper(StringValue(item, ContourGeometricTypeTag));
+  if (type != "CLOSED_PLANAR")
+  {
+    FailFile(RTStructWhere,
+             "RTSTRUCT",
+             path,
+             what + " is " + (type.empty() ? "of no geometric type" : type) +
+               "; only CLOSED_PLANAR contours are rasterized");
+  }
+  std::vector<double> count;
+  std::vector<double> coordinates;
+  if (!ParseNumbers(StringValue(item, NumberOfContourPointsTag), count) || count.size() != 1)
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", path, what + " has no valid Number of Contour Points (3006,0046)");
+  }
+  if (!ParseNumbers(StringValue(item, ContourDataTag), coordinates))
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", path, what + ": its Contour Data (3006,0050) hold a value that is no number");
+  }
+  if (count[0] < 3 || coordinates.size() != 3 * static_cast<std::size_t>(count[0]))
+  {
+    std::ostringstream os;
+    os << what << " has " << coordinates.size() << " coordinates for " << count[0]
+       << " points (3 per point, at least 3 points)";
+    FailFile(RTStructWhere, "RTSTRUCT", path, os.str());
+  }
+  Contour contour;
+  for (std::size_t p = 0; p < coordinates.size(); p += 3)
+  {
+    ImageBase<3>::PointType point;
+    point[0] = coordinates[p];
+    point[1] = coordinates[p + 1];
+    point[2] = coordinates[p + 2];
+    contour.points.push_back(point);
+  }
+  return contour;
+}
+
+/** Reads the contours of the mapped ROIs from the ROI Contour Sequence. */
+void
+ReadContours(const gdcm::DataSet & ds, std::vector<ROI> & rois, const std::string & path)
+{
+  const auto sq = Sequence(ds, ROIContourSequenceTag);
+  for (gdcm::SequenceOfItems::SizeType i = 1; sq && i <= sq->GetNumberOfItems(); ++i)
+  {
+    const gdcm::DataSet & item = sq->GetItem(i).GetNestedDataSet();
+    const long            number =
+      ParseROINumber(StringValue(item, ReferencedROINumberTag), path, "ROI Contour Sequence item " + std::to_string(i));
+    const auto roi = std::find_if(rois.begin(), rois.end(), [number](const ROI & r) { return r.number == number; });
+    if (roi == rois.end())
+    {
+      FailFile(RTStructWhere,
+               "RTSTRUCT",
+               path,
+               "ROI Contour Sequence item " + std::to_string(i) + " refers to ROI number " + std::to_string(number) +
+                 ", which the Structure Set ROI Sequence does not define");
+    }
+    if (!roi->mapped)
+    {
+      continue;
+    }
+    const auto contours = Sequence(item, ContourSequenceTag);
+    for (gdcm::SequenceOfItems::SizeType c = 1; contours && c <= contours->GetNumberOfItems(); ++c)
+    {
+      roi->contours.push_back(ReadContour(contours->GetItem(c).GetNestedDataSet(), *roi, c, path));
+    }
+  }
+  for (const auto & roi : rois)
+  {
+    if (roi.mapped && roi.contours.empty())
+    {
+      FailFile(RTStructWhere, "RTSTRUCT", path, "ROI " + Quote(roi.name) + " has no contour");
+    }
+  }
+}
+
+/** An edge of a contour in the continuous index space of a slice (i, j). */
+struct Edge
+{
+  double x0, y0, x1, y1;
+};
+
+/** A run of voxels of one row, as offsets into the output buffer. */
+struct Run
+{
+  std::size_t start;
+  std::size_t length;
+};
+
+/** The edges of \a roi's contours per slice index of \a grid; throws when a contour matches no slice or
+ * leaves the grid in-plane. */
+std::map<long, std::vector<Edge>>
+ContourEdgesPerSlice(const ROI & roi, const ImageBase<3> * grid, const std::string & path)
+{
+  // Continuous indices are computed by the grid (any direction), relative to its region's start.
+  const auto region = grid->GetLargestPossibleRegion();
+  // DS values carry at most 16 characters: positions are exact to ~1e-6 of a voxel; 1e-3 voxel is ample.
+  constexpr double                  tolerance = 1e-3;
+  std::map<long, std::vector<Edge>> edges;
+  for (std::size_t c = 0; c < roi.contours.size(); ++c)
+  {
+    const auto &                            points = roi.contours[c].points;
+    std::vector<ContinuousIndex<double, 3>> indices(points.size());
+    double                                  meanK = 0.0;
+    for (std::size_t p = 0; p < points.size(); ++p)
+    {
+      grid->TransformPhysicalPointToContinuousIndex(points[p], indices[p]);
+      for (unsigned int a = 0; a < 3; ++a)
+      {
+        indices[p][a] -= static_cast<double>(region.GetIndex(a));
+      }
+      meanK += indices[p][2] / static_cast<double>(points.size());
+    }
+    const long         slice = std::lround(meanK);
+    const std::string  what = "ROI " + Quote(roi.name) + ", contour " + std::to_string(c + 1);
+    std::ostringstream at;
+    at << " (at z = " << points.front()[2] << " mm)";
+    for (const auto & index : indices)
+    {
+      if (std::abs(index[2] - static_cast<double>(slice)) > 0.5 + tolerance)
+      {
+        FailFile(RTStructWhere,
+                 "RTSTRUCT",
+                 path,
+                 what + at.str() + " does not lie in one slice of the reference grid (it is not parallel to them)");
+      }
+    }
+    if (slice < 0 || slice >= static_cast<long>(region.GetSize(2)))
+    {
+      std::ostringstream os;
+      os << what << at.str() << " lies on no slice of the reference grid (slice index " << meanK << ", grid 0.."
+         << region.GetSize(2) - 1 << ")";
+      FailFile(RTStructWhere, "RTSTRUCT", path, os.str());
+    }
+    for (const auto & index : indices)
+    {
+      for (unsigned int a = 0; a < 2; ++a)
+      {
+        if (index[a] < -0.5 - tolerance || index[a] > static_cast<double>(region.GetSize(a)) - 0.5 + tolerance)
+        {
+          FailFile(RTStructWhere, "RTSTRUCT", path, what + at.str() + " lies outside the reference grid in-plane");
+        }
+      }
+    }
+    auto & sliceEdges = edges[slice];
+    for (std::size_t p = 0; p < indices.size(); ++p)
+    {
+      const auto & a = indices[p];
+      const auto & b = indices[(p + 1) % indices.size()]; // closed: the last point joins the first
+      sliceEdges.push_back({ a[0], a[1], b[0], b[1] });
+    }
+  }
+  return edges;
+}
+
+/** Even-odd fill of one slice: along each row j (y = j), voxel centre i is inside when an odd number of edges
+ * cross the row left of it. An edge crosses the row when its ends lie on different sides of y (one end
+ * strictly above): a vertex on the row is counted once, so the count along a row of closed contours is even. */
+void
+FillSlice(const std::vector<Edge> & edges, long slice, const ImageRegion<3> & region, std::vector<Run> & runs)
+{
+  const long          nx = static_cast<long>(region.GetSize(0));
+  const long          ny = static_cast<long>(region.GetSize(1));
+  std::vector<double> crossings;
+  for (long j = 0; j < ny; ++j)
+  {
+    const double y = static_cast<double>(j);
+    crossings.clear();
+    for (const auto & e : edges)
+    {
+      if ((e.y0 > y) != (e.y1 > y))
+      {
+        crossings.push_back(e.x0 + (y - e.y0) * (e.x1 - e.x0) / (e.y1 - e.y0));
+      }
+    }
+    std::sort(crossings.begin(), crossings.end());
+    for (std::size_t m = 0; m + 1 < crossings.size(); m += 2)
+    {
+      // Centres i with crossings[m] < i <= crossings[m + 1] have an odd count of crossings left of them.
+      const long first = std::max(0L, static_cast<long>(std::floor(crossings[m])) + 1);
+      const long last = std::min(nx - 1, static_cast<long>(std::floor(crossings[m + 1])));
+      if (first <= last)
+      {
+        const std::size_t row = static_cast<std::size_t>(nx) * static_cast<std::size_t>(j + ny * slice);
+        runs.push_back({ row + static_cast<std::size_t>(first), static_cast<std::size_t>(last - first + 1) });
+      }
+    }
+  }
+}
+
+std::vector<Run>
+RasterizeROI(const ROI & roi, const ImageBase<3> * grid, const std::string & path)
+{
+  std::vector<Run> runs;
+  for (const auto & slice : ContourEdgesPerSlice(roi, grid, path))
+  {
+    FillSlice(slice.second, slice.first, grid->GetLargestPossibleRegion(), runs);
+  }
+  return runs;
+}
+
+DicomRTLabelImageType::Pointer
+MakeLabelImage(const ImageBase<3> * grid, std::int32_t background)
+{
+  const bmr::GridGeometry g = GridGeometryOf(grid);
+  const std::size_t       voxels = g.size[0] * g.size[1] * g.size[2];
+  return MakeImageOnGrid<DicomRTLabelImageType>(g, std::vector<std::int32_t>(voxels, background));
+}
+
+// ------------------------------------------------------------------------------------------ RTDOSE
+
+constexpr const char * RTDoseWhere = "ReadRTDose";
+
+std::vector<double>
+RequireNumbers(const gdcm::DataSet & ds, const gdcm::Tag & tag, const std::string & name, const std::string & path)
+{
+  std::vector<double> values;
+  if (!ds.FindDataElement(tag) || !ParseNumbers(StringValue(ds, tag), values) || values.empty())
+  {
+    std::ostringstream os;
+    os << "has no valid " << name << " " << tag;
+    FailFile(RTDoseWhere, "RTDOSE", path, os.str());
+  }
+  return values;
+}
+
+/** Origin [mm], spacing [mm] and direction of the dose grid from its position, orientation, pixel spacing and
+ * frame offsets. */
+void
+SetDoseGeometry(const gdcm::DataSet & ds, unsigned int frames, DicomRTDoseImageType * image, const std::string & path)
+{
+  const auto position = RequireNumbers(ds, ImagePositionPatientTag, "Image Position (Patient)", path);
+  const auto orientation = RequireNumbers(ds, ImageOrientationPatientTag, "Image Orientation (Patient)", path);
+  const auto pixelSpacing = RequireNumbers(ds, PixelSpacingTag, "Pixel Spacing", path);
+  if (position.size() != 3 || orientation.size() != 6 || pixelSpacing.size() != 2 || pixelSpacing[0] <= 0 ||
+      pixelSpacing[1] <= 0)
+  {
+    FailFile(RTDoseWhere,
+             "RTDOSE",
+             path,
+             "its Image Position (3 values), Image Orientation (6) or Pixel Spacing (2 positive) is malformed");
+  }
+  const std::array<double, 3> row{ { orientation[0], orientation[1], orientation[2] } };
+  const std::array<double, 3> column{ { orientation[3], orientation[4], orientation[5] } };
+  const std::array<double, 3> normal{ { row[1] * column[2] - row[2] * column[1],
+                                        row[2] * column[0] - row[0] * column[2],
+                                        row[0] * column[1] - row[1] * column[0] } };
+  const double                rowLength = std::sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2]);
+  const double columnLength = std::sqrt(column[0] * column[0] + column[1] * column[1] + column[2] * column[2]);
+  const double dot = row[0] * column[0] + row[1] * column[1] + row[2] * column[2];
+  if (std::abs(rowLength - 1) > 1e-3 || std::abs(columnLength - 1) > 1e-3 || std::abs(dot) > 1e-3)
+  {
+    FailFile(RTDoseWhere, "RTDOSE", path, "its Image Orientation (Patient) is not two orthogonal unit vectors");
+  }
+
+  // Frame positions along the normal, relative to the Image Position.
+  std::vector<double> offsets(1, 0.0);
+  if (frames > 1 || ds.FindDataElement(GridFrameOffsetVectorTag))
+  {
+    offsets = RequireNumbers(ds, GridFrameOffsetVectorTag, "Grid Frame Offset Vector", path);
+  }
+  if (offsets.size() != frames)
+  {
+    FailFile(RTDoseWhere,
+             "RTDOSE",
+             path,
+             "its Grid Frame Offset Vector has " + std::to_string(offsets.size()) + " values for " +
+               std::to_string(frames) + " frames");
+  }
+  if (offsets[0] != 0.0)
+  {
+    // DICOM PS3.3 C.8.8.3.2: a first value other than 0 makes the vector the frames' z coordinates, which is
+    // allowed only for the axial orientation 1\0\0\0\1\0.
+    const bool axial = std::abs(row[0] - 1) < 1e-6 && std::abs(column[1] - 1) < 1e-6;
+    if (!axial)
+    {
+      FailFile(RTDoseWhere,
+               "RTDOSE",
+               path,
+               "its Grid Frame Offset Vector starts at a non-zero value (z coordinates) on a non-axial grid");
+    }
+    for (auto & o : offsets)
+    {
+      o -= position[2];
+    }
+  }
+  double step = 1.0; // one frame: a nominal slice spacing [mm]
+  if (frames > 1)
+  {
+    step = (offsets.back() - offsets.front()) / static_cast<double>(frames - 1);
+    for (unsigned int f = 1; f < frames; ++f)
+    {
+      const double gap = offsets[f] - offsets[f - 1];
+      if (std::abs(gap - step) > std::max(1e-3 * std::abs(step), 1e-3) || step == 0.0)
+      {
+        std::ostringstream os;
+        os << "its frames are not evenly spaced (Grid Frame Offset Vector step " << gap << " mm between frames " << f
+           << " and " << f + 1 << ", mean " << step << " mm)";
+        FailFile(RTDoseWhere, "RTDOSE", path, os.str());
+      }
+    }
+  }
+  DicomRTDoseImageType::PointType     origin;
+  DicomRTDoseImageType::SpacingType   spacing;
+  DicomRTDoseImageType::DirectionType direction;
+  const double                        sign = step < 0 ? -1.0 : 1.0;
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    origin[a] = position[a] + offsets[0] * normal[a];
+    direction(a, 0) = row[a];
+    direction(a, 1) = column[a];
+    direction(a, 2) = sign * normal[a];
+  }
+  spacing[0] = pixelSpacing[1]; // DICOM: spacing between rows, then between columns
+  spacing[1] = pixelSpacing[0];
+  spacing[2] = std::abs(step);
+  image->SetOrigin(origin);
+  image->SetSpacing(spacing);
+  image->SetDirection(direction);
+}
+
+/** Stored value number \a i of a buffer of 16- or 32-bit, signed or unsigned, little-endian integers (GDCM
+ * delivers the decoded buffer in the machine's byte order, little endian on every platform we build for). */
+double
+StoredValue(const std::vector<char> & buffer, std::size_t i, unsigned int bits, bool isSigned)
+{
+  if (bits == 16)
+  {
+    std::uint16_t v;
+    std::memcpy(&v, buffer.data() + 2 * i, 2);
+    return isSigned ? static_cast<double>(static_cast<std::int16_t>(v)) : static_cast<double>(v);
+  }
+  std::uint32_t v;
+  std::memcpy(&v, buffer.data() + 4 * i, 4);
+  return isSigned ? static_cast<double>(static_cast<std::int32_t>(v)) : static_cast<double>(v);
+}
+
+} // namespace
+
+// ------------------------------------------------------------------------------------------ public
+
+std::string
+ReadDicomModality(const std::string & path)
+{
+  try
+  {
+    if (!HasPart10Preamble(path))
+    {
+      return std::string();
+    }
+    QuietGDCM    quiet;
+    gdcm::Reader reader;
+    reader.SetFileName(path.c_str());
+    if (!reader.ReadSelectedTags({ ModalityTag }))
+    {
+      return std::string();
+    }
+    return Upper(StringValue(reader.GetFile().GetDataSet(), ModalityTag));
+  }
+  catch (const std::exception &)
+  {
+    return std::string();
+  }
+}
+
+std::vector<std::string>
+ReadRTStructROINames(const std::string & rtstructPath)
+{
+  gdcm::Reader reader;
+  ReadDataSet(reader, "ReadRTStructROINames", "RTSTRUCT", rtstructPath);
+  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
+  CheckModality(ds, "RTSTRUCT", "ReadRTStructROINames", rtstructPath);
+  std::vector<std::string> names;
+  for (const auto & roi : ReadROIs(ds, rtstructPath))
+  {
+    names.push_back(roi.name);
+  }
+  return names;
+}
+
+DicomRTLabelImageType::Pointer
+ReadRTStructAsLabelImage(const std::string &                         rtstructPath,
+                         const ImageBase<3> *                        referenceGrid,
+                         const std::map<std::string, std::int32_t> & roiNameToLabel,
+                         const RTStructRasterizationOptions &        options)
+{
+  if (!referenceGrid)
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", rtstructPath, "no reference grid given");
+  }
+  gdcm::Reader reader;
+  ReadDataSet(reader, RTStructWhere, "RTSTRUCT", rtstructPath);
+  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
+  CheckModality(ds, "RTSTRUCT", RTStructWhere, rtstructPath);
+  CheckReferencedSeries(ds, rtstructPath);
+  std::vector<ROI> rois = ReadROIs(ds, rtstructPath);
+  MapROIs(rois, roiNameToLabel, options.ignoreUnmappedROIs, rtstructPath);
+  ReadContours(ds, rois, rtstructPath);
+
+  // Rasterize every mapped ROI, then paint the largest first: the ROI with the fewest voxels wins an overlap,
+  // and among equal counts the first in the file (painted last).
+  struct Painted
+  {
+    std::size_t      order;
+    std::size_t      voxels;
+    std::int32_t     label;
+    std::vector<Run> runs;
+  };
+  std::vector<Painted> painted;
+  for (std::size_t r = 0; r < rois.size(); ++r)
+  {
+    if (!rois[r].mapped)
+    {
+      continue;
+    }
+    Painted p{ r, 0, rois[r].label, RasterizeROI(rois[r], referenceGrid, rtstructPath) };
+    for (const auto & run : p.runs)
+    {
+      p.voxels += run.length;
+    }
+    painted.push_back(std::move(p));
+  }
+  std::sort(painted.begin(), painted.end(), [](const Painted & a, const Painted & b) {
+    return a.voxels != b.voxels ? a.voxels > b.voxels : a.order > b.order;
+  });
+  auto           labels = MakeLabelImage(referenceGrid, options.backgroundLabel);
+  std::int32_t * buffer = labels->GetBufferPointer();
+  for (const auto & p : painted)
+  {
+    for (const auto & run : p.runs)
+    {
+      std::fill(buffer + run.start, buffer + run.start + run.length, p.label);
+    }
+  }
+  return labels;
+}
+
+DicomRTDoseImageType::Pointer
+ReadRTDose(const std::string & path)
+{
+  CheckDicomFile(RTDoseWhere, "RTDOSE", path);
+  const std::string modality = ReadDicomModality(path);
+  if (modality != "RTDOSE")
+  {
+    FailFile(RTDoseWhere,
+             "RTDOSE",
+             path,
+             "is not an RTDOSE (Modality " + (modality.empty() ? std::string("missing") : Quote(modality)) + ")");
+  }
+  QuietGDCM         quiet;
+  gdcm::ImageReader reader;
+  bool              ok = false;
+  reader.SetFileName(path.c_str());
+  try
+  {
+    ok = reader.Read();
+  }
+  catch (const std::exception &)
+  {
+    ok = false;
+  }
+  if (!ok)
+  {
+    FailFile(RTDoseWhere, "RTDOSE", path, "cannot be read as a DICOM image (corrupt)");
+  }
+  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
+  CheckModality(ds, "RTDOSE", RTDoseWhere, path);
+  const std::string units = Upper(StringValue(ds, DoseUnitsTag));
+  if (units != "GY")
+  {
+    FailFile(RTDoseWhere,
+             "RTDOSE",
+             path,
+             "its Dose Units (3004,0002) are " + (units.empty() ? std::string("missing") : Quote(units)) +
+               ", not GY (a relative dose cannot be used as Gy)");
+  }
+  const auto scaling = RequireNumbers(ds, DoseGridScalingTag, "Dose Grid Scaling", path);
+  if (scaling.size() != 1 || !(scaling[0] > 0))
+  {
+    FailFile(RTDoseWhere, "RTDOSE", path, "its Dose Grid Scaling (3004,000E) is not one positive number");
+  }
+
+  const gdcm::Image &       gdcmImage = reader.GetImage();
+  const gdcm::PixelFormat & format = gdcmImage.GetPixelFormat();
+  const unsigned int        bits = format.GetBitsAllocated();
+  if (format.GetSamplesPerPixel() != 1 || (bits != 16 && bits != 32))
+  {
+    FailFile(RTDoseWhere,
+             "RTDOSE",
+             path,
+             "its pixels are " + std::to_string(format.GetSamplesPerPixel()) + " sample(s) of " + std::to_string(bits) +
+               " bits; one sample of 16 or 32 bits is required");
+  }
+  const unsigned int columns = gdcmImage.GetDimension(0);
+  const unsigned int rows = gdcmImage.GetDimension(1);
+  const unsigned int frames = gdcmImage.GetNumberOfDimensions() > 2 ? gdcmImage.GetDimension(2) : 1;
+  const double       declared = static_cast<double>(columns) * rows * frames;
+  if (columns == 0 || rows == 0 || frames == 0 || declared > BiomechanicalMaximumNumberOfVoxels)
+  {
+    FailFile(RTDoseWhere, "RTDOSE", path, "declares an empty or absurd grid (Rows x Columns x Number of Frames)");
+  }
+  const std::size_t voxels = static_cast<std::size_t>(columns) * rows * frames;
+  std::vector<char> buffer(std::max<std::size_t>(gdcmImage.GetBufferLength(), 1));
+  bool              decoded = false;
+  try
+  {
+    decoded = gdcmImage.GetBuffer(buffer.data());
+  }
+  catch (const std::exception &)
+  {
+    decoded = false;
+  }
+  if (!decoded || gdcmImage.GetBufferLength() < voxels * (bits / 8))
+  {
+    FailFile(RTDoseWhere,
+             "RTDOSE",
+             path,
+             "its pixel data hold fewer values than Rows x Columns x Number of Frames (truncated or corrupt)");
+  }
+
+  auto                             dose = DicomRTDoseImageType::New();
+  DicomRTDoseImageType::RegionType region;
+  region.SetSize(0, columns);
+  region.SetSize(1, rows);
+  region.SetSize(2, frames);
+  dose->SetRegions(region);
+  SetDoseGeometry(ds, frames, dose.GetPointer(), path);
+  dose->Allocate();
+  float *    values = dose->GetBufferPointer();
+  const bool isSigned = format.GetPixelRepresentation() == 1;
+  for (std::size_t i = 0; i < voxels; ++i)
+  {
+    values[i] = static_cast<float>(StoredValue(buffer, i, bits, isSigned) * scaling[0]);
+  }
+  return dose;
+}
+
+DicomRTDoseImageType::Pointer
+ReadDoseImage(const std::string & path)
+{
+  if (ReadDicomModality(path) == "RTDOSE")
+  {
+    return ReadRTDose(path);
+  }
+  return ReadBiomechanicalImage<DicomRTDoseImageType>(path, "dose image");
+}
+
+} // namespace itk
