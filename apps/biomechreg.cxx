@@ -26,6 +26,7 @@
 //   biomechreg phantom-cohort ...   N phantom patients x M fractions with their truth (stage, modulus, anatomy)
 //   biomechreg cohort ...           the cohort workflow on Snakemake: one registration per daily image, statistics
 //   biomechreg cohort-stats ...     the statistics of a cohort's registrations (the workflow's last step)
+//   biomechreg markers ...          the treatment anatomy from tracked markers (FEM vs rigid vs spline)
 //   biomechreg dose ...             per-organ DVHs, D95/D2/Dmean, V-doses and gEUD of a dose or a synthetic plan
 //   biomechreg help [SUB], biomechreg SUB --help, biomechreg --version
 // Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
@@ -82,6 +83,11 @@ ParsePhantomSettings(const Arguments & args)
     throw UsageError("--bladder-kPa and --rectum-kPa must be >= 0");
   }
   o.noiseHU = args.Number("--noise-HU", o.noiseHU);
+  o.trackingNoiseMM = args.Number("--tracking-noise-mm", o.trackingNoiseMM);
+  if (!(o.trackingNoiseMM >= 0.0 && o.trackingNoiseMM <= 10.0))
+  {
+    throw UsageError("--tracking-noise-mm must lie in [0, 10]");
+  }
   const double seed = args.Number("--seed", 1.0);
   if (!(seed >= 0.0 && seed == std::floor(seed)))
   {
@@ -213,6 +219,8 @@ DemoCommand()
 namespace bmrcli {
 int
 DoseCommand(const Arguments & args); // biomechregDose.cxx
+int
+MarkersCommand(const Arguments & args); // biomechregMarkers.cxx
 
 void
 WritePhantom(const std::string &          out,
@@ -296,6 +304,10 @@ main(int argc, char * argv[])
     if (command == "dose")
     {
       return bmrcli::DoseCommand(options);
+    }
+    if (command == "markers")
+    {
+      return bmrcli::MarkersCommand(options);
     }
     throw UsageError("unknown command \"" + command + "\"");
   }

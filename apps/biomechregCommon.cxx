@@ -147,6 +147,27 @@ Arguments::Number(const std::string & key, double fallback) const
   return v;
 }
 
+std::map<std::string, double>
+Arguments::NamedNumbers(const std::string & key) const
+{
+  std::map<std::string, double> values;
+  const std::string             text = Get(key);
+  std::stringstream             items(text);
+  for (std::string item; !text.empty() && std::getline(items, item, ',');)
+  {
+    const auto        equals = item.find('=');
+    const std::string value = equals == std::string::npos ? std::string() : item.substr(equals + 1);
+    char *            end = nullptr;
+    const double      v = std::strtod(value.c_str(), &end);
+    if (equals == 0 || equals == std::string::npos || value.empty() || *end != '\0' || !std::isfinite(v))
+    {
+      throw UsageError("option " + key + " expects NAME=NUMBER,... with finite numbers, got \"" + item + "\"");
+    }
+    values[item.substr(0, equals)] = v;
+  }
+  return values;
+}
+
 unsigned int
 Arguments::Count(const std::string & key, unsigned int fallback, unsigned int lo, unsigned int hi) const
 {

@@ -183,6 +183,9 @@ public:
   Count(const std::string & key, unsigned int fallback, unsigned int lo, unsigned int hi) const;
   std::array<double, 3>
   Triple(const std::string & key, const std::array<double, 3> & fallback) const;
+  /** NAME=NUMBER,... (finite numbers; empty when the option is absent). */
+  std::map<std::string, double>
+  NamedNumbers(const std::string & key) const;
   /** One of \a choices. */
   std::string
   Choice(const std::string & key, const std::vector<std::string> & choices) const;

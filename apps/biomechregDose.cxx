@@ -18,7 +18,9 @@
 // biomechreg dose: per-organ DVHs, D95/D2/Dmean, V-doses and gEUD of a dose image (or of a synthetic conformal
 // plan) on a label map, optionally after warping the dose through a displacement field (itkDoseEvaluation.h).
 #include "biomechregCommon.h"
+#include "itkDicomRT.h"
 #include "itkDoseEvaluation.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -30,11 +32,24 @@ namespace {
 
 using DoseImageType = itk::BiomechanicalDoseImageType;
 
-/** The dose image [Gy] at \a path. */
+/** The dose [Gy] at \a path: a DICOM RTDOSE (its dose grid scaling applied) or any image ITK reads, in Gy
+ * (itk::ReadDoseImage()); refuses a negative dose, naming the file and the voxel. */
 DoseImageType::Pointer
 ReadDose(const std::string & path)
 {
-  return ReadImage<DoseImageType>(path, "dose image");
+  DoseImageType::Pointer dose = itk::ReadDoseImage(path);
+  for (itk::ImageRegionConstIteratorWithIndex<DoseImageType> it(dose, dose->GetLargestPossibleRegion()); !it.IsAtEnd();
+       ++it)
+  {
+    if (it.Get() < 0.0f)
+    {
+      std::ostringstream os;
+      os << "dose image \"" << path << "\": voxel " << it.GetIndex() << " holds " << it.Get()
+         << " Gy (a dose must be >= 0)";
+      throw std::runtime_error(os.str());
+    }
+  }
+  return dose;
 }
 
 /** Comma-separated numbers of option \a key ("" gives none). */

@@ -36,6 +36,7 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--model linear|neo_hookean]\n"
     "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
     "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
+    "                     [--tracking-noise-mm S (landmarks_tracked.csv: the fixed seeds + N(0, S^2); 0.5)]\n"
     "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"
     "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
   { "simulate",
@@ -87,8 +88,17 @@ const std::pair<const char *, const char *> commands[] = {
   { "cohort-stats",
     "  biomechreg cohort-stats --cohort FILE.csv --study DIR\n"
     "    per-patient moduli and their correlation with the covariates from DIR/results (the workflow's last step)\n" },
+  { "markers",
+    "  biomechreg markers --planning-ct FILE --planning-labels FILE --scene FILE --planning-markers FILE\n"
+    "                     --treatment-markers FILE --out DIR [--treatment-labels FILE (evaluation: IoU, D)]\n"
+    "                     [--organ NAME (prostate)] [--box-margin-mm M (25)] [--control-spacing-mm S (8)]\n"
+    "                     [--regularization A (1e-3)] [--mesh-scale F (1)] [--modulus NAME=E_kPa,...]\n"
+    "                     [--leave-one-out on|off]\n"
+    "    the treatment anatomy from tracked markers (LPS mm; .csv, .fcsv, .json; paired by id): FEM with forces on\n"
+    "    the organ's surface in a static box, against rigid alignment and a thin-plate spline; leave-one-out TRE;\n"
+    "    writes field.nrrd (treatment -> planning, mm), warped_ct.nrrd, warped_labels.nrrd, report.json\n" },
   { "dose",
-    "  biomechreg dose --labels FILE --scene FILE --out DIR (--dose FILE [Gy] | --plan-margin MM)\n"
+    "  biomechreg dose --labels FILE --scene FILE --out DIR (--dose FILE (RTDOSE, or an image in Gy) | --plan-margin MM)\n"
     "                  [--field FILE (warp the dose first: out(x) = dose(x + d(x)), linear)]\n"
     "                  [--prescription-Gy RX (78)] [--penumbra-mm W (6, 80-20 %)] [--bath-fraction F (0)]\n"
     "                  [--eud-a ORGAN=A,... (defaults: prostate -10, rectum and its wall 8, bladder 2, others 1)]\n"

@@ -40,7 +40,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iterator>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -223,9 +225,10 @@ public:
     : m_Bytes(std::move(bytes))
   {}
 
-  /** An empty string when the structure is complete, else what is wrong. */
+  /** An empty string when the structure is complete, else what is wrong. With \a stopAtModality, stops at the
+   * Modality (0008,0060) or where it would have been: a prefix of the file suffices. */
   std::string
-  Check()
+  Check(bool stopAtModality = false)
   {
     if (m_Bytes.size() < 132 || std::memcmp(m_Bytes.data() + 128, "DICM", 4) != 0)
     {
@@ -233,21 +236,19 @@ public:
     }
     // The File Meta Information (group 0002) is explicit VR little endian; its transfer syntax says how the
     // data set that follows is encoded.
-    std::size_t       pos = 132;
-    std::string       transferSyntax;
-    std::string       problem;
+    std::size_t pos = 132;
+    std::string transferSyntax;
+    std::string problem;
     while (pos + 4 <= m_Bytes.size() && Uint16(pos, false) == 0x0002)
     {
-      const std::size_t start = pos;
+      const std::uint16_t element = Uint16(pos + 2, false);
       if (!SkipElement(pos, true, false, 0, problem))
       {
         return problem;
       }
-      if (Uint16(start + 2, false) == 0x0010)
+      if (element == 0x0010)
       {
-        transferSyntax.assign(reinterpret_cast<const char *>(m_Bytes.data()) + pos - Uint16(start + 6, false),
-                              Uint16(start + 6, false));
-        transferSyntax = Trim(transferSyntax.substr(0, transferSyntax.find('\0')));
+        transferSyntax = m_Value;
       }
     }
     if (transferSyntax == "1.2.840.10008.1.2.1.99")
@@ -258,12 +259,33 @@ public:
     const bool bigEndian = transferSyntax == "1.2.840.10008.1.2.2";
     while (pos < m_Bytes.size())
     {
+      const std::uint16_t group = pos + 4 <= m_Bytes.size() ? Uint16(pos, bigEndian) : 0;
+      const std::uint16_t element = pos + 4 <= m_Bytes.size() ? Uint16(pos + 2, bigEndian) : 0;
+      if (stopAtModality && (group > 0x0008 || (group == 0x0008 && element > 0x0060)))
+      {
+        return std::string();
+      }
       if (!SkipElement(pos, explicitVR, bigEndian, 0, problem))
       {
         return problem;
       }
+      if (group == 0x0008 && element == 0x0060)
+      {
+        m_Modality = Upper(m_Value);
+        if (stopAtModality)
+        {
+          return std::string();
+        }
+      }
     }
     return std::string();
+  }
+
+  /** The Modality found by Check(), upper case without padding; empty when there is none. */
+  const std::string &
+  Modality() const
+  {
+    return m_Modality;
   }
 
 private:
@@ -296,6 +318,7 @@ private:
       return false;
     }
     const std::uint16_t group = Uint16(pos, bigEndian);
+    const std::uint16_t element = Uint16(pos + 2, bigEndian);
     std::uint32_t       length = 0;
     bool                sequenceLike = false; // SQ, UN or an item: an undefined length holds nested elements
     if (group == 0xfffe)
@@ -307,7 +330,7 @@ private:
     }
     else if (explicitVR)
     {
-      const std::string vr(reinterpret_cast<const char *>(m_Bytes.data()) + pos + 4, 2);
+      const std::string                  vr(reinterpret_cast<const char *>(m_Bytes.data()) + pos + 4, 2);
       static const std::set<std::string> longVRs{ "OB", "OD", "OF", "OL", "OV", "OW", "SQ",
                                                   "SV", "UC", "UN", "UR", "UT", "UV" };
       if (longVRs.count(vr))
@@ -338,11 +361,14 @@ private:
       if (length > m_Bytes.size() - pos)
       {
         std::ostringstream os;
-        os << "the value of element (" << std::hex << group << "," << Uint16(pos - 8, bigEndian) << std::dec
-           << ") ends beyond the end of the file (truncated)";
+        os << "the value of element (" << std::hex << std::setfill('0') << std::setw(4) << group << "," << std::setw(4)
+           << element << std::dec << ") ends beyond the end of the file (truncated)";
         problem = os.str();
         return false;
       }
+      // The text of a short value (the transfer syntax, the modality) without its padding.
+      m_Value.assign(reinterpret_cast<const char *>(m_Bytes.data()) + pos, std::min<std::uint32_t>(length, 64));
+      m_Value = Trim(m_Value.substr(0, m_Value.find('\0')));
       pos += length;
       return true;
     }
@@ -354,8 +380,8 @@ private:
     // Nested elements up to the item (E00D) or sequence (E0DD) delimiter.
     while (pos + 8 <= m_Bytes.size())
     {
-      const bool delimiter =
-        Uint16(pos, bigEndian) == 0xfffe && (Uint16(pos + 2, bigEndian) == 0xe00d || Uint16(pos + 2, bigEndian) == 0xe0dd);
+      const bool delimiter = Uint16(pos, bigEndian) == 0xfffe &&
+                             (Uint16(pos + 2, bigEndian) == 0xe00d || Uint16(pos + 2, bigEndian) == 0xe0dd);
       if (!SkipElement(pos, explicitVR, bigEndian, depth + 1, problem))
       {
         return false;
@@ -370,6 +396,8 @@ private:
   }
 
   std::vector<unsigned char> m_Bytes;
+  std::string                m_Value;    ///< of the last element of defined length (its first 64 bytes)
+  std::string                m_Modality; ///< (0008,0060) of the top-level data set
 };
 
 /** Turns GDCM's diagnostics (printed on std::cerr by Debian's build) off while it lives. */
@@ -890,16 +918,19 @@ SetDoseGeometry(const gdcm::DataSet & ds, unsigned int frames, DicomRTDoseImageT
   if (frames > 1)
   {
     step = (offsets.back() - offsets.front()) / static_cast<double>(frames - 1);
+    double smallest = std::numeric_limits<double>::infinity(), largest = -smallest;
     for (unsigned int f = 1; f < frames; ++f)
     {
-      const double gap = offsets[f] - offsets[f - 1];
-      if (std::abs(gap - step) > std::max(1e-3 * std::abs(step), 1e-3) || step == 0.0)
-      {
-        std::ostringstream os;
-        os << "its frames are not evenly spaced (Grid Frame Offset Vector step " << gap << " mm between frames " << f
-           << " and " << f + 1 << ", mean " << step << " mm)";
-        FailFile(RTDoseWhere, "RTDOSE", path, os.str());
-      }
+      smallest = std::min(smallest, offsets[f] - offsets[f - 1]);
+      largest = std::max(largest, offsets[f] - offsets[f - 1]);
+    }
+    const double allowed = std::max(1e-3 * std::abs(step), 1e-3); // mm: DS text rounding
+    if (step == 0.0 || largest - step > allowed || step - smallest > allowed)
+    {
+      std::ostringstream os;
+      os << "its frames are not evenly spaced (Grid Frame Offset Vector steps from " << smallest << " to " << largest
+         << " mm)";
+      FailFile(RTDoseWhere, "RTDOSE", path, os.str());
     }
   }
   DicomRTDoseImageType::PointType     origin;
@@ -946,18 +977,18 @@ ReadDicomModality(const std::string & path)
 {
   try
   {
-    if (!HasPart10Preamble(path))
+    if (std::filesystem::is_directory(path) || !HasPart10Preamble(path))
     {
       return std::string();
     }
-    QuietGDCM    quiet;
-    gdcm::Reader reader;
-    reader.SetFileName(path.c_str());
-    if (!reader.ReadSelectedTags({ ModalityTag }))
-    {
-      return std::string();
-    }
-    return Upper(StringValue(reader.GetFile().GetDataSet(), ModalityTag));
+    // The Modality comes early in the file (group 0008): a prefix is enough, whatever the file's size.
+    constexpr std::size_t      prefixBytes = 1 << 20;
+    std::ifstream              file(path, std::ios::binary);
+    std::vector<unsigned char> bytes(prefixBytes);
+    file.read(reinterpret_cast<char *>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    bytes.resize(static_cast<std::size_t>(file.gcount()));
+    DicomStructureWalker walker(std::move(bytes));
+    return walker.Check(true).empty() ? walker.Modality() : std::string();
   }
   catch (const std::exception &)
   {

@@ -26,6 +26,32 @@
 #include <limits>
 
 namespace bmr {
+namespace {
+/** dPhi/dp from g = dPhi/du and its adjoint lambda (K_T lambda = g on the free dofs): the sensitivities to the
+ * forces (lambda) and to the prescribed displacements (g - K_T lambda on the constrained dofs) pulled back
+ * through the parameterization, plus the prior's gradient at \a p. */
+std::vector<double>
+PullBackThroughLoads(ForwardModel &               model,
+                     const LoadParameterization & loads,
+                     const std::vector<double> &  p,
+                     const std::vector<double> &  g,
+                     const std::vector<double> &  lambda)
+{
+  const std::vector<double> Klambda = model.ApplyTangent(lambda);
+  std::vector<double>       prescribedSensitivity(g.size(), 0.0);
+  for (std::int32_t n : loads.GetConstrainedNodes())
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
+      prescribedSensitivity[dof] = g[dof] - Klambda[dof];
+    }
+  }
+  return loads.PullBackGradient(p, prescribedSensitivity, lambda);
+}
+
+} // namespace
+
 
 EstimationObjective::EstimationObjective(ForwardModel &                model,
                                          LoadParameterization &        loads,
@@ -103,18 +129,7 @@ EstimationObjective::Evaluate(const std::vector<double> & p,
   const std::vector<double> lambda = m_Model.SolveAdjoint(g);
   if (gradientP != nullptr)
   {
-    // dPhi/d(prescribed u) = g - K_T lambda on the constrained dofs.
-    const std::vector<double> Klambda = m_Model.ApplyTangent(lambda);
-    std::vector<double>       prescribedSensitivity(u.size(), 0.0);
-    for (std::int32_t n : m_Loads.GetConstrainedNodes())
-    {
-      for (int c = 0; c < 3; ++c)
-      {
-        const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
-        prescribedSensitivity[dof] = g[dof] - Klambda[dof];
-      }
-    }
-    *gradientP = m_Loads.PullBackGradient(p, prescribedSensitivity, lambda);
+    *gradientP = PullBackThroughLoads(m_Model, m_Loads, p, g, lambda);
   }
   if (gradientLogE != nullptr)
   {
@@ -258,12 +273,30 @@ RowsOfDofs(const std::vector<std::int32_t> & dofs, std::size_t ndof)
 AffineState
 LinearizeState(ForwardModel & model, const LoadParameterization & loads, const std::vector<std::int32_t> & dofs)
 {
+  // u = u0 + A p on the data dofs: A by columns (one solve per parameter) or, with fewer data dofs than
+  // parameters, by rows through the adjoint (one solve per data dof; the same A, K being symmetric).
   AffineState        s;
   const BoundaryLoad zero = loads.Apply(std::vector<double>(loads.GetNumberOfParameters(), 0.0));
   s.u0 = model.SolveState(zero.forces, zero.prescribed);
   s.rowOfDof = RowsOfDofs(dofs, s.u0.size());
   const std::size_t np = loads.GetNumberOfParameters();
   s.A.resize(static_cast<Eigen::Index>(dofs.size()), static_cast<Eigen::Index>(np));
+  if (dofs.size() < np)
+  {
+    // Fewer data dofs than parameters (markers): row i of A is du_i/dp, one adjoint solve per data dof.
+    const std::vector<double> zero(np, 0.0);
+    for (std::size_t i = 0; i < dofs.size(); ++i)
+    {
+      std::vector<double> g(s.u0.size(), 0.0);
+      g[dofs[i]] = 1.0;
+      const std::vector<double> row = PullBackThroughLoads(model, loads, zero, g, model.SolveAdjoint(g));
+      for (std::size_t j = 0; j < np; ++j)
+      {
+        s.A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row[j];
+      }
+    }
+    return s;
+  }
   for (std::size_t j = 0; j < np; ++j)
   {
     const BoundaryLoad        direction = loads.Direction(j);

@@ -156,8 +156,8 @@ TestEquivalentUniformDose()
   }
   ok &= Near(bmr::GeneralizedEquivalentUniformDose(doses, 1000.0),
              maximum,
-             0.005 * maximum,
-             "gEUD with a = 1000 within 0.5 % of the maximum (the bound (1/500)^(1/1000) = 0.9938)");
+             0.01 * maximum,
+             "gEUD with a = 1000 within 1 % of the maximum (the bound above: 1 - 500^(-1/1000) = 0.62 %)");
   // The power mean increases with a (strictly, for unequal doses).
   double previous = 0.0;
   for (const double a : { -40.0, -10.0, -1.0, 0.0, 1.0, 2.0, 8.0, 12.0, 40.0 })
@@ -275,7 +275,7 @@ TestPlanProfile()
   const std::array<double, 3> spacing{ { 1.0, 1.25, 2.5 } };
   const auto                  labels = MakeImage<LabelImage>({ { 120, 96, 48 } }, spacing, { { 0, 0, 0 } }, 1);
   // The prostate: voxel indices [40, 80) x [32, 64) x [16, 32): faces at (i - 1/2) h: x 39.5 / 79.5 mm,
-  // z 37.5 / 77.5 mm; the profiles run along the centre lines through x = 59 mm, y = 60 mm, z = 57.5 mm.
+  // z 38.75 / 78.75 mm; the profiles run along the centre lines through x = 59 mm, y = 60 mm, z = 57.5 mm.
   for (itk::ImageRegionIteratorWithIndex<LabelImage> it(labels, labels->GetLargestPossibleRegion()); !it.IsAtEnd();
        ++it)
   {
@@ -297,7 +297,7 @@ TestPlanProfile()
     for (const int axis : { 0, 2 })
     {
       const double        h = spacing[axis];
-      const double        face = axis == 0 ? 79.5 : 77.5; // the +x or +z face [mm]
+      const double        face = axis == 0 ? 79.5 : 78.75; // the +x or +z face [mm]
       std::vector<double> positions, values;
       double              worst = 0.0;
       // From 10 mm inside the face (nearer to it than to any other face) to the grid's border.
@@ -319,17 +319,19 @@ TestPlanProfile()
       // Rx/2 on the PTV surface (face + 5 mm), by linear interpolation between voxel centres: near the inflection
       // point the profile is nearly linear; |f''| h^2 / 8 over the slope Rx phi(0) / sigma bounds the error by
       // 0.01 mm at 1 mm and 0.07 mm at 2.5 mm.
-      ok &= Near(Crossing(positions, values, 0.5 * Rx),
-                 face + plan.marginMm,
-                 axis == 0 ? 0.02 : 0.1,
-                 "Rx/2 on the PTV surface" + where);
+      const double half = Crossing(positions, values, 0.5 * Rx);
+      ok &= Near(half, face + plan.marginMm, axis == 0 ? 0.02 : 0.1, "Rx/2 on the PTV surface" + where);
+      std::cout << "profile" << where << ": max |D - closed form| " << worst << " Gy, Rx/2 at " << half - face
+                << " mm from the prostate's face";
       if (axis == 0)
       {
         // The 80-20 % width: each crossing by linear interpolation at 1 mm is off by at most
         // |f''| h^2 / 8 / slope = 0.03 mm (sigma 3.56 mm), so 0.1 mm on the width.
         const double width = Crossing(positions, values, 0.2 * Rx) - Crossing(positions, values, 0.8 * Rx);
         ok &= Near(width, penumbra, 0.1, "80-20 % width = the penumbra" + where);
+        std::cout << ", 80-20 % width " << width << " mm";
       }
+      std::cout << std::endl;
     }
   }
   // Inside the prostate, D >= Rx Phi(m / sigma) for every margin (its voxels are at least half a voxel deep).

@@ -1,0 +1,66 @@
+# biomechreg register takes an RTSTRUCT where it takes a label image: the spheres phantom's fixed labels are
+# converted by plastimatch (one mask per scene label: outer, inner) into an RTSTRUCT on the fixed CT's
+# series, and register is run once with the NRRD labels and once with the RTSTRUCT. The RTSTRUCT path
+# rasterizes onto the fixed CT's grid and maps ROI names to the scene's labels; plastimatch's contours give the
+# masks back voxel for voxel here (itkDicomRTTest measures Dice 1), so the recovered modulus, the final
+# objective and the Dice must be the same numbers. An RTSTRUCT with an ROI the scene does not name ("couch")
+# is refused in one line naming the file and the ROI.
+# Run with: cmake -DCLI=<biomechreg> -DDRIVER=<test driver> -DDIR=<spheres phantom dir> -DOUT=<scratch dir>
+#   -P biomechregRTStructRegister.cmake
+find_program(PLASTIMATCH plastimatch)
+if(NOT PLASTIMATCH)
+  message(FATAL_ERROR "plastimatch is not installed (scripts/setup.sh installs Debian's package)")
+endif()
+file(REMOVE_RECURSE ${OUT})
+file(MAKE_DIRECTORY ${OUT})
+
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${ARGN}: exit code ${rc}\n${out}\n${err}")
+  endif()
+endfunction()
+
+run(${DRIVER} itkDicomRTTest masks ${DIR}/fixed_labels.nrrd ${OUT}/masks outer=1 inner=2)
+run(${PLASTIMATCH} convert --input ${DIR}/fixed_ct.nrrd --input-prefix ${OUT}/masks --output-dicom ${OUT}/dicom)
+file(GLOB rtstruct ${OUT}/dicom/rtss_*.dcm)
+
+set(common register --moving-ct ${DIR}/moving_ct.nrrd --moving-labels ${DIR}/moving_labels.nrrd
+  --fixed-ct ${DIR}/fixed_ct.nrrd --scene ${DIR}/scene.json --outputs report)
+foreach(kind nrrd rtstruct)
+  if(kind STREQUAL "nrrd")
+    set(labels ${DIR}/fixed_labels.nrrd)
+  else()
+    set(labels ${rtstruct})
+  endif()
+  execute_process(COMMAND ${CLI} ${common} --fixed-labels ${labels} --out ${OUT}/register_${kind}
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "recovered Young's moduli:  inner [0-9.]+ kPa")
+    message(FATAL_ERROR "register with the ${kind} fixed labels: exit code ${rc}\n${out}\n${err}")
+  endif()
+  file(READ ${OUT}/register_${kind}/report.json report)
+  string(JSON E_${kind} GET "${report}" youngs_modulus_kPa inner)
+  string(JSON phi_${kind} GET "${report}" final_phi_mm2)
+  string(JSON dice_${kind} GET "${report}" dice)
+endforeach()
+message(STATUS "NRRD labels: inner E ${E_nrrd} kPa, Phi* ${phi_nrrd} mm2, Dice ${dice_nrrd}")
+message(STATUS "RTSTRUCT:    inner E ${E_rtstruct} kPa, Phi* ${phi_rtstruct} mm2, Dice ${dice_rtstruct}")
+# The modulus may sit on a bound of the scene; the objective and the Dice against the fixed labels depend on
+# every fixed voxel, so they are compared too (as text: the same labels give the same bits).
+if(NOT E_nrrd STREQUAL E_rtstruct OR NOT phi_nrrd STREQUAL phi_rtstruct OR NOT dice_nrrd STREQUAL dice_rtstruct)
+  message(FATAL_ERROR "the RTSTRUCT labels give another registration than the NRRD labels")
+endif()
+
+# An ROI that is no label of the scene: a one-line error naming the file and the ROI, exit code 1.
+run(${DRIVER} itkDicomRTTest masks ${DIR}/fixed_labels.nrrd ${OUT}/masks_couch outer=1 inner=2 couch=0)
+run(${PLASTIMATCH} convert --input ${DIR}/fixed_ct.nrrd --input-prefix ${OUT}/masks_couch --output-dicom ${OUT}/dicom_couch)
+file(GLOB couch ${OUT}/dicom_couch/rtss_*.dcm)
+execute_process(COMMAND ${CLI} ${common} --fixed-labels ${couch} --out ${OUT}/register_couch
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+string(REGEX MATCHALL "\n" lines "${err}")
+list(LENGTH lines count)
+if(NOT rc EQUAL 1 OR NOT count EQUAL 1 OR NOT err MATCHES
+    "error: fixed label image: RTSTRUCT \"[^\"]*rtss_[^\"]*\": ROI \"couch\" is not one of the known names")
+  message(FATAL_ERROR "an RTSTRUCT with an ROI the scene lacks: exit code ${rc}, stderr:\n${err}")
+endif()
+message(STATUS "refused: ${err}")
