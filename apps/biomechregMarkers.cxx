@@ -109,7 +109,18 @@ MarkersCommand(const Arguments & args)
   MakeOutputDirectory(out);
   itk::WriteImageAtomically(result.state.pullBack.GetPointer(), out + "/field.nrrd");
   itk::WriteImageAtomically(result.warpedCT.GetPointer(), out + "/warped_ct.nrrd");
-  itk::WriteImageAtomically(result.methods.front().warpedLabels.GetPointer(), out + "/warped_labels.nrrd");
+  for (const auto & m : result.methods)
+  {
+    // The FEM's estimate is warped_labels.nrrd; the references' are written beside it for comparison.
+    if (m.method == "fem")
+    {
+      itk::WriteImageAtomically(m.warpedLabels.GetPointer(), out + "/warped_labels.nrrd");
+    }
+    else if (m.method != "none")
+    {
+      itk::WriteImageAtomically(m.warpedLabels.GetPointer(), out + "/warped_labels_" + m.method + ".nrrd");
+    }
+  }
   timer.End();
   result.stages = timer.stages;
   bmr::WriteTextFileAtomically(out + "/report.json", itk::MarkerReportJson(result, settings));

@@ -96,9 +96,11 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--leave-one-out on|off]\n"
     "    the treatment anatomy from tracked markers (LPS mm; .csv, .fcsv, .json; paired by id): FEM with forces on\n"
     "    the organ's surface in a static box, against rigid alignment and a thin-plate spline; leave-one-out TRE;\n"
-    "    writes field.nrrd (treatment -> planning, mm), warped_ct.nrrd, warped_labels.nrrd, report.json\n" },
+    "    writes field.nrrd (treatment -> planning, mm), warped_ct.nrrd, warped_labels.nrrd, report.json and the\n"
+    "    references' warped_labels_rigid.nrrd, warped_labels_tps.nrrd\n" },
   { "dose",
-    "  biomechreg dose --labels FILE --scene FILE --out DIR (--dose FILE (RTDOSE, or an image in Gy) | --plan-margin MM)\n"
+    "  biomechreg dose --labels FILE --scene FILE --out DIR\n"
+    "                  (--dose FILE (RTDOSE, or an image in Gy) | --plan-margin MM (a synthetic plan))\n"
     "                  [--field FILE (warp the dose first: out(x) = dose(x + d(x)), linear)]\n"
     "                  [--prescription-Gy RX (78)] [--penumbra-mm W (6, 80-20 %)] [--bath-fraction F (0)]\n"
     "                  [--eud-a ORGAN=A,... (defaults: prostate -10, rectum and its wall 8, bladder 2, others 1)]\n"
