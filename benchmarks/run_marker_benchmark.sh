@@ -22,6 +22,7 @@ assumed="${ASSUMED_E:-60}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
 work="${WORK_DIR:-$(mktemp -d)}"
+mkdir -p "$work"
 [ -n "${WORK_DIR:-}" ] || trap 'rm -rf "$work"' EXIT
 log="$work/log.txt"
 

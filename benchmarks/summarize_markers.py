@@ -47,6 +47,8 @@ def incomplete_beta(a, b, x):
 def paired_t(differences):
     """Two-sided p of the paired t-test (t with n - 1 degrees of freedom)."""
     n = len(differences)
+    if n < 2:
+        return float("nan")
     mean = statistics.mean(differences)
     sd = statistics.stdev(differences)
     if sd == 0.0:

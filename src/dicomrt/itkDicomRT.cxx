@@ -213,11 +213,16 @@ Sequence(const gdcm::DataSet & ds, const gdcm::Tag & tag)
 
 // ------------------------------------------------------------------------------------------ structure check
 
-/** Walks the data elements of a DICOM Part 10 file without interpreting them, to refuse a truncated or
- * corrupt file before GDCM parses it: Debian's GDCM is built with assertions, and its reader, after a failed
- * first pass over a truncated file, asserts on the exhausted stream (abort) instead of failing. Checks that
- * every element's value (defined lengths) ends inside the file and that every undefined-length sequence, item
- * and encapsulated pixel data reaches its delimiter. */
+/** Walks the data elements of a DICOM Part 10 file without interpreting their values, to refuse a truncated or
+ * corrupt file before GDCM parses it: Debian's GDCM is built with assertions, and its reader aborts the
+ * process on some malformed files instead of failing (after a failed first pass over a truncated file it
+ * asserts on the exhausted stream; a sequence delimiter where an element is expected fails an assertion).
+ * The grammar checked (PS3.5 7.1, 7.5): a data set is a list of elements, each ending inside the file and
+ * inside its parent; a sequence (SQ; in implicit VR, any element of undefined length) holds only items
+ * (FFFE,E000), ended by its length or by a sequence delimiter (FFFE,E0DD); an item holds a data set, ended by
+ * its length or by an item delimiter (FFFE,E00D); encapsulated pixel data (OB/OW of undefined length) hold
+ * fragments (items of defined length) up to a sequence delimiter. Defined-length sequences are walked too in
+ * explicit VR; in implicit VR a defined-length sequence cannot be told from a value and is only bounded. */
 class DicomStructureWalker
 {
 public:
@@ -238,13 +243,12 @@ public:
     // data set that follows is encoded.
     std::size_t pos = 132;
     std::string transferSyntax;
-    std::string problem;
-    while (pos + 4 <= m_Bytes.size() && Uint16(pos, false) == 0x0002)
+    while (pos + 4 <= m_Bytes.size() && Uint16(pos) == 0x0002)
     {
-      const std::uint16_t element = Uint16(pos + 2, false);
-      if (!SkipElement(pos, true, false, 0, problem))
+      const std::uint16_t element = Uint16(pos + 2);
+      if (!Element(pos, m_Bytes.size(), 0))
       {
-        return problem;
+        return m_Problem;
       }
       if (element == 0x0010)
       {
@@ -255,19 +259,22 @@ public:
     {
       return std::string(); // deflated: the data set cannot be walked without inflating it; left to GDCM
     }
-    const bool explicitVR = transferSyntax != "1.2.840.10008.1.2";
-    const bool bigEndian = transferSyntax == "1.2.840.10008.1.2.2";
+    m_ExplicitVR = transferSyntax != "1.2.840.10008.1.2";
+    m_BigEndian = transferSyntax == "1.2.840.10008.1.2.2";
     while (pos < m_Bytes.size())
     {
-      const std::uint16_t group = pos + 4 <= m_Bytes.size() ? Uint16(pos, bigEndian) : 0;
-      const std::uint16_t element = pos + 4 <= m_Bytes.size() ? Uint16(pos + 2, bigEndian) : 0;
+      if (pos + 4 > m_Bytes.size())
+      {
+        return "ends inside an element header (truncated)";
+      }
+      const std::uint16_t group = Uint16(pos), element = Uint16(pos + 2);
       if (stopAtModality && (group > 0x0008 || (group == 0x0008 && element > 0x0060)))
       {
         return std::string();
       }
-      if (!SkipElement(pos, explicitVR, bigEndian, 0, problem))
+      if (!Element(pos, m_Bytes.size(), 0))
       {
-        return problem;
+        return m_Problem;
       }
       if (group == 0x0008 && element == 0x0060)
       {
@@ -289,113 +296,196 @@ public:
   }
 
 private:
+  static constexpr std::uint32_t UndefinedLength = 0xffffffff;
+  static constexpr unsigned int  MaximumDepth = 64;
+
   std::uint16_t
-  Uint16(std::size_t pos, bool bigEndian) const
+  Uint16(std::size_t pos) const
   {
     const unsigned char * b = m_Bytes.data() + pos;
-    return bigEndian ? static_cast<std::uint16_t>(b[0] << 8 | b[1]) : static_cast<std::uint16_t>(b[1] << 8 | b[0]);
+    return m_BigEndian ? static_cast<std::uint16_t>(b[0] << 8 | b[1]) : static_cast<std::uint16_t>(b[1] << 8 | b[0]);
   }
   std::uint32_t
-  Uint32(std::size_t pos, bool bigEndian) const
+  Uint32(std::size_t pos) const
   {
-    const std::uint32_t lo = Uint16(pos, bigEndian), hi = Uint16(pos + 2, bigEndian);
-    return bigEndian ? (lo << 16 | hi) : (hi << 16 | lo);
+    const std::uint32_t first = Uint16(pos), second = Uint16(pos + 2);
+    return m_BigEndian ? (first << 16 | second) : (second << 16 | first);
+  }
+  bool
+  Fail(const std::string & problem)
+  {
+    m_Problem = problem;
+    return false;
+  }
+  bool
+  IsTag(std::size_t pos, std::uint16_t element) const
+  {
+    return Uint16(pos) == 0xfffe && Uint16(pos + 2) == element;
   }
 
-  /** Skips one element (or item, or delimiter) at \a pos; false with \a problem set when it does not fit. */
+  /** One element of a data set at \a pos, ending by \a end. */
   bool
-  SkipElement(std::size_t & pos, bool explicitVR, bool bigEndian, unsigned int depth, std::string & problem)
+  Element(std::size_t & pos, std::size_t end, unsigned int depth)
   {
-    constexpr std::uint32_t undefinedLength = 0xffffffff;
-    if (depth > 64)
+    if (depth > MaximumDepth)
     {
-      problem = "sequences nested deeper than 64 levels";
-      return false;
+      return Fail("sequences nested deeper than 64 levels");
     }
-    if (pos + 8 > m_Bytes.size())
+    if (pos + 8 > end)
     {
-      problem = "ends inside an element header";
-      return false;
+      return Fail("ends inside an element header (truncated)");
     }
-    const std::uint16_t group = Uint16(pos, bigEndian);
-    const std::uint16_t element = Uint16(pos + 2, bigEndian);
-    std::uint32_t       length = 0;
-    bool                sequenceLike = false; // SQ, UN or an item: an undefined length holds nested elements
+    const std::uint16_t group = Uint16(pos), element = Uint16(pos + 2);
+    std::ostringstream  name;
+    name << "(" << std::hex << std::setfill('0') << std::setw(4) << group << "," << std::setw(4) << element << ")";
     if (group == 0xfffe)
     {
-      // Items and delimiters have no VR in any transfer syntax.
-      length = Uint32(pos + 4, bigEndian);
-      pos += 8;
-      sequenceLike = true;
+      return Fail("an item or delimiter tag " + name.str() + " where a data element belongs");
     }
-    else if (explicitVR)
+    std::string   vr;
+    std::uint32_t length = 0;
+    if (m_ExplicitVR || group == 0x0002)
     {
-      const std::string                  vr(reinterpret_cast<const char *>(m_Bytes.data()) + pos + 4, 2);
+      vr.assign(reinterpret_cast<const char *>(m_Bytes.data()) + pos + 4, 2);
+      // An unknown VR sends GDCM's reader into its implicit-VR fallback, which asserts (see above).
+      static const std::set<std::string> knownVRs{ "AE", "AS", "AT", "CS", "DA", "DS", "DT", "FL", "FD",
+                                                   "IS", "LO", "LT", "OB", "OD", "OF", "OL", "OV", "OW",
+                                                   "PN", "SH", "SL", "SQ", "SS", "ST", "SV", "TM", "UC",
+                                                   "UI", "UL", "UN", "UR", "US", "UT", "UV" };
+      if (!knownVRs.count(vr))
+      {
+        return Fail("element " + name.str() + " has no valid VR");
+      }
       static const std::set<std::string> longVRs{ "OB", "OD", "OF", "OL", "OV", "OW", "SQ",
                                                   "SV", "UC", "UN", "UR", "UT", "UV" };
       if (longVRs.count(vr))
       {
-        if (pos + 12 > m_Bytes.size())
+        if (pos + 12 > end)
         {
-          problem = "ends inside an element header";
-          return false;
+          return Fail("ends inside the header of element " + name.str() + " (truncated)");
         }
-        length = Uint32(pos + 8, bigEndian);
+        length = Uint32(pos + 8);
         pos += 12;
       }
       else
       {
-        length = Uint16(pos + 6, bigEndian);
+        length = Uint16(pos + 6);
         pos += 8;
       }
-      sequenceLike = vr == "SQ" || vr == "UN" || vr == "OB" || vr == "OW"; // OB/OW: encapsulated pixel data
     }
     else
     {
-      length = Uint32(pos + 4, bigEndian);
+      length = Uint32(pos + 4);
       pos += 8;
-      sequenceLike = true; // implicit VR: an undefined length is a sequence
     }
-    if (length != undefinedLength)
+    if (vr == "SQ" || (vr.empty() && length == UndefinedLength))
     {
-      if (length > m_Bytes.size() - pos)
+      return Sequence(pos, end, length, depth, name.str());
+    }
+    if (length == UndefinedLength)
+    {
+      if (vr == "OB" || vr == "OW" || vr == "UN")
       {
-        std::ostringstream os;
-        os << "the value of element (" << std::hex << std::setfill('0') << std::setw(4) << group << "," << std::setw(4)
-           << element << std::dec << ") ends beyond the end of the file (truncated)";
-        problem = os.str();
-        return false;
+        // Encapsulated pixel data (fragments) or a UN sequence: items up to a sequence delimiter.
+        return Sequence(pos, end, length, depth, name.str(), vr != "UN");
       }
-      // The text of a short value (the transfer syntax, the modality) without its padding.
-      m_Value.assign(reinterpret_cast<const char *>(m_Bytes.data()) + pos, std::min<std::uint32_t>(length, 64));
-      m_Value = Trim(m_Value.substr(0, m_Value.find('\0')));
-      pos += length;
-      return true;
+      return Fail("element " + name.str() + " of VR " + vr + " has an undefined length");
     }
-    if (!sequenceLike)
+    if (length > end - pos)
     {
-      problem = "an element of undefined length that is not a sequence";
-      return false;
+      return Fail("the value of element " + name.str() + " ends beyond its end (truncated)");
     }
-    // Nested elements up to the item (E00D) or sequence (E0DD) delimiter.
-    while (pos + 8 <= m_Bytes.size())
+    // The text of a short value (the transfer syntax, the modality) without its padding.
+    m_Value.assign(reinterpret_cast<const char *>(m_Bytes.data()) + pos, std::min<std::uint32_t>(length, 64));
+    m_Value = Trim(m_Value.substr(0, m_Value.find('\0')));
+    pos += length;
+    return true;
+  }
+
+  /** The items of a sequence whose value starts at \a pos: \a length bytes, or up to a sequence delimiter; with
+   * \a fragments, the items are the fragments of encapsulated pixel data. */
+  bool
+  Sequence(std::size_t &       pos,
+           std::size_t         end,
+           std::uint32_t       length,
+           unsigned int        depth,
+           const std::string & name,
+           bool                fragments = false)
+  {
+    if (length != UndefinedLength)
     {
-      const bool delimiter = Uint16(pos, bigEndian) == 0xfffe &&
-                             (Uint16(pos + 2, bigEndian) == 0xe00d || Uint16(pos + 2, bigEndian) == 0xe0dd);
-      if (!SkipElement(pos, explicitVR, bigEndian, depth + 1, problem))
+      if (length > end - pos)
       {
-        return false;
+        return Fail("sequence " + name + " ends beyond its end (truncated)");
       }
-      if (delimiter)
+      end = pos + length;
+    }
+    while (length == UndefinedLength || pos < end)
+    {
+      if (pos + 8 > end)
       {
+        return Fail("sequence " + name + " ends inside an item header (truncated)");
+      }
+      const std::uint32_t itemLength = Uint32(pos + 4);
+      if (length == UndefinedLength && IsTag(pos, 0xe0dd))
+      {
+        pos += 8;
         return true;
       }
+      if (!IsTag(pos, 0xe000))
+      {
+        return Fail("sequence " + name + " holds something other than items");
+      }
+      pos += 8;
+      if (itemLength == UndefinedLength)
+      {
+        if (!ItemUpToDelimiter(pos, end, depth + 1, name))
+        {
+          return false;
+        }
+        continue;
+      }
+      if (itemLength > end - pos)
+      {
+        return Fail("an item of sequence " + name + " ends beyond its end (truncated)");
+      }
+      const std::size_t itemEnd = pos + itemLength;
+      // Fragments of encapsulated pixel data are bytes; items of a sequence hold data sets (walked in explicit VR).
+      while (!fragments && m_ExplicitVR && pos < itemEnd)
+      {
+        if (!Element(pos, itemEnd, depth + 1))
+        {
+          return false;
+        }
+      }
+      pos = itemEnd;
     }
-    problem = "a sequence or item of undefined length has no delimiter (truncated)";
-    return false;
+    return true;
+  }
+
+  /** The data set of an item of undefined length, up to its item delimiter. */
+  bool
+  ItemUpToDelimiter(std::size_t & pos, std::size_t end, unsigned int depth, const std::string & name)
+  {
+    while (pos + 8 <= end)
+    {
+      if (IsTag(pos, 0xe00d))
+      {
+        pos += 8;
+        return true;
+      }
+      if (!Element(pos, end, depth))
+      {
+        return false;
+      }
+    }
+    return Fail("an item of sequence " + name + " has no item delimiter (truncated)");
   }
 
   std::vector<unsigned char> m_Bytes;
+  bool                       m_ExplicitVR{ true };
+  bool                       m_BigEndian{ false };
+  std::string                m_Problem;
   std::string                m_Value;    ///< of the last element of defined length (its first 64 bytes)
   std::string                m_Modality; ///< (0008,0060) of the top-level data set
 };
