@@ -230,7 +230,8 @@ LabelImageType::Pointer
 ReadLabelsOrRTStruct(const std::string &       path,
                      const std::string &       what,
                      const itk::ImageBase<3> * ctGrid,
-                     const bmr::Scene &        scene)
+                     const bmr::Scene &        scene,
+                     bool                      ignoreUnmappedROIs)
 {
   if (itk::ReadDicomModality(path) != "RTSTRUCT")
   {
@@ -238,6 +239,7 @@ ReadLabelsOrRTStruct(const std::string &       path,
   }
   std::map<std::string, std::int32_t> roiNameToLabel;
   itk::RTStructRasterizationOptions   options;
+  options.ignoreUnmappedROIs = ignoreUnmappedROIs;
   bool                                backgroundSet = false;
   for (const auto & label : scene.labels)
   {
@@ -259,6 +261,17 @@ ReadLabelsOrRTStruct(const std::string &       path,
   {
     bmr::Fail("ReadLabelsOrRTStruct", what + ": " + e.GetDescription());
   }
+}
+
+bool
+IgnoreUnmappedROIs(const Arguments & args)
+{
+  const std::string choice = args.Get("--unmapped-rois", "refuse");
+  if (choice != "ignore" && choice != "refuse")
+  {
+    throw UsageError("--unmapped-rois must be ignore or refuse");
+  }
+  return choice == "ignore";
 }
 
 bmr::GridGeometry

@@ -154,12 +154,20 @@ ReadImage(const std::string & path, const std::string & what)
  * CT of the same scan) by itk::ReadRTStructAsLabelImage(), its ROI names mapped to the names of \a scene's labels
  * other than the outside ones (case-insensitively; every one must be in the file, and every ROI of the file
  * must be one of them; voxels outside every ROI get the scene's first outside label, or 0); any other path is
- * read as a label image (ReadImage). Errors name \a what and the file. */
+ * read as a label image (ReadImage). \a ignoreUnmappedROIs: ROIs that are no scene label (BODY, couch, PTV) are
+ * skipped instead of refused. Errors name \a what and the file. */
 LabelImageType::Pointer
 ReadLabelsOrRTStruct(const std::string &       path,
                      const std::string &       what,
                      const itk::ImageBase<3> * ctGrid,
-                     const bmr::Scene &        scene);
+                     const bmr::Scene &        scene,
+                     bool                      ignoreUnmappedROIs = false);
+
+class Arguments;
+/** --unmapped-rois ignore|refuse (default refuse): what ReadLabelsOrRTStruct() does with ROIs of an RTSTRUCT that
+ * are no scene label. */
+bool
+IgnoreUnmappedROIs(const Arguments & args);
 
 // ------------------------------------------------------------ argument parsing
 

@@ -72,28 +72,6 @@ ParseNumberList(const std::string & key, const std::string & text)
   return values;
 }
 
-/** --eud-a organ=a,...: the gEUD parameter per structure name. */
-std::map<std::string, double>
-ParseEudParameters(const std::string & text)
-{
-  std::map<std::string, double> parameters;
-  std::stringstream             in(text);
-  std::string                   item;
-  while (!text.empty() && std::getline(in, item, ','))
-  {
-    const auto   equals = item.find('=');
-    const auto   value = equals == std::string::npos ? std::string() : item.substr(equals + 1);
-    char *       end = nullptr;
-    const double a = std::strtod(value.c_str(), &end);
-    if (equals == 0 || equals == std::string::npos || value.empty() || *end != '\0' || !std::isfinite(a))
-    {
-      throw UsageError("--eud-a expects ORGAN=A,... with a finite number A, got \"" + item + "\"");
-    }
-    parameters[item.substr(0, equals)] = a;
-  }
-  return parameters;
-}
-
 std::string
 ShellQuoted(const std::string & text)
 {
@@ -228,7 +206,7 @@ DoseCommand(const Arguments & args)
   {
     settings.volumeDosesGy = ParseNumberList("--v-doses", args.Get("--v-doses"));
   }
-  settings.eudParameters = ParseEudParameters(args.Get("--eud-a"));
+  settings.eudParameters = args.NamedNumbers("--eud-a");
   settings.wall.prostateName = args.Get("--prostate", settings.wall.prostateName);
   settings.wall.rectumName = args.Get("--rectum", settings.wall.rectumName);
   const bool plot = args.Choice("--plot", { "on", "off" }) == "on";

@@ -80,6 +80,7 @@ MarkersCommand(const Arguments & args)
   const std::string treatmentLabelsPath = args.Get("--treatment-labels");
   const std::string out = args.Require("--out");
   const auto        settings = ParseMarkerSettings(args);
+  const bool        ignoreROIs = IgnoreUnmappedROIs(args);
   args.CheckAllUsed();
 
   StageTimer timer;
@@ -87,14 +88,14 @@ MarkersCommand(const Arguments & args)
   timer.Begin("read inputs");
   const bmr::Scene scene = bmr::ReadScene(scenePath);
   const auto       ct = ReadImage<CTImageType>(ctPath, "planning CT");
-  const auto       labels = ReadLabelsOrRTStruct(labelsPath, "planning label image", ct, scene);
+  const auto       labels = ReadLabelsOrRTStruct(labelsPath, "planning label image", ct, scene, ignoreROIs);
   const auto       planningMarkers = bmr::ReadLandmarks(planningMarkersPath);
   const auto       treatmentMarkers = bmr::ReadLandmarks(treatmentMarkersPath);
   // Real treatment labels (for the evaluation only) lie on the planning grid; an RTSTRUCT is gridded there.
   LabelImageType::Pointer treatmentLabels;
   if (!treatmentLabelsPath.empty())
   {
-    treatmentLabels = ReadLabelsOrRTStruct(treatmentLabelsPath, "treatment label image", ct, scene);
+    treatmentLabels = ReadLabelsOrRTStruct(treatmentLabelsPath, "treatment label image", ct, scene, ignoreROIs);
   }
   timer.End();
   auto result = itk::EstimateTreatmentFromMarkers(labels, ct, scene, planningMarkers, treatmentMarkers, settings, &timer);

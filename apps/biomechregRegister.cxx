@@ -188,6 +188,7 @@ RegisterCommand(const Arguments & args)
   auto              settings = ParseRegistrationSettings(args);
   settings.pushField = outputs.forwardField; // computed only when written
   const std::string probabilities = args.Get("--fixed-probabilities");
+  const bool        ignoreROIs = IgnoreUnmappedROIs(args);
   args.CheckAllUsed();
 
   StageTimer timer(true);
@@ -196,10 +197,10 @@ RegisterCommand(const Arguments & args)
   const bmr::Scene scene = bmr::ReadScene(scenePath);
   const auto       moving = ReadImage<CTImageType>(movingCT, "moving CT");
   // A label input may be an RTSTRUCT, rasterized on the grid of the CT of the same scan.
-  const auto movingMap = ReadLabelsOrRTStruct(movingLabels, "moving label image", moving, scene);
+  const auto movingMap = ReadLabelsOrRTStruct(movingLabels, "moving label image", moving, scene, ignoreROIs);
   // The fixed CT is read to check it (and to grid an RTSTRUCT); the fixed label image defines the output grid.
   const auto fixed = ReadImage<CTImageType>(fixedCT, "fixed CT");
-  const auto fixedMap = ReadLabelsOrRTStruct(fixedLabels, "fixed label image", fixed, scene);
+  const auto fixedMap = ReadLabelsOrRTStruct(fixedLabels, "fixed label image", fixed, scene, ignoreROIs);
   const auto fixedProbabilities = ReadProbabilityImages(probabilities);
   timer.End();
   const auto result =

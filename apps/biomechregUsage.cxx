@@ -52,7 +52,7 @@ const std::pair<const char *, const char *> commands[] = {
     "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F] [--uncertainty-smoothing-voxels "
     "S]\n"
     "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
-    "                      [--fixed-probabilities ORGAN=FILE,...]\n"
+    "                      [--fixed-probabilities ORGAN=FILE,...] [--unmapped-rois refuse|ignore]\n"
     "                      [--outputs LIST|all|default (field,warped_ct,warped_labels,report; also "
     "forward_field,mesh,\n"
     "                      history,sweep)] [--field-precision float|double] [--compression-level 0-9 (1)]\n"
@@ -93,7 +93,7 @@ const std::pair<const char *, const char *> commands[] = {
     "                     --treatment-markers FILE --out DIR [--treatment-labels FILE (evaluation: IoU, D)]\n"
     "                     [--organ NAME (prostate)] [--box-margin-mm M (25)] [--control-spacing-mm S (8)]\n"
     "                     [--regularization A (1e-3)] [--mesh-scale F (1)] [--modulus NAME=E_kPa,...]\n"
-    "                     [--leave-one-out on|off]\n"
+    "                     [--leave-one-out on|off] [--unmapped-rois refuse|ignore]\n"
     "    the treatment anatomy from tracked markers (LPS mm; .csv, .fcsv, .json; paired by id): FEM with forces on\n"
     "    the organ's surface in a static box, against rigid alignment and a thin-plate spline; leave-one-out TRE;\n"
     "    writes field.nrrd (treatment -> planning, mm), warped_ct.nrrd, warped_labels.nrrd, report.json and the\n"
@@ -114,6 +114,8 @@ const std::pair<const char *, const char *> commands[] = {
 
 const char * const footer =
   "Images: NRRD, NIfTI, MetaImage, ... or a DICOM series directory. Units: mm (LPS), kPa, mN, Gy.\n"
+  "Label inputs of register, compare and markers may be a DICOM RTSTRUCT (ROI names = scene label names),\n"
+  "gridded on the CT of the same scan; a dose may be a DICOM RTDOSE.\n"
   "Exit status: 0 success, 1 error (bad input, failed computation), 2 usage error.\n";
 
 } // namespace

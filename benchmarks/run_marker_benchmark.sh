@@ -11,7 +11,8 @@
 #      and the anatomies estimated from the markers (FEM, rigid, spline): gEUD of the prostate (a = -10) and of the
 #      anterior rectal wall (a = 8);
 #   4. benchmarks/summarize_markers.py: tables, paired t-tests and exact Wilcoxon signed-rank tests, PNG.
-# Usage: benchmarks/run_marker_benchmark.sh [PAIRS] [SEED]   (about 1.5 min per pair on 2 cores)
+# Usage: benchmarks/run_marker_benchmark.sh [PAIRS] [SEED]   (about 1.5 min per pair on 2 cores; WORK_DIR keeps the
+# phantoms, and a WORK_DIR that already holds them reuses them)
 # Writes benchmarks/results/markers_pairs.csv, markers_dose.csv, markers_summary.md, markers.png.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -25,9 +26,16 @@ work="${WORK_DIR:-$(mktemp -d)}"
 mkdir -p "$work"
 [ -n "${WORK_DIR:-}" ] || trap 'rm -rf "$work"' EXIT
 log="$work/log.txt"
+# A copy of the binary: a rebuild during the run must not change or remove it.
+cp "$bin" "$work/biomechreg"
+bin="$work/biomechreg"
 
-echo "phantom set: $pairs pairs (seed $seed) -> $work/phantoms"
-"$bin" phantom-set --count "$pairs" --seed "$seed" --out "$work/phantoms" > "$log"
+if [ -f "$work/phantoms/pairs.csv" ]; then
+  echo "phantom set: reusing $work/phantoms"
+else
+  echo "phantom set: $pairs pairs (seed $seed) -> $work/phantoms"
+  "$bin" phantom-set --count "$pairs" --seed "$seed" --out "$work/phantoms" > "$log"
+fi
 pairs_csv="$out/markers_pairs.csv"
 dose_csv="$out/markers_dose.csv"
 echo "pair,true_E_kPa,method,loo_rms_mm,fit_max_mm,iou,mean_surface_distance_mm,fem_seconds" > "$pairs_csv.tmp"

@@ -29,9 +29,9 @@
 namespace itk {
 
 /** Label map made from an RTSTRUCT: one label value per ROI, 0 (or the chosen background) elsewhere.
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 using DicomRTLabelImageType = Image<std::int32_t, 3>;
-/** Dose grid [Gy]. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+/** Dose grid [Gy]. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 using DicomRTDoseImageType = Image<float, 3>;
 
 /** \brief The DICOM Modality (0008,0060) of \a path, without its padding ("RTSTRUCT", "RTDOSE", "CT", ...).
@@ -39,7 +39,7 @@ using DicomRTDoseImageType = Image<float, 3>;
  * A cheap check that reads only the file's header up to the Modality: returns an empty string, without
  * throwing, when \a path is not a DICOM Part 10 file (no "DICM" after the 128-byte preamble), is a directory,
  * cannot be opened, or has no Modality. Used to tell an RTSTRUCT or RTDOSE from any other image file.
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT std::string
                                  ReadDicomModality(const std::string & path);
 
@@ -48,12 +48,12 @@ BiomechanicalRegistration_EXPORT std::string
  *
  * Throws an itk::ExceptionObject naming \a path when the file cannot be read as DICOM or its Modality is not
  * RTSTRUCT. A command line maps these names to a scene's labels.
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT std::vector<std::string>
                                  ReadRTStructROINames(const std::string & rtstructPath);
 
 /** How ReadRTStructAsLabelImage() treats what the map does not cover.
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 struct BiomechanicalRegistration_EXPORT RTStructRasterizationOptions
 {
   /** false (default): an ROI of the file whose name is not in the map is an error; true: it is skipped
@@ -91,12 +91,12 @@ struct BiomechanicalRegistration_EXPORT RTStructRasterizationOptions
  * entries have the same name; a mapped ROI has no contour or a contour that is not CLOSED_PLANAR, has fewer
  * than 3 points, holds a number of coordinates other than 3 x Number of Contour Points, or a non-finite one;
  * a contour matches no slice of the grid or lies outside it in-plane (beyond half a voxel of its border).
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT DicomRTLabelImageType::Pointer
                                  ReadRTStructAsLabelImage(const std::string &                         rtstructPath,
                                                           const ImageBase<3> *                        referenceGrid,
                                                           const std::map<std::string, std::int32_t> & roiNameToLabel,
-                                                          const RTStructRasterizationOptions &        options = RTStructRasterizationOptions());
+                                                          const RTStructRasterizationOptions &        options = {});
 
 /** \brief Reads a DICOM RTDOSE as a dose image [Gy] on the dose grid.
  *
@@ -105,22 +105,23 @@ BiomechanicalRegistration_EXPORT DicomRTLabelImageType::Pointer
  * (0028,0030) the in-plane spacing [mm] (row spacing, then column spacing), and the Grid Frame Offset Vector
  * (3004,000C) the frames' positions along the slice direction [mm]: relative to the origin when its first
  * value is 0, otherwise (allowed only for the axial orientation 1\0\0\0\1\0) their z coordinates. The
- * offsets must be evenly spaced (within 0.1 % of the mean step, or 1e-3 mm); decreasing offsets give a
- * direction whose slice axis points against the normal. A single frame gets a slice spacing of 1 mm.
+ * offsets must be evenly spaced (every step within 0.1 % of the mean step or 0.001 mm, whichever is larger);
+ * decreasing offsets give a direction whose slice axis points against the normal. A single frame gets a
+ * slice spacing of 1 mm.
  * Values: stored value (unsigned or signed integers of 16 or 32 bits) x Dose Grid Scaling (3004,000E).
  *
  * Throws an itk::ExceptionObject, in one line naming \a path, when the file is not DICOM, is truncated or
  * corrupt, its Modality is not RTDOSE, the Dose Units (3004,0002) are not GY (RELATIVE is refused: no
  * absolute dose), a geometry tag is missing or malformed, the offsets are not evenly spaced, the pixels are
  * not one sample of 16 or 32 bits, or the pixel data hold fewer values than Rows x Columns x Number of
- * Frames. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * Frames. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT DicomRTDoseImageType::Pointer
                                  ReadRTDose(const std::string & path);
 
 /** \brief A dose image [Gy] from an RTDOSE file (ReadRTDose()) when ReadDicomModality(\a path) is RTDOSE,
  * otherwise from any 3-D image ITK reads (or a DICOM series directory), whose values are taken as Gy
  * (itk::ReadBiomechanicalImage(): non-finite values and bad geometry are refused).
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT DicomRTDoseImageType::Pointer
                                  ReadDoseImage(const std::string & path);
 

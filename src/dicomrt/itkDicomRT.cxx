@@ -624,7 +624,8 @@ long
 ParseROINumber(const std::string & text, const std::string & path, const std::string & context)
 {
   std::vector<double> values;
-  if (!ParseNumbers(text, values) || values.size() != 1 || values[0] != std::floor(values[0]))
+  if (!ParseNumbers(text, values) || values.size() != 1 || values[0] != std::floor(values[0]) ||
+      std::abs(values[0]) > 2147483647.0)
   {
     FailFile(RTStructWhere, "RTSTRUCT", path, context + " has no valid ROI number (" + Quote(text) + ")");
   }
@@ -737,7 +738,7 @@ ReadContour(const gdcm::DataSet & item, const ROI & roi, std::size_t index, cons
   {
     FailFile(RTStructWhere, "RTSTRUCT", path, what + ": its Contour Data (3006,0050) hold a value that is no number");
   }
-  if (count[0] < 3 || coordinates.size() != 3 * static_cast<std::size_t>(count[0]))
+  if (count[0] < 3 || count[0] > 1e8 || coordinates.size() != 3 * static_cast<std::size_t>(count[0]))
   {
     std::ostringstream os;
     os << what << " has " << coordinates.size() << " coordinates for " << count[0]
@@ -922,9 +923,11 @@ RasterizeROI(const ROI & roi, const ImageBase<3> * grid, const std::string & pat
 DicomRTLabelImageType::Pointer
 MakeLabelImage(const ImageBase<3> * grid, std::int32_t background)
 {
-  const bmr::GridGeometry g = GridGeometryOf(grid);
-  const std::size_t       voxels = g.size[0] * g.size[1] * g.size[2];
-  return MakeImageOnGrid<DicomRTLabelImageType>(g, std::vector<std::int32_t>(voxels, background));
+  // The grid's geometry, 0-based (the origin at its region's start); filled in place rather than copied from a
+  // vector of the image's size.
+  auto labels = MakeImageOnGrid<DicomRTLabelImageType>(GridGeometryOf(grid), {});
+  labels->FillBuffer(background);
+  return labels;
 }
 
 // ------------------------------------------------------------------------------------------ RTDOSE

@@ -53,7 +53,8 @@ endif()
 
 # An ROI that is no label of the scene: a one-line error naming the file and the ROI, exit code 1.
 run(${DRIVER} itkDicomRTTest masks ${DIR}/fixed_labels.nrrd ${OUT}/masks_couch outer=1 inner=2 couch=0)
-run(${PLASTIMATCH} convert --input ${DIR}/fixed_ct.nrrd --input-prefix ${OUT}/masks_couch --output-dicom ${OUT}/dicom_couch)
+run(${PLASTIMATCH} convert --input ${DIR}/fixed_ct.nrrd --input-prefix ${OUT}/masks_couch
+  --output-dicom ${OUT}/dicom_couch)
 file(GLOB couch ${OUT}/dicom_couch/rtss_*.dcm)
 execute_process(COMMAND ${CLI} ${common} --fixed-labels ${couch} --out ${OUT}/register_couch
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
