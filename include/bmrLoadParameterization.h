@@ -84,6 +84,18 @@ public:
   BoundaryForces(const std::vector<double> & internal) const = 0;
 };
 
+/** The ridge prior alpha/2 |p|^2 of WallLoads and OrganSurfaceForces [mm^2 for p in mm]. */
+inline double
+RidgePrior(double alpha, const std::vector<double> & p)
+{
+  double pp = 0.0;
+  for (double x : p)
+  {
+    pp += x * x;
+  }
+  return 0.5 * alpha * pp;
+}
+
 /** How the loaded walls may move (WallLoads). */
 enum class WallMotionEnum : std::uint8_t
 {

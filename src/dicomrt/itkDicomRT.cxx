@@ -536,11 +536,11 @@ CheckDicomFile(const char * where, const std::string & kind, const std::string &
   }
 }
 
-/** Reads the whole data set of \a path; throws naming the file when it is not DICOM or cannot be parsed. */
+/** Parses \a path with \a reader (a gdcm::Reader or gdcm::ImageReader) after CheckDicomFile(); throws naming the
+ * file when GDCM cannot. */
 void
-ReadDataSet(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path)
+ReadParsedFile(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path)
 {
-  CheckDicomFile(where, kind, path);
   QuietGDCM quiet;
   bool      ok = false;
   reader.SetFileName(path.c_str());
@@ -1093,7 +1093,8 @@ std::vector<std::string>
 ReadRTStructROINames(const std::string & rtstructPath)
 {
   gdcm::Reader reader;
-  ReadDataSet(reader, "ReadRTStructROINames", "RTSTRUCT", rtstructPath);
+  CheckDicomFile("ReadRTStructROINames", "RTSTRUCT", rtstructPath);
+  ReadParsedFile(reader, "ReadRTStructROINames", "RTSTRUCT", rtstructPath);
   const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
   CheckModality(ds, "RTSTRUCT", "ReadRTStructROINames", rtstructPath);
   std::vector<std::string> names;
@@ -1115,7 +1116,8 @@ ReadRTStructAsLabelImage(const std::string &                         rtstructPat
     FailFile(RTStructWhere, "RTSTRUCT", rtstructPath, "no reference grid given");
   }
   gdcm::Reader reader;
-  ReadDataSet(reader, RTStructWhere, "RTSTRUCT", rtstructPath);
+  CheckDicomFile(RTStructWhere, "RTSTRUCT", rtstructPath);
+  ReadParsedFile(reader, RTStructWhere, "RTSTRUCT", rtstructPath);
   const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
   CheckModality(ds, "RTSTRUCT", RTStructWhere, rtstructPath);
   CheckReferencedSeries(ds, rtstructPath);
@@ -1173,22 +1175,8 @@ ReadRTDose(const std::string & path)
              path,
              "is not an RTDOSE (Modality " + (modality.empty() ? std::string("missing") : Quote(modality)) + ")");
   }
-  QuietGDCM         quiet;
   gdcm::ImageReader reader;
-  bool              ok = false;
-  reader.SetFileName(path.c_str());
-  try
-  {
-    ok = reader.Read();
-  }
-  catch (const std::exception &)
-  {
-    ok = false;
-  }
-  if (!ok)
-  {
-    FailFile(RTDoseWhere, "RTDOSE", path, "cannot be read as a DICOM image (corrupt)");
-  }
+  ReadParsedFile(reader, RTDoseWhere, "RTDOSE", path);
   const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
   CheckModality(ds, "RTDOSE", RTDoseWhere, path);
   const std::string units = Upper(StringValue(ds, DoseUnitsTag));

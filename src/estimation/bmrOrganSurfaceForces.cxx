@@ -199,12 +199,7 @@ OrganSurfaceForces::PullBackGradient(const std::vector<double> & p,
 double
 OrganSurfaceForces::EvaluatePrior(const std::vector<double> & p) const
 {
-  double pp = 0.0;
-  for (double x : p)
-  {
-    pp += x * x;
-  }
-  return 0.5 * m_Impl->alpha * pp;
+  return RidgePrior(m_Impl->alpha, p);
 }
 
 std::vector<double>

@@ -394,12 +394,7 @@ WallLoads::PullBackGradient(const std::vector<double> & p,
 double
 WallLoads::EvaluatePrior(const std::vector<double> & p) const
 {
-  double pp = 0.0;
-  for (double x : p)
-  {
-    pp += x * x;
-  }
-  return 0.5 * m_Impl->regularization * pp;
+  return RidgePrior(m_Impl->regularization, p);
 }
 
 std::vector<double>
