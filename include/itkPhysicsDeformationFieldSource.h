@@ -78,7 +78,11 @@ operator<<(std::ostream & out, const PhysicsDeformationFieldSourceEnums::FieldDi
  * leaves them at zero instead.
  *
  * Threaded over z-slabs; a voxel on a shared face belongs to the element of
- * lowest index, so the output is identical for any number of threads.
+ * lowest index, so the output is identical for any number of threads. The fill
+ * is threaded with the same guarantee (bmr::FillOutsideHarmonic). A field of
+ * double 3-vectors is computed in place in the output buffer (other pixel
+ * types through a buffer of doubles), whose pages are advised to be huge
+ * (bmr::AdviseHugePages).
  * Units: mm (LPS). Input: an itk::TetrahedralMeshObject with nodal displacement.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationField
  */

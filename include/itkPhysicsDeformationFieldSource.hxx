@@ -20,10 +20,12 @@
 
 #include "itkPhysicsDeformationFieldSource.h"
 #include "bmrDisplacementFieldRasterizer.h"
-#include "itkImageRegionIterator.h"
 #include "itkMultiThreaderBase.h"
 
+#include <algorithm>
+#include <memory>
 #include <numeric>
+#include <type_traits>
 
 namespace itk {
 
@@ -103,7 +105,9 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
 {
   OutputImageType * output = this->GetOutput();
   output->SetBufferedRegion(output->GetRequestedRegion());
-  output->Allocate();
+  output->Allocate(); // not initialized here: each work unit clears its own region (parallel first touch)
+  bmr::AdviseHugePages(output->GetBufferPointer(),
+                       output->GetPixelContainer()->Size() * sizeof(typename TOutputImage::PixelType));
 
   const bmr::TetrahedralMesh & mesh = this->GetMesh()->Get();
   const bmr::GridGeometry      grid = GridGeometryOf(output);
@@ -117,12 +121,19 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
                     << " elements are inverted by the deformation; the pull-back is undefined inside them");
   }
 
-  std::vector<double>        field(3 * grid.GetNumberOfVoxels(), 0.0);
-  std::vector<unsigned char> inside(grid.GetNumberOfVoxels(), 0);
+  // A field of double 3-vectors has the rasterizer's layout (3 doubles per voxel, index 0 fastest): it is
+  // computed in place. Other pixel types go through a buffer of doubles.
+  using ValueType = typename PixelType::ValueType;
+  constexpr bool            inPlace = std::is_same<ValueType, double>::value && sizeof(PixelType) == 3 * sizeof(double);
+  const std::size_t         nvox = grid.GetNumberOfVoxels();
+  std::unique_ptr<double[]> buffer(inPlace ? nullptr : new double[3 * nvox]);
+  double *                  field = inPlace ? reinterpret_cast<double *>(output->GetBufferPointer()) : buffer.get();
+  std::unique_ptr<unsigned char[]> inside(new unsigned char[nvox]);
   // Slabs along the last index: the rasterizer's ownership rule makes the result independent of the split.
   const auto          largest = output->GetLargestPossibleRegion();
   const auto          start = largest.GetIndex();
   MultiThreaderBase * threader = this->GetMultiThreader();
+  threader->SetNumberOfWorkUnits(this->GetNumberOfWorkUnits());
   threader->ParallelizeImageRegion<3>(
     largest,
     [&](const ImageRegion<3> & region) {
@@ -132,29 +143,44 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
         s[i] = static_cast<std::size_t>(region.GetIndex(i) - start[i]);
         n[i] = region.GetSize(i);
       }
-      rasterizer.RasterizeRegion(s, n, field.data(), inside.data());
+      // The rasterizer writes the covered voxels only: the others start at 0.
+      for (std::size_t k = s[2]; k < s[2] + n[2]; ++k)
+      {
+        for (std::size_t j = s[1]; j < s[1] + n[1]; ++j)
+        {
+          const std::size_t row = s[0] + grid.size[0] * (j + grid.size[1] * k);
+          std::fill(field + 3 * row, field + 3 * (row + n[0]), 0.0);
+          std::fill(inside.get() + row, inside.get() + row + n[0], static_cast<unsigned char>(0));
+        }
+      }
+      rasterizer.RasterizeRegion(s, n, field, inside.get());
     },
     nullptr);
   this->UpdateProgress(0.6f);
-  m_NumberOfCoveredVoxels = std::accumulate(inside.begin(), inside.end(), SizeValueType{ 0 });
+  m_NumberOfCoveredVoxels = std::accumulate(inside.get(), inside.get() + nvox, SizeValueType{ 0 });
   if (m_FillOutside)
   {
-    bmr::FillOutsideHarmonic(grid, field.data(), inside.data(), m_FillCoarsening);
+    bmr::FillOutsideHarmonic(grid, field, inside.get(), m_FillCoarsening, threader);
   }
   this->UpdateProgress(0.9f);
-  ImageRegionIterator<OutputImageType> it(output, output->GetRequestedRegion());
-  for (; !it.IsAtEnd(); ++it)
+  if constexpr (!inPlace)
   {
-    const auto        index = it.GetIndex();
-    const std::size_t off = static_cast<std::size_t>(index[0] - start[0]) +
-                            grid.size[0] * (static_cast<std::size_t>(index[1] - start[1]) +
-                                            grid.size[1] * static_cast<std::size_t>(index[2] - start[2]));
-    PixelType p;
-    for (unsigned int c = 0; c < 3; ++c)
-    {
-      p[c] = static_cast<typename PixelType::ValueType>(field[3 * off + c]);
-    }
-    it.Set(p);
+    threader->ParallelizeArray(
+      0,
+      grid.size[2],
+      [&](SizeValueType k) {
+        PixelType *       out = output->GetBufferPointer() + k * grid.size[0] * grid.size[1];
+        const double *    in = field + 3 * k * grid.size[0] * grid.size[1];
+        const std::size_t planeSize = grid.size[0] * grid.size[1];
+        for (std::size_t v = 0; v < planeSize; ++v)
+        {
+          for (unsigned int c = 0; c < 3; ++c)
+          {
+            out[v][c] = static_cast<ValueType>(in[3 * v + c]);
+          }
+        }
+      },
+      nullptr);
   }
   this->UpdateProgress(1.0f);
 }

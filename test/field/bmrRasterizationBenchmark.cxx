@@ -52,7 +52,7 @@ struct Case
   bmr::TetrahedralMesh mesh;
 };
 
-template <typename T>
+template<typename T>
 void
 WriteVector(std::ofstream & out, const std::vector<T> & v)
 {
@@ -61,7 +61,7 @@ WriteVector(std::ofstream & out, const std::vector<T> & v)
   out.write(reinterpret_cast<const char *>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
 }
 
-template <typename T>
+template<typename T>
 void
 ReadVector(std::ifstream & in, std::vector<T> & v)
 {
@@ -204,7 +204,7 @@ Run(const std::string & path, int runs, int threads)
     const auto start = std::chrono::steady_clock::now();
     source->Update();
     times.push_back(Seconds(start));
-    const FieldType * field = source->GetOutput();
+    const FieldType *   field = source->GetOutput();
     const std::uint64_t h =
       Fnv1a(field->GetBufferPointer(), field->GetPixelContainer()->Size() * sizeof(FieldType::PixelType));
     if (r > 0 && h != hash)
