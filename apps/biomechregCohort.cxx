@@ -63,79 +63,6 @@ ParsePhantomCohortSettings(const Arguments & args)
   return s;
 }
 
-/** Writes one pair of a phantom patient: the planning scan and scene with the first fraction, then the daily scan,
- * its seeds and its truth. Returns the cohort file's line of the fraction. */
-std::string
-WriteCohortFraction(const std::string &               out,
-                    const itk::PhantomCohortPatient & patient,
-                    std::size_t                       f,
-                    const itk::PhantomPair &          pair)
-{
-  const std::string patientDir = out + "/" + patient.name;
-  const std::string fraction = "F" + std::to_string(f + 1);
-  const std::string dailyDir = patientDir + "/" + fraction;
-  itk::MakeOutputDirectory(dailyDir);
-  if (f == 0)
-  {
-    itk::WriteImageAtomically(pair.movingCT.GetPointer(), patientDir + "/planning_ct.nrrd");
-    itk::WriteImageAtomically(pair.movingLabels.GetPointer(), patientDir + "/planning_labels.nrrd");
-    bmr::Scene scene = pair.scene;
-    scene.movingLandmarks.clear();
-    scene.fixedLandmarks.clear();
-    bmr::WriteTextFileAtomically(patientDir + "/scene.json", bmr::SceneToJson(scene));
-    bmr::WriteLandmarks(patientDir + "/seeds_planning.csv", pair.movingLandmarks);
-  }
-  itk::WriteImageAtomically(pair.fixedCT.GetPointer(), dailyDir + "/daily_ct.nrrd");
-  itk::WriteImageAtomically(pair.fixedLabels.GetPointer(), dailyDir + "/daily_labels.nrrd");
-  bmr::WriteLandmarks(dailyDir + "/seeds_daily.csv", pair.fixedLandmarks);
-  bmr::WriteTextFileAtomically(dailyDir + "/truth.json", itk::PhantomTruthJson(pair, patient.fractions[f]));
-  const std::string p = patient.name + "/";
-  return patient.name + "," + fraction + ",T" + std::to_string(patient.stage) + "," + p + "planning_ct.nrrd," + p +
-         "planning_labels.nrrd," + p + fraction + "/daily_ct.nrrd," + p + fraction + "/daily_labels.nrrd," + p +
-         "scene.json\n";
-}
-
-std::string
-TruthPatientLine(const itk::PhantomCohortPatient & p)
-{
-  std::ostringstream o;
-  const auto &       a = p.anatomy;
-  o << p.name << ",T" << p.stage << "," << p.prostateE << "," << a.prostateScale << "," << a.bladderScale << ","
-    << a.rectumRadius << "," << a.offset[0] << "," << a.offset[1] << "," << a.offset[2] << ","
-    << p.clearance.organToOrgan << "," << p.clearance.organToBoneOrOutline << "\n";
-  return o.str();
-}
-
-/** The truth's correlation of the prostate modulus with the stage, as the cohort study computes the recovered
- * one. */
-std::string
-TruthCorrelations(const std::vector<itk::PhantomCohortPatient> & cohort)
-{
-  std::vector<double> stage, modulus;
-  for (const auto & p : cohort)
-  {
-    stage.push_back(p.stage);
-    modulus.push_back(p.prostateE);
-  }
-  std::ostringstream o;
-  o << "# the truth: prostate modulus against T-stage over the patients; p two-sided\n"
-       "method,n,coefficient,p_approximate,p_permutation\n";
-  for (auto method :
-       { bmr::CorrelationEnum::Pearson, bmr::CorrelationEnum::Spearman, bmr::CorrelationEnum::KendallTauB })
-  {
-    if (cohort.size() < 3)
-    {
-      break;
-    }
-    const auto t = bmr::CorrelationTest(stage, modulus, method);
-    o << bmr::ToString(method) << "," << t.count << "," << t.coefficient << "," << t.pValueApproximate << ","
-      << t.pValuePermutation << "\n";
-    std::cout << "  truth: " << bmr::ToString(method) << " " << t.coefficient << " (p " << t.pValueApproximate << ")"
-              << std::endl;
-  }
-  return o.str();
-}
-
 } // namespace
 
 int
@@ -145,33 +72,18 @@ PhantomCohortCommand(const Arguments & args)
   const auto        settings = ParsePhantomCohortSettings(args);
   args.CheckAllUsed();
   const auto cohort = itk::DrawPhantomCohort(settings);
-  itk::MakeOutputDirectory(out);
-  std::string cohortCsv = "# a phantom cohort (biomechreg phantom-cohort); its truth: truth.csv, truth_fractions.csv\n"
-                          "patient,fraction,t_stage,planning_ct,planning_labels,daily_ct,daily_labels,scene\n";
-  std::string truthCsv =
-    "# per patient: T-stage, true prostate modulus [kPa], anatomy (scales, mm) and clearances [mm]\n"
-    "patient,t_stage,true_E_kPa,prostate_scale,bladder_scale,rectum_radius_mm,offset_x_mm,"
-    "offset_y_mm,offset_z_mm,organ_gap_mm,bone_or_outline_gap_mm\n";
-  std::ostringstream fractions;
-  fractions << "# per fraction: the fillings [mm] and the random seed of its pair\n"
-               "patient,fraction,bladder_mm,rectum_mm,seed\n";
   for (const auto & patient : cohort)
   {
     std::cout << patient.name << ": T" << patient.stage << ", prostate " << patient.prostateE << " kPa, scale "
               << patient.anatomy.prostateScale << std::endl;
-    truthCsv += TruthPatientLine(patient);
-    for (std::size_t f = 0; f < patient.fractions.size(); ++f)
-    {
-      const itk::PhantomSettings & o = patient.fractions[f];
-      StageTimer                   timer;
-      cohortCsv += WriteCohortFraction(out, patient, f, itk::MakePhantomPair(o, &timer));
-      fractions << patient.name << ",F" << f + 1 << "," << o.bladderMM << "," << o.rectumMM << "," << o.seed << "\n";
-    }
   }
-  bmr::WriteTextFileAtomically(out + "/truth.csv", truthCsv);
-  bmr::WriteTextFileAtomically(out + "/truth_fractions.csv", fractions.str());
-  bmr::WriteTextFileAtomically(out + "/truth_correlations.csv", TruthCorrelations(cohort));
-  bmr::WriteTextFileAtomically(out + "/cohort.csv", cohortCsv);
+  StageTimer timer;
+  itk::WritePhantomCohort(out, cohort, &timer);
+  for (const auto & t : itk::PhantomCohortTruthCorrelations(cohort))
+  {
+    std::cout << "  truth: " << bmr::ToString(t.method) << " " << t.coefficient << " (p " << t.pValueApproximate << ")"
+              << std::endl;
+  }
   std::cout << "Wrote " << out << "/cohort.csv (for biomechreg cohort --cohort) and truth*.csv" << std::endl;
   return EXIT_SUCCESS;
 }

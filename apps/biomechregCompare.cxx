@@ -118,6 +118,34 @@ ReadPair(const itk::ImagePairEntry & pair, const CompareOptions & o, const std::
   return d;
 }
 
+/** \a field placed exactly on \a fixed's grid when it has its size and its origin, spacing and direction agree to
+ * 1e-4 of a voxel: other tools (plastimatch) write the geometry in single precision, which ITK's filters then
+ * refuse as another physical space. Any other field is returned as it is. */
+FieldType::Pointer
+OnFixedGrid(FieldType::Pointer field, const LabelImageType * fixed)
+{
+  if (field->GetLargestPossibleRegion().GetSize() != fixed->GetLargestPossibleRegion().GetSize())
+  {
+    return field;
+  }
+  for (unsigned int i = 0; i < 3; ++i)
+  {
+    const double h = fixed->GetSpacing()[i];
+    bool         close = std::abs(field->GetOrigin()[i] - fixed->GetOrigin()[i]) <= 1e-4 * h &&
+                 std::abs(field->GetSpacing()[i] - h) <= 1e-4 * h;
+    for (unsigned int j = 0; j < 3; ++j)
+    {
+      close = close && std::abs(field->GetDirection()(i, j) - fixed->GetDirection()(i, j)) <= 1e-4;
+    }
+    if (!close)
+    {
+      return field;
+    }
+  }
+  field->CopyInformation(fixed);
+  return field;
+}
+
 /** The fixed -> moving field of \a method on the pair, and its compute time [s] (-1 when given). */
 FieldType::Pointer
 MethodField(const std::string &         method,
@@ -132,7 +160,7 @@ MethodField(const std::string &         method,
   if (!given.empty())
   {
     seconds = -1.0;
-    return ReadImage<FieldType>(given, method + " field");
+    return OnFixedGrid(ReadImage<FieldType>(given, method + " field"), d.fixedLabels);
   }
   if (method == "identity")
   {

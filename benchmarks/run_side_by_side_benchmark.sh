@@ -17,6 +17,7 @@
 #   5. benchmarks/summarize_side_by_side.py: medians, ratios against plastimatch and itk-demons measured in the
 #      same run, CSV, PNG and a markdown table.
 # Usage: benchmarks/run_side_by_side_benchmark.sh [PAIRS] [RUNS]   (about 30 minutes for 2 pairs x 3 runs on 2 cores)
+# Resumable: run again with the same WORK_DIR and finished runs are kept.
 # A quick smoke run: MAIN_GRID="64,48,48 3" SIZES="32 6" MESH_SCALES=1.5 INTERVAL=off ... 1 1
 # Writes benchmarks/results/side_by_side_runs.csv, side_by_side_summary.md, side_by_side.png.
 set -euo pipefail
@@ -47,7 +48,9 @@ timed() {
   local study=$1 pair=$2 method=$3 run=$4 voxels=$5 dir=$6
   shift 6
   mkdir -p "$dir"
-  /usr/bin/time -f "%e %M" -o "$dir/time.txt" "$@" >> "$log" 2>&1
+  # A run that finished in an earlier, interrupted invocation with the same WORK_DIR is not repeated.
+  [ -f "$dir/time.txt" ] || /usr/bin/time -f "%e %M" -o "$dir/time.txt.part" "$@" >> "$log" 2>&1
+  [ -f "$dir/time.txt" ] || mv "$dir/time.txt.part" "$dir/time.txt"
   local tets=""
   [ -f "$dir/report.json" ] && tets=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['mesh']['tetrahedra'])" "$dir/report.json")
   read -r wall kb < "$dir/time.txt"

@@ -61,8 +61,8 @@ struct BiomechanicalRegistration_EXPORT CohortPatient
  * - patient, fraction: names of letters, digits, '_', '-' and '.', the pair (patient, fraction) unique;
  * - planning_ct, planning_labels, daily_ct, daily_labels, scene: paths relative to the file or absolute, each
  *   an existing file;
- * - planning_landmarks and daily_landmarks are reserved (marker-driven fractions without daily labels) and refused
- *   for now;
+ * - planning_landmarks and daily_landmarks are refused: a fraction seen only through its markers recovers no
+ *   modulus (biomechreg markers / itk::EstimateTreatmentFromMarkers carries the anatomy with known moduli);
  * - every other column a covariate of the patient: a number, or a clinical T-stage written T0 ... T4 with an
  *   optional sub-stage letter (T2b), read as its number 0 ... 4 as the dissertation codes T1, T2, T3 as 1, 2, 3
  *   (sub-stages are not ordered finer because their definitions differ between editions of the TNM system).
@@ -97,8 +97,11 @@ struct BiomechanicalRegistration_EXPORT CohortWorkflowSettings
   std::string              executable;      ///< biomechreg, absolute
   std::vector<std::string> registerOptions; ///< passed to every biomechreg register (default: --outputs report)
   unsigned int             threadsPerJob{ 1 };
-  unsigned int             memoryMB{ 3000 };     ///< per job, for a cluster's scheduler
-  unsigned int             runtimeMinutes{ 30 }; ///< per job, for a cluster's scheduler
+  /** Per job, for a cluster's scheduler: the measured peak resident memory of one registration with the default
+   * rescan interval on a 1 mm pelvis of 200 x 160 x 160 voxels (769 MB, benchmarks/results/side_by_side_runs.csv),
+   * plus 30 %. */
+  unsigned int memoryMB{ 1000 };
+  unsigned int runtimeMinutes{ 30 }; ///< per job, for a cluster's scheduler
 };
 
 /** The workflow's configuration (JSON): the cohort, the settings and one job per fraction, keyed

@@ -99,6 +99,16 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
                    PipelineObserver *                  observer = nullptr,
                    bool                                pushField = true);
 
+/** As SimulateLabelImage() on a mesh already made for \a scene (its labels, sizes and excluded labels): the forward
+ * problem and the fields, the push field on \a movingReference's grid. \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT SimulationResult
+SimulateMesh(bmr::TetrahedralMesh mesh,
+             const bmr::Scene &   scene,
+             const ImageBase<3> * reference,
+             const ImageBase<3> * movingReference,
+             PipelineObserver *   observer = nullptr,
+             bool                 pushField = true);
+
 /** How RegisterSegmentedPair() states the uncertainty of the estimated moduli.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 enum class UncertaintyMethodEnum : std::uint8_t
@@ -304,6 +314,14 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
  * simulated displacement. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT PhantomPair
 MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = nullptr);
+
+/** As above, reusing the truth's mesh: an empty \a truthMesh receives the mesh made, a non-empty one is used
+ * instead of meshing again. Only for pairs of one planning anatomy (the same grid, planningSeed, anatomy, model,
+ * tumour and truthRefinement, as the fractions of one phantom-cohort patient), whose truth meshes are identical:
+ * CGAL meshes the same labels with the same sizes and seed into the same mesh. The fillings, moduli and noise may
+ * differ. \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT PhantomPair
+MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer, bmr::TetrahedralMesh & truthMesh);
 
 /** \a count pelvis phantom settings for a comparison (biomechreg phantom-set), drawn reproducibly from \a seed:
  * prostate modulus log-uniform in [50, 300] kPa (whole kPa), bladder filling uniform in [3, 8] mm and rectum in

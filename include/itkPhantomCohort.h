@@ -20,6 +20,8 @@
 
 #include "itkBiomechanicalPipelines.h"
 
+#include "bmrStatistics.h"
+
 namespace itk {
 
 /** \brief How a phantom cohort is drawn (biomechreg phantom-cohort): N patients, each with its own anatomy,
@@ -64,6 +66,23 @@ struct BiomechanicalRegistration_EXPORT PhantomCohortPatient
 /** Draws the cohort; throws itk::ExceptionObject on settings out of range or an anatomy that cannot be drawn. */
 BiomechanicalRegistration_EXPORT std::vector<PhantomCohortPatient>
                                  DrawPhantomCohort(const PhantomCohortSettings & settings);
+
+/** The truth's correlation of the prostate modulus with the T-stage over the patients (Pearson, Spearman, Kendall
+ * tau-b), as the cohort study computes the recovered one; empty below 3 patients. */
+BiomechanicalRegistration_EXPORT std::vector<bmr::CorrelationTestResult>
+                                 PhantomCohortTruthCorrelations(const std::vector<PhantomCohortPatient> & cohort);
+
+/** Makes every pair of \a cohort (MakePhantomPair) and writes it under \a directory: per patient P the planning
+ * scan, labels, scene and seeds (P/planning_ct.nrrd, planning_labels.nrrd, scene.json, seeds_planning.csv), per
+ * fraction F the daily scan, labels, seeds and truth (P/F/daily_ct.nrrd, daily_labels.nrrd, seeds_daily.csv,
+ * truth.json); then cohort.csv (the file biomechreg cohort reads), truth.csv (stage, modulus [kPa], anatomy and
+ * clearances [mm] per patient), truth_fractions.csv (fillings [mm], seeds) and truth_correlations.csv. A patient's
+ * fractions share one planning anatomy, so its truth is meshed once and reused. Every file is written atomically.
+ * \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT void
+WritePhantomCohort(const std::string &                       directory,
+                   const std::vector<PhantomCohortPatient> & cohort,
+                   PipelineObserver *                        observer = nullptr);
 
 } // namespace itk
 

@@ -140,9 +140,11 @@ Cohort::Read(const std::string & cohortPath)
   {
     if (table.HasColumn(column))
     {
+      // A fraction seen only through its markers recovers no modulus: biomechreg markers carries the anatomy
+      // with known moduli. A cohort of moduli needs every fraction's daily labels.
       table.Fail("the column \"" + column +
-                 "\" is reserved for marker-driven fractions, which cohorts do not run "
-                 "yet: give every fraction its daily CT and labels");
+                 "\" holds markers, which recover no modulus (biomechreg markers estimates the anatomy with known "
+                 "moduli): give every fraction its daily CT and labels");
     }
   }
   Cohort cohort;

@@ -17,7 +17,12 @@
  *=========================================================================*/
 #include "itkPhantomCohort.h"
 
+#include "bmrAtomicFile.h"
 #include "bmrError.h"
+#include "bmrLandmarks.h"
+#include "itkBiomechanicalImageIO.h"
+#include "itkBiomechanicalReports.h"
+#include "itkBiomechanicalWriters.h"
 #include "itkPipelineStages.h"
 
 #include <cmath>
@@ -119,6 +124,119 @@ DrawPhantomCohort(const PhantomCohortSettings & s)
     cohort.push_back(patient);
   }
   return cohort;
+}
+
+namespace {
+/** Writes one pair of a phantom patient: with the first fraction the planning scan and scene, then the daily scan,
+ * its seeds and its truth. Returns the cohort file's line of the fraction. */
+std::string
+WriteCohortFraction(const std::string &          directory,
+                    const PhantomCohortPatient & patient,
+                    std::size_t                  f,
+                    const PhantomPair &          pair)
+{
+  const std::string patientDir = directory + "/" + patient.name;
+  const std::string fraction = "F" + std::to_string(f + 1);
+  const std::string dailyDir = patientDir + "/" + fraction;
+  MakeOutputDirectory(dailyDir);
+  if (f == 0)
+  {
+    WriteImageAtomically(pair.movingCT.GetPointer(), patientDir + "/planning_ct.nrrd");
+    WriteImageAtomically(pair.movingLabels.GetPointer(), patientDir + "/planning_labels.nrrd");
+    bmr::Scene scene = pair.scene;
+    scene.movingLandmarks.clear();
+    scene.fixedLandmarks.clear();
+    bmr::WriteTextFileAtomically(patientDir + "/scene.json", bmr::SceneToJson(scene));
+    bmr::WriteLandmarks(patientDir + "/seeds_planning.csv", pair.movingLandmarks);
+  }
+  WriteImageAtomically(pair.fixedCT.GetPointer(), dailyDir + "/daily_ct.nrrd");
+  WriteImageAtomically(pair.fixedLabels.GetPointer(), dailyDir + "/daily_labels.nrrd");
+  bmr::WriteLandmarks(dailyDir + "/seeds_daily.csv", pair.fixedLandmarks);
+  bmr::WriteTextFileAtomically(dailyDir + "/truth.json", PhantomTruthJson(pair, patient.fractions[f]));
+  const std::string p = patient.name + "/";
+  return patient.name + "," + fraction + ",T" + std::to_string(patient.stage) + "," + p + "planning_ct.nrrd," + p +
+         "planning_labels.nrrd," + p + fraction + "/daily_ct.nrrd," + p + fraction + "/daily_labels.nrrd," + p +
+         "scene.json\n";
+}
+
+std::string
+TruthPatientLine(const PhantomCohortPatient & p)
+{
+  std::ostringstream o;
+  const auto &       a = p.anatomy;
+  o << p.name << ",T" << p.stage << "," << p.prostateE << "," << a.prostateScale << "," << a.bladderScale << ","
+    << a.rectumRadius << "," << a.offset[0] << "," << a.offset[1] << "," << a.offset[2] << ","
+    << p.clearance.organToOrgan << "," << p.clearance.organToBoneOrOutline << "\n";
+  return o.str();
+}
+
+std::string
+TruthCorrelationsCsv(const std::vector<bmr::CorrelationTestResult> & tests)
+{
+  std::ostringstream o;
+  o << "# the truth: prostate modulus against T-stage over the patients; p two-sided\n"
+       "method,n,coefficient,p_approximate,p_permutation\n";
+  for (const auto & t : tests)
+  {
+    o << bmr::ToString(t.method) << "," << t.count << "," << t.coefficient << "," << t.pValueApproximate << ","
+      << t.pValuePermutation << "\n";
+  }
+  return o.str();
+}
+} // namespace
+
+std::vector<bmr::CorrelationTestResult>
+PhantomCohortTruthCorrelations(const std::vector<PhantomCohortPatient> & cohort)
+{
+  std::vector<bmr::CorrelationTestResult> tests;
+  std::vector<double>                     stage, modulus;
+  for (const auto & p : cohort)
+  {
+    stage.push_back(p.stage);
+    modulus.push_back(p.prostateE);
+  }
+  for (auto method :
+       { bmr::CorrelationEnum::Pearson, bmr::CorrelationEnum::Spearman, bmr::CorrelationEnum::KendallTauB })
+  {
+    if (cohort.size() >= 3)
+    {
+      tests.push_back(bmr::CorrelationTest(stage, modulus, method));
+    }
+  }
+  return tests;
+}
+
+void
+WritePhantomCohort(const std::string &                       directory,
+                   const std::vector<PhantomCohortPatient> & cohort,
+                   PipelineObserver *                        observer)
+{
+  MakeOutputDirectory(directory);
+  std::string cohortCsv = "# a phantom cohort (biomechreg phantom-cohort); its truth: truth.csv, truth_fractions.csv\n"
+                          "patient,fraction,t_stage,planning_ct,planning_labels,daily_ct,daily_labels,scene\n";
+  std::string truthCsv =
+    "# per patient: T-stage, true prostate modulus [kPa], anatomy (scales, mm) and clearances [mm]\n"
+    "patient,t_stage,true_E_kPa,prostate_scale,bladder_scale,rectum_radius_mm,offset_x_mm,"
+    "offset_y_mm,offset_z_mm,organ_gap_mm,bone_or_outline_gap_mm\n";
+  std::ostringstream fractions;
+  fractions << "# per fraction: the fillings [mm] and the random seed of its pair\n"
+               "patient,fraction,bladder_mm,rectum_mm,seed\n";
+  for (const auto & patient : cohort)
+  {
+    truthCsv += TruthPatientLine(patient);
+    bmr::TetrahedralMesh truthMesh; // one planning anatomy per patient: meshed with the first fraction
+    for (std::size_t f = 0; f < patient.fractions.size(); ++f)
+    {
+      const PhantomSettings & o = patient.fractions[f];
+      cohortCsv += WriteCohortFraction(directory, patient, f, MakePhantomPair(o, observer, truthMesh));
+      fractions << patient.name << ",F" << f + 1 << "," << o.bladderMM << "," << o.rectumMM << "," << o.seed << "\n";
+    }
+  }
+  bmr::WriteTextFileAtomically(directory + "/truth.csv", truthCsv);
+  bmr::WriteTextFileAtomically(directory + "/truth_fractions.csv", fractions.str());
+  bmr::WriteTextFileAtomically(directory + "/truth_correlations.csv",
+                               TruthCorrelationsCsv(PhantomCohortTruthCorrelations(cohort)));
+  bmr::WriteTextFileAtomically(directory + "/cohort.csv", cohortCsv);
 }
 
 } // namespace itk

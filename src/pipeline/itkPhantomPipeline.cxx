@@ -304,6 +304,13 @@ MoveSeeds(PhantomPair & pair, const std::vector<bmr::Seed> & seeds, const bmr::T
 PhantomPair
 MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
 {
+  bmr::TetrahedralMesh truthMesh;
+  return MakePhantomPair(s, observer, truthMesh);
+}
+
+PhantomPair
+MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer, bmr::TetrahedralMesh & truthMesh)
+{
   PhantomPair          pair;
   pipeline::StageClock clock(observer, pair.stages);
   clock.Begin("phantom volume");
@@ -325,7 +332,13 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
   const bmr::GridGeometry fixedGrid = ShiftedGrid(moving.grid, s.fixedGridShiftVoxels, 4000 + s.seed);
   const auto              fixedReference =
     MakeImageOnGrid<BiomechanicalLabelImageType>(fixedGrid, std::vector<std::int32_t>(fixedGrid.GetNumberOfVoxels()));
-  const SimulationResult truth = SimulateLabelImage(truthLabels, pair.truthScene, fixedReference, observer, false);
+  if (truthMesh.points.empty())
+  {
+    pipeline::StageClock meshClock(observer, pair.stages);
+    truthMesh = pipeline::MeshLabelImage(truthLabels, pair.truthScene, meshClock, "mesh (CGAL Mesh_3)");
+  }
+  const SimulationResult truth =
+    SimulateMesh(truthMesh, pair.truthScene, fixedReference, truthLabels, observer, false);
   pair.truthField = truth.pullBack;
   pair.truthTetrahedra = truth.mesh.GetNumberOfTetrahedra();
   pair.truthNodes = truth.mesh.GetNumberOfPoints();

@@ -137,10 +137,27 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
                    PipelineObserver *                  observer,
                    bool                                pushField)
 {
+  std::vector<PipelineStage> stages;
+  pipeline::StageClock       clock(observer, stages);
+  SimulationResult           out =
+    SimulateMesh(pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)"), scene, reference,
+                 movingLabels, observer, pushField);
+  out.stages.insert(out.stages.begin(), stages.begin(), stages.end());
+  return out;
+}
+
+SimulationResult
+SimulateMesh(bmr::TetrahedralMesh  mesh,
+             const bmr::Scene &    scene,
+             const ImageBase<3> *  reference,
+             const ImageBase<3> *  movingReference,
+             PipelineObserver *    observer,
+             bool                  pushField)
+{
   SimulationResult     out;
   pipeline::StageClock clock(observer, out.stages);
+  out.mesh = std::move(mesh);
   clock.Warn(out.warnings, scene.Warnings());
-  out.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");
   clock.Warn(out.warnings, bmr::MeshResolutionWarnings(scene, out.mesh));
 
   clock.Begin("FEM (assemble, factorize, solve)");
@@ -167,7 +184,7 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
   clock.Add("assemble", t.assemble);
   clock.Add("factorize", t.analyze + t.factorize);
   clock.Add("solve", t.solve);
-  pipeline::ComputeFields(out, reference, movingLabels, pushField, clock);
+  pipeline::ComputeFields(out, reference, movingReference, pushField, clock);
   return out;
 }
 
