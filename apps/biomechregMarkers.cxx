@@ -98,7 +98,8 @@ MarkersCommand(const Arguments & args)
     treatmentLabels = ReadLabelsOrRTStruct(treatmentLabelsPath, "treatment label image", ct, scene, ignoreROIs);
   }
   timer.End();
-  auto result = itk::EstimateTreatmentFromMarkers(labels, ct, scene, planningMarkers, treatmentMarkers, settings, &timer);
+  auto result =
+    itk::EstimateTreatmentFromMarkers(labels, ct, scene, planningMarkers, treatmentMarkers, settings, &timer);
   timer.stages.insert(timer.stages.end(), result.stages.begin(), result.stages.end());
   if (treatmentLabels)
   {

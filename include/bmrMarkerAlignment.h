@@ -72,9 +72,9 @@ public:
   Apply(const Point3 & x) const;
 
 private:
-  std::vector<Point3>   m_Centers;
-  std::vector<Point3>   m_Weights;
-  Point3                m_Centroid{ { 0, 0, 0 } };
+  std::vector<Point3>    m_Centers;
+  std::vector<Point3>    m_Weights;
+  Point3                 m_Centroid{ { 0, 0, 0 } };
   std::array<double, 12> m_Affine{}; ///< per output coordinate c: a_0, then the three gradients
 };
 

@@ -28,8 +28,8 @@ namespace itk {
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT MarkerSettings
 {
-  std::string organ{ "prostate" }; ///< scene label whose surface carries the unknown forces
-  double      boxMargin{ 25.0 };   ///< mm: the static box is the organ's bounding box widened by this
+  std::string organ{ "prostate" };   ///< scene label whose surface carries the unknown forces
+  double      boxMargin{ 25.0 };     ///< mm: the static box is the organ's bounding box widened by this
   double      controlSpacing{ 8.0 }; ///< mm between the force basis' control points on the organ surface
   /** alpha [1] of the prior alpha/2 |q|^2 on the surface loads (bmr::OrganSurfaceForces; q reads as mm). */
   double regularization{ 1e-3 };
@@ -46,11 +46,11 @@ struct BiomechanicalRegistration_EXPORT MarkerSettings
 struct BiomechanicalRegistration_EXPORT MarkerMethodResult
 {
   std::string                          method;
-  std::vector<double>                  fitResidual;     ///< per marker, fitted to all [mm]
-  std::vector<double>                  leaveOneOutError; ///< per marker, fitted to the others [mm]
+  std::vector<double>                  fitResidual;            ///< per marker, fitted to all [mm]
+  std::vector<double>                  leaveOneOutError;       ///< per marker, fitted to the others [mm]
   double                               leaveOneOutRms{ -1.0 }; ///< mm; < 0 when not computed
-  BiomechanicalFieldType::Pointer      field;           ///< treatment -> planning [mm] on the planning grid
-  BiomechanicalLabelImageType::Pointer warpedLabels;    ///< the estimated treatment labels
+  BiomechanicalFieldType::Pointer      field;                  ///< treatment -> planning [mm] on the planning grid
+  BiomechanicalLabelImageType::Pointer warpedLabels;           ///< the estimated treatment labels
   /** Against the real treatment labels (EvaluateMarkerMethods()): the organ's intersection over union and the
    * mean one-sided surface distance D [mm] from the real organ's surface to the estimated one (Table 4.1);
    * < 0 when not evaluated. */
@@ -61,10 +61,10 @@ struct BiomechanicalRegistration_EXPORT MarkerMethodResult
 /** What EstimateTreatmentFromMarkers() found. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT MarkerResult
 {
-  SimulationResult                  state;      ///< the box mesh with the FEM displacement, the pull-back field
-  BiomechanicalCTImageType::Pointer warpedCT;   ///< the estimated treatment CT (FEM)
-  std::vector<std::string>          markerIds;  ///< in the order of every per-marker list
-  std::vector<MarkerMethodResult>   methods;    ///< "fem", "rigid", "tps"
+  SimulationResult                  state;     ///< the box mesh with the FEM displacement, the pull-back field
+  BiomechanicalCTImageType::Pointer warpedCT;  ///< the estimated treatment CT (FEM)
+  std::vector<std::string>          markerIds; ///< in the order of every per-marker list
+  std::vector<MarkerMethodResult>   methods;   ///< "fem", "rigid", "tps"
   std::size_t                       loadParameters{ 0 }, surfaceNodes{ 0 }, heldNodes{ 0 };
   double                            forceScale{ 0.0 }; ///< kappa [mN per unit parameter]
   std::vector<double>               surfaceForces;     ///< 3N nodal forces of the FEM fit [mN]
@@ -100,16 +100,18 @@ EstimateTreatmentFromMarkers(const BiomechanicalLabelImageType * planningLabels,
 /** Fills every method's intersectionOverUnion and meanSurfaceDistance for \a organLabel against the real
  * \a treatmentLabels (on the planning grid: throws otherwise). \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT void
-EvaluateMarkerMethods(MarkerResult & result, const BiomechanicalLabelImageType * treatmentLabels, std::int32_t organLabel);
+EvaluateMarkerMethods(MarkerResult &                      result,
+                      const BiomechanicalLabelImageType * treatmentLabels,
+                      std::int32_t                        organLabel);
 
 /** report.json of a marker run (units in the keys). \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT std::string
-MarkerReportJson(const MarkerResult & result, const MarkerSettings & settings);
+                                 MarkerReportJson(const MarkerResult & result, const MarkerSettings & settings);
 
 /** \a markers with independent Gaussian tracking noise of \a sigma [mm] on every coordinate, seeded by \a seed
  * (the same seed gives the same noise on every platform). \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT std::vector<bmr::Landmark>
-AddTrackingNoise(std::vector<bmr::Landmark> markers, double sigma, std::uint64_t seed);
+                                 AddTrackingNoise(std::vector<bmr::Landmark> markers, double sigma, std::uint64_t seed);
 
 } // namespace itk
 

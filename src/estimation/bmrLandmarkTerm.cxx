@@ -169,7 +169,9 @@ LandmarkTerm::Evaluate(const std::vector<double> & u, std::vector<double> * grad
 }
 
 void
-LandmarkTerm::EvaluateResiduals(const std::vector<double> & u, std::vector<double> & r, ResidualJacobian * jacobian) const
+LandmarkTerm::EvaluateResiduals(const std::vector<double> & u,
+                                std::vector<double> &       r,
+                                ResidualJacobian *          jacobian) const
 {
   const auto positions = DeformedPositions(u);
   r.assign(3 * m_Markers.size(), 0.0);

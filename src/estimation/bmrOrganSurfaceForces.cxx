@@ -106,7 +106,8 @@ OrganSurfaceForces::OrganSurfaceForces(const TetrahedralMesh &           mesh,
   {
     Fail("OrganSurfaceForces", "the organ surface has no free node in the mesh");
   }
-  d.basis = std::make_unique<WallBasis>(mesh.points, std::vector<decltype(wall)>{ wall }, d.surface.size(), controlSpacing);
+  d.basis =
+    std::make_unique<WallBasis>(mesh.points, std::vector<decltype(wall)>{ wall }, d.surface.size(), controlSpacing);
 }
 
 OrganSurfaceForces::~OrganSurfaceForces() = default;
@@ -160,8 +161,8 @@ OrganSurfaceForces::Apply(const std::vector<double> & p) const
 {
   if (p.size() != GetNumberOfParameters())
   {
-    Fail("OrganSurfaceForces", "expected " + std::to_string(GetNumberOfParameters()) + " parameters, got " +
-                                 std::to_string(p.size()));
+    Fail("OrganSurfaceForces",
+         "expected " + std::to_string(GetNumberOfParameters()) + " parameters, got " + std::to_string(p.size()));
   }
   return { m_Impl->Forces(p), m_Impl->prescribed };
 }

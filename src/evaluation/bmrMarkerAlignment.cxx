@@ -39,8 +39,9 @@ CheckPairs(const std::vector<Point3> & from, const std::vector<Point3> & to, con
 {
   if (from.empty() || from.size() != to.size())
   {
-    Fail(where, "expected two equally long, non-empty marker lists, got " + std::to_string(from.size()) + " and " +
-                  std::to_string(to.size()));
+    Fail(where,
+         "expected two equally long, non-empty marker lists, got " + std::to_string(from.size()) + " and " +
+           std::to_string(to.size()));
   }
   for (const auto * list : { &from, &to })
   {
@@ -152,7 +153,7 @@ ThinPlateSpline::ThinPlateSpline(const std::vector<Point3> & from, const std::ve
   : m_Centers(from)
 {
   CheckPairs(from, to, "ThinPlateSpline");
-  const auto n = static_cast<Eigen::Index>(from.size());
+  const auto    n = static_cast<Eigen::Index>(from.size());
   const Vector3 c = Centroid(from);
   m_Centroid = { { c.x(), c.y(), c.z() } };
   Eigen::MatrixXd system = Eigen::MatrixXd::Zero(n + 4, n + 4);

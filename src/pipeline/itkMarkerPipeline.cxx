@@ -51,18 +51,19 @@ PairMarkers(const std::vector<bmr::Landmark> & planning,
 {
   if (planning.size() < 2)
   {
-    bmr::Fail("EstimateTreatmentFromMarkers", "at least two planning markers are needed, got " +
-                                                std::to_string(planning.size()));
+    bmr::Fail("EstimateTreatmentFromMarkers",
+              "at least two planning markers are needed, got " + std::to_string(planning.size()));
   }
   if (planning.size() != treatment.size())
   {
-    bmr::Fail("EstimateTreatmentFromMarkers", std::to_string(planning.size()) + " planning markers but " +
-                                                std::to_string(treatment.size()) + " treatment markers");
+    bmr::Fail("EstimateTreatmentFromMarkers",
+              std::to_string(planning.size()) + " planning markers but " + std::to_string(treatment.size()) +
+                " treatment markers");
   }
   for (const bmr::Landmark & p : planning)
   {
-    auto match = std::find_if(
-      treatment.begin(), treatment.end(), [&](const bmr::Landmark & t) { return t.id == p.id; });
+    auto match =
+      std::find_if(treatment.begin(), treatment.end(), [&](const bmr::Landmark & t) { return t.id == p.id; });
     if (match == treatment.end())
     {
       bmr::Fail("EstimateTreatmentFromMarkers", "planning marker \"" + p.id + "\" has no treatment marker of that id");
@@ -144,14 +145,14 @@ OrganBox(const BiomechanicalLabelImageType * labels, std::int32_t organ, double 
   }
   if (!found)
   {
-    bmr::Fail("EstimateTreatmentFromMarkers", "the planning labels contain no voxel of the organ (label " +
-                                                std::to_string(organ) + ")");
+    bmr::Fail("EstimateTreatmentFromMarkers",
+              "the planning labels contain no voxel of the organ (label " + std::to_string(organ) + ")");
   }
   const ImageRegion<3> whole = labels->GetBufferedRegion();
   bool                 clipped = false;
   for (unsigned int d = 0; d < 3; ++d)
   {
-    const auto m = static_cast<IndexValueType>(std::ceil(margin / labels->GetSpacing()[d]));
+    const auto           m = static_cast<IndexValueType>(std::ceil(margin / labels->GetSpacing()[d]));
     const IndexValueType first = whole.GetIndex(d), last = first + static_cast<IndexValueType>(whole.GetSize(d)) - 1;
     clipped = clipped || lo[d] - m < first || hi[d] + m > last;
     lo[d] = std::max(first, lo[d] - m);
@@ -216,10 +217,10 @@ ForceScale(const bmr::TetrahedralMesh & mesh, const bmr::Scene & box, std::int32
 /** The FEM model of the box and its fit to weighted markers. */
 struct BoxModel
 {
-  const bmr::TetrahedralMesh &         mesh;
-  std::unique_ptr<bmr::ForwardModel>   model;
+  const bmr::TetrahedralMesh &             mesh;
+  std::unique_ptr<bmr::ForwardModel>       model;
   std::unique_ptr<bmr::OrganSurfaceForces> loads;
-  const MarkerSettings &               settings;
+  const MarkerSettings &                   settings;
 
   /** Nodal displacement [mm] fitted to the markers with the given weights; \a iterations receives the LM's and
    * \a forces the nodal forces [mN] of the fit, when not null. */
@@ -276,8 +277,8 @@ Rms(const std::vector<double> & values)
 
 /** Each marker predicted by \a predict fitted to the others. */
 std::vector<double>
-LeaveOneOut(const PointList &                                                                     from,
-            const PointList &                                                                     to,
+LeaveOneOut(const PointList &                                                                             from,
+            const PointList &                                                                             to,
             const std::function<bmr::Point3(const PointList &, const PointList &, const bmr::Point3 &)> & predict)
 {
   std::vector<double> errors;
@@ -310,7 +311,7 @@ FieldOfMap(const ImageBase<3> * reference, const std::function<bmr::Point3(const
   {
     Point<double, 3> x;
     field->TransformIndexToPhysicalPoint(it.GetIndex(), x);
-    const bmr::Point3                  y = toPlanning({ { x[0], x[1], x[2] } });
+    const bmr::Point3                 y = toPlanning({ { x[0], x[1], x[2] } });
     BiomechanicalFieldType::PixelType d;
     for (unsigned int c = 0; c < 3; ++c)
     {
@@ -377,14 +378,12 @@ ReferenceMethods(const ImageBase<3> * reference, const PointList & from, const P
   tps.fitResidual = Distances(viaSpline, to);
   if (leaveOneOut)
   {
-    rigid.leaveOneOutError = LeaveOneOut(
-      from, to, [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
-        return bmr::FitRigidTransform(a, b).Apply(x);
-      });
-    tps.leaveOneOutError = LeaveOneOut(
-      from, to, [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
-        return bmr::ThinPlateSpline(a, b).Apply(x);
-      });
+    rigid.leaveOneOutError = LeaveOneOut(from, to, [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
+      return bmr::FitRigidTransform(a, b).Apply(x);
+    });
+    tps.leaveOneOutError = LeaveOneOut(from, to, [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
+      return bmr::ThinPlateSpline(a, b).Apply(x);
+    });
     rigid.leaveOneOutRms = Rms(rigid.leaveOneOutError);
     tps.leaveOneOutRms = Rms(tps.leaveOneOutError);
   }
@@ -395,7 +394,10 @@ ReferenceMethods(const ImageBase<3> * reference, const PointList & from, const P
 
 /** The planning anatomy left where it was: what the markers' motion is measured against. */
 MarkerMethodResult
-Unmoved(const BiomechanicalLabelImageType * planningLabels, const PointList & from, const PointList & to, bool leaveOneOut)
+Unmoved(const BiomechanicalLabelImageType * planningLabels,
+        const PointList &                   from,
+        const PointList &                   to,
+        bool                                leaveOneOut)
 {
   MarkerMethodResult none;
   none.method = "none";
@@ -422,8 +424,9 @@ CheckMarkersInMesh(const bmr::TetrahedralMesh & mesh, const std::vector<std::str
     if (!bmr::LocateInMesh(mesh, from[k], where))
     {
       bmr::Fail("EstimateTreatmentFromMarkers",
-                "planning marker \"" + ids[k] + "\" lies outside the meshed box (in a lumen, bone or beyond the "
-                "box margin); widen the box margin or check the marker file");
+                "planning marker \"" + ids[k] +
+                  "\" lies outside the meshed box (in a lumen, bone or beyond the "
+                  "box margin); widen the box margin or check the marker file");
     }
   }
 }
@@ -447,14 +450,16 @@ EstimateTreatmentFromMarkers(const BiomechanicalLabelImageType * planningLabels,
   {
     bmr::Fail("EstimateTreatmentFromMarkers", "the box margin, control spacing and mesh scale must be finite and > 0");
   }
-  MarkerResult             r;
-  pipeline::StageClock     clock(observer, r.stages);
-  PointList                from, to;
+  MarkerResult         r;
+  pipeline::StageClock clock(observer, r.stages);
+  PointList            from, to;
   PairMarkers(planningMarkers, treatmentMarkers, r.markerIds, from, to);
   const bmr::SceneLabel * organ = scene.FindLabel(settings.organ);
-  if (organ == nullptr || (organ->role != bmr::LabelRoleEnum::Material && organ->role != bmr::LabelRoleEnum::UnknownMaterial))
+  if (organ == nullptr ||
+      (organ->role != bmr::LabelRoleEnum::Material && organ->role != bmr::LabelRoleEnum::UnknownMaterial))
   {
-    bmr::Fail("EstimateTreatmentFromMarkers", "the organ \"" + settings.organ + "\" is not a simulated label of the scene");
+    bmr::Fail("EstimateTreatmentFromMarkers",
+              "the organ \"" + settings.organ + "\" is not a simulated label of the scene");
   }
   const bmr::Scene boxScene = MarkerScene(scene, settings, r);
   const bool       leaveOneOut = settings.leaveOneOut && from.size() >= 3;
@@ -465,8 +470,12 @@ EstimateTreatmentFromMarkers(const BiomechanicalLabelImageType * planningLabels,
 
   clock.Begin("FEM fit to the markers (surface forces, Levenberg-Marquardt)");
   const bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(boxScene, r.state.mesh);
-  BoxModel box{ r.state.mesh, bmr::MakeForwardModel(boxScene, r.state.mesh, bmr::SceneMaterials(boxScene)), nullptr, settings };
-  box.loads = std::make_unique<bmr::OrganSurfaceForces>(r.state.mesh, bc.dirichletNodes, bc.dirichletValues,
+  BoxModel                      box{
+    r.state.mesh, bmr::MakeForwardModel(boxScene, r.state.mesh, bmr::SceneMaterials(boxScene)), nullptr, settings
+  };
+  box.loads = std::make_unique<bmr::OrganSurfaceForces>(r.state.mesh,
+                                                        bc.dirichletNodes,
+                                                        bc.dirichletValues,
                                                         bmr::NodesOnLabelSurface(r.state.mesh, organ->value),
                                                         settings.controlSpacing);
   r.forceScale = ForceScale(r.state.mesh, boxScene, organ->value, box.loads->GetSurfaceNodes().size());
@@ -556,7 +565,9 @@ MeanOneSidedSurfaceDistance(const BiomechanicalLabelImageType * truth,
 } // namespace
 
 void
-EvaluateMarkerMethods(MarkerResult & result, const BiomechanicalLabelImageType * treatmentLabels, std::int32_t organLabel)
+EvaluateMarkerMethods(MarkerResult &                      result,
+                      const BiomechanicalLabelImageType * treatmentLabels,
+                      std::int32_t                        organLabel)
 {
   if (treatmentLabels == nullptr)
   {
@@ -573,7 +584,8 @@ EvaluateMarkerMethods(MarkerResult & result, const BiomechanicalLabelImageType *
     const LabelOverlap o = ComputeLabelOverlap(m.warpedLabels.GetPointer(), treatmentLabels, organLabel);
     if (o.inB == 0)
     {
-      bmr::Fail("EvaluateMarkerMethods", "the treatment labels contain no voxel of label " + std::to_string(organLabel));
+      bmr::Fail("EvaluateMarkerMethods",
+                "the treatment labels contain no voxel of label " + std::to_string(organLabel));
     }
     m.intersectionOverUnion = static_cast<double>(o.inBoth) / static_cast<double>(o.inA + o.inB - o.inBoth);
     m.meanSurfaceDistance = MeanOneSidedSurfaceDistance(treatmentLabels, m.warpedLabels.GetPointer(), organLabel);

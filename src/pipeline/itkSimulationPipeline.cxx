@@ -139,20 +139,23 @@ SimulateLabelImage(const BiomechanicalLabelImageType * movingLabels,
 {
   std::vector<PipelineStage> stages;
   pipeline::StageClock       clock(observer, stages);
-  SimulationResult           out =
-    SimulateMesh(pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)"), scene, reference,
-                 movingLabels, observer, pushField);
+  SimulationResult out = SimulateMesh(pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)"),
+                                      scene,
+                                      reference,
+                                      movingLabels,
+                                      observer,
+                                      pushField);
   out.stages.insert(out.stages.begin(), stages.begin(), stages.end());
   return out;
 }
 
 SimulationResult
-SimulateMesh(bmr::TetrahedralMesh  mesh,
-             const bmr::Scene &    scene,
-             const ImageBase<3> *  reference,
-             const ImageBase<3> *  movingReference,
-             PipelineObserver *    observer,
-             bool                  pushField)
+SimulateMesh(bmr::TetrahedralMesh mesh,
+             const bmr::Scene &   scene,
+             const ImageBase<3> * reference,
+             const ImageBase<3> * movingReference,
+             PipelineObserver *   observer,
+             bool                 pushField)
 {
   SimulationResult     out;
   pipeline::StageClock clock(observer, out.stages);

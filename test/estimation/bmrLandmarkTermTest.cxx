@@ -153,17 +153,19 @@ MarkersAreFitted()
   m.loads->SetRegularization(1e-6);
   const bmr::LandmarkTerm  term(m.mesh, m.Targets(1.0));
   bmr::EstimationObjective objective(*m.model, *m.loads, { &term }, {});
-  const auto solution = objective.SolveLoadsGaussNewton(std::vector<double>(objective.GetNumberOfParameters(), 0.0), 30, 1e-10);
+  const auto               solution =
+    objective.SolveLoadsGaussNewton(std::vector<double>(objective.GetNumberOfParameters(), 0.0), 30, 1e-10);
   const auto stats = term.ComputeStatistics(objective.ComputeDisplacement(solution.parameters));
   std::cout << "fit: " << solution.iterations << " iterations, marker RMS " << stats[0].rms << " mm" << std::endl;
-  return Expect(stats[0].rms < 1e-3, "LM fits three markers moved by 1.1 mm to < 1e-3 mm (RMS " + ToString(stats[0].rms) + ")");
+  return Expect(stats[0].rms < 1e-3,
+                "LM fits three markers moved by 1.1 mm to < 1e-3 mm (RMS " + ToString(stats[0].rms) + ")");
 }
 
 bool
 RigidAndSplineReproduceKnownMotions()
 {
-  const double             angle = 0.2;
-  bmr::RigidTransform      truth;
+  const double        angle = 0.2;
+  bmr::RigidTransform truth;
   truth.rotation = { { std::cos(angle), -std::sin(angle), 0, std::sin(angle), std::cos(angle), 0, 0, 0, 1 } };
   truth.translation = { { 3.0, -2.0, 1.5 } };
   const std::vector<bmr::Point3> from = { { { 10, 0, 0 } }, { { 0, 12, 1 } }, { { -3, -4, 8 } }, { { 5, 5, -6 } } };
@@ -183,29 +185,32 @@ RigidAndSplineReproduceKnownMotions()
   {
     worst = std::max(worst, std::abs(fitted.translation[i] - truth.translation[i]));
   }
-  bool ok = Expect(worst < 1e-10, "rigid motion from 3 markers (max error " + ToString(worst) + ")");
+  bool              ok = Expect(worst < 1e-10, "rigid motion from 3 markers (max error " + ToString(worst) + ")");
   const bmr::Point3 back = fitted.ApplyInverse(fitted.Apply(from[3]));
   ok &= Expect(std::abs(back[0] - from[3][0]) + std::abs(back[1] - from[3][1]) + std::abs(back[2] - from[3][2]) < 1e-10,
                "ApplyInverse undoes Apply");
   // Two markers along x moved along y: the smallest rotation turns x into y (a quarter turn about z).
-  const bmr::RigidTransform two = bmr::FitRigidTransform({ { { -1, 0, 0 } }, { { 1, 0, 0 } } }, { { { 0, -1, 0 } }, { { 0, 1, 0 } } });
-  const bmr::Point3         z = two.Apply({ { 0, 0, 1 } });
+  const bmr::RigidTransform two =
+    bmr::FitRigidTransform({ { { -1, 0, 0 } }, { { 1, 0, 0 } } }, { { { 0, -1, 0 } }, { { 0, 1, 0 } } });
+  const bmr::Point3 z = two.Apply({ { 0, 0, 1 } });
   ok &= Expect(std::abs(z[2] - 1.0) < 1e-12 && std::abs(two.rotation[3] - 1.0) < 1e-12,
                "two markers: the smallest rotation, about the normal of both lines");
   // The spline: exact at the markers; with 4 non-coplanar markers an affine motion is reproduced everywhere.
-  const double A[3][3] = { { 1.05, 0.02, 0.0 }, { -0.03, 0.97, 0.01 }, { 0.0, 0.04, 1.02 } };
+  const double             A[3][3] = { { 1.05, 0.02, 0.0 }, { -0.03, 0.97, 0.01 }, { 0.0, 0.04, 1.02 } };
   std::vector<bmr::Point3> affine;
   for (const auto & x : from)
   {
-    affine.push_back({ { A[0][0] * x[0] + A[0][1] * x[1] + A[0][2] * x[2] + 1.0, A[1][0] * x[0] + A[1][1] * x[1] + A[1][2] * x[2] - 2.0,
+    affine.push_back({ { A[0][0] * x[0] + A[0][1] * x[1] + A[0][2] * x[2] + 1.0,
+                         A[1][0] * x[0] + A[1][1] * x[1] + A[1][2] * x[2] - 2.0,
                          A[2][0] * x[0] + A[2][1] * x[1] + A[2][2] * x[2] + 0.5 } });
   }
   const bmr::ThinPlateSpline spline(from, affine);
   const bmr::Point3          probe{ { 2.0, -3.0, 4.0 } };
   const bmr::Point3          y = spline.Apply(probe);
   double                     affineError = 0.0;
-  const double               expected[3] = { A[0][0] * 2 - A[0][1] * 3 + A[0][2] * 4 + 1.0, A[1][0] * 2 - A[1][1] * 3 + A[1][2] * 4 - 2.0,
-                               A[2][0] * 2 - A[2][1] * 3 + A[2][2] * 4 + 0.5 };
+  const double               expected[3] = { A[0][0] * 2 - A[0][1] * 3 + A[0][2] * 4 + 1.0,
+                                             A[1][0] * 2 - A[1][1] * 3 + A[1][2] * 4 - 2.0,
+                                             A[2][0] * 2 - A[2][1] * 3 + A[2][2] * 4 + 0.5 };
   for (int c = 0; c < 3; ++c)
   {
     affineError = std::max(affineError, std::abs(y[c] - expected[c]));
@@ -227,15 +232,34 @@ BadInputIsNamed(const bmr::TetrahedralMesh & mesh)
 {
   using bmr::test::ExpectException;
   bool ok = ExpectException(
-    "marker outside", [&] { bmr::LandmarkTerm(mesh, { { "gold2", { { 40, 0, 0 } }, { { 40, 0, 0 } }, 1.0 } }); }, "gold2");
+    "marker outside",
+    [&] {
+      bmr::LandmarkTerm(mesh, { { "gold2", { { 40, 0, 0 } }, { { 40, 0, 0 } }, 1.0 } });
+    },
+    "gold2");
   ok &= ExpectException(
-    "all weights zero", [&] { bmr::LandmarkTerm(mesh, { { "a", { { 8, 0, 0 } }, { { 8, 0, 0 } }, 0.0 } }); }, "weight 0");
+    "all weights zero",
+    [&] {
+      bmr::LandmarkTerm(mesh, { { "a", { { 8, 0, 0 } }, { { 8, 0, 0 } }, 0.0 } });
+    },
+    "weight 0");
   ok &= ExpectException(
-    "NaN target", [&] { bmr::LandmarkTerm(mesh, { { "a", { { 8, 0, 0 } }, { { NAN, 0, 0 } }, 1.0 } }); }, "not finite");
-  ok &= ExpectException("rigid sizes", [] { bmr::FitRigidTransform({ { { 0, 0, 0 } } }, {}); }, "non-empty");
+    "NaN target",
+    [&] {
+      bmr::LandmarkTerm(mesh, { { "a", { { 8, 0, 0 } }, { { NAN, 0, 0 } }, 1.0 } });
+    },
+    "not finite");
+  ok &= ExpectException(
+    "rigid sizes",
+    [] {
+      bmr::FitRigidTransform({ { { 0, 0, 0 } } }, {});
+    },
+    "non-empty");
   ok &= ExpectException(
     "coinciding spline markers",
-    [] { bmr::ThinPlateSpline({ { { 0, 0, 0 } }, { { 0, 0, 0 } } }, { { { 1, 0, 0 } }, { { 1, 0, 0 } } }); },
+    [] {
+      bmr::ThinPlateSpline({ { { 0, 0, 0 } }, { { 0, 0, 0 } } }, { { { 1, 0, 0 } }, { { 1, 0, 0 } } });
+    },
     "coincide");
   return ok;
 }

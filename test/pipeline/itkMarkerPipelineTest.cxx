@@ -123,15 +123,16 @@ itkMarkerPipelineTest(int, char *[])
   bmr::PelvisPhantomParameters p;
   p.grid.size = { { 100, 80, 80 } };
   p.grid.spacing = { { 2.0, 2.0, 2.0 } };
-  const bmr::PhantomVolume volume = bmr::MakePelvisPhantom(p);
-  const auto planning = itk::MakeImageOnGrid<LabelImage>(volume.grid, volume.labels);
-  const auto treatment = Translated(planning);
-  const bmr::Point3 c = ProstateCentroid(planning);
-  const double      offsets[3][3] = { { 6, 2, -4 }, { -5, 4, 3 }, { 1, -6, 5 } };
+  const bmr::PhantomVolume   volume = bmr::MakePelvisPhantom(p);
+  const auto                 planning = itk::MakeImageOnGrid<LabelImage>(volume.grid, volume.labels);
+  const auto                 treatment = Translated(planning);
+  const bmr::Point3          c = ProstateCentroid(planning);
+  const double               offsets[3][3] = { { 6, 2, -4 }, { -5, 4, 3 }, { 1, -6, 5 } };
   std::vector<bmr::Landmark> from, to;
   for (int k = 0; k < 3; ++k)
   {
-    bmr::Landmark m{ "gold" + std::to_string(k + 1), { { c[0] + offsets[k][0], c[1] + offsets[k][1], c[2] + offsets[k][2] } } };
+    bmr::Landmark m{ "gold" + std::to_string(k + 1),
+                     { { c[0] + offsets[k][0], c[1] + offsets[k][1], c[2] + offsets[k][2] } } };
     from.push_back(m);
     for (int d = 0; d < 3; ++d)
     {
@@ -139,7 +140,7 @@ itkMarkerPipelineTest(int, char *[])
     }
     to.push_back(m);
   }
-  const bmr::Scene scene = bmr::PelvisPhantomScene(60.0, false);
+  const bmr::Scene  scene = bmr::PelvisPhantomScene(60.0, false);
   itk::MarkerResult r = itk::EstimateTreatmentFromMarkers(planning, nullptr, scene, from, to);
   itk::EvaluateMarkerMethods(r, treatment, bmr::PelvisProstate);
   std::cout << r.state.mesh.GetNumberOfTetrahedra() << " tetrahedra, " << r.loadParameters << " load parameters, "
@@ -153,19 +154,21 @@ itkMarkerPipelineTest(int, char *[])
   const auto & rigid = Method(r, "rigid");
   const auto & tps = Method(r, "tps");
   const auto & none = Method(r, "none");
-  bool ok = Expect(rigid.leaveOneOutRms < 1e-9 && Largest(rigid.fitResidual) < 1e-9,
+  bool         ok = Expect(rigid.leaveOneOutRms < 1e-9 && Largest(rigid.fitResidual) < 1e-9,
                    "rigid alignment reproduces a translation (LOO RMS " + ToString(rigid.leaveOneOutRms) + " mm)");
   ok &= Expect(tps.leaveOneOutRms < 1e-9 && Largest(tps.fitResidual) < 1e-9,
                "the spline reproduces a translation (LOO RMS " + ToString(tps.leaveOneOutRms) + " mm)");
   ok &= Expect(rigid.intersectionOverUnion >= 0.999,
                "the rigid warp reproduces the translated prostate (IoU " + ToString(rigid.intersectionOverUnion) + ")");
-  ok &= Expect(Largest(fem.fitResidual) < 0.05, "FEM fits the markers (max " + ToString(Largest(fem.fitResidual)) + " mm)");
-  ok &= Expect(fem.leaveOneOutRms < 0.35, "FEM predicts the left-out marker (RMS " + ToString(fem.leaveOneOutRms) + " mm)");
+  ok &=
+    Expect(Largest(fem.fitResidual) < 0.05, "FEM fits the markers (max " + ToString(Largest(fem.fitResidual)) + " mm)");
+  ok &=
+    Expect(fem.leaveOneOutRms < 0.35, "FEM predicts the left-out marker (RMS " + ToString(fem.leaveOneOutRms) + " mm)");
   ok &= Expect(fem.intersectionOverUnion > none.intersectionOverUnion + 0.1,
                "FEM moves the prostate towards the truth (IoU " + ToString(fem.intersectionOverUnion) + " against " +
                  ToString(none.intersectionOverUnion) + " unmoved)");
   // Pull-back at the prostate centroid: -shift within 10 %.
-  const auto field = fem.field;
+  const auto            field = fem.field;
   itk::Point<double, 3> x;
   for (int d = 0; d < 3; ++d)
   {
@@ -179,17 +182,22 @@ itkMarkerPipelineTest(int, char *[])
   {
     error += (d[k] + 2.0 * Shift[k]) * (d[k] + 2.0 * Shift[k]);
   }
-  ok &= Expect(std::sqrt(error) < 0.1 * std::sqrt(12.0), "FEM field at the prostate centre is the translation within 10 % (error " +
-                                                           ToString(std::sqrt(error)) + " mm)");
+  ok &= Expect(std::sqrt(error) < 0.1 * std::sqrt(12.0),
+               "FEM field at the prostate centre is the translation within 10 % (error " + ToString(std::sqrt(error)) +
+                 " mm)");
   ok &= Expect(r.warnings.size() == 0, "no warning with every modulus known");
 
   using bmr::test::ExpectException;
   auto renamed = to;
   renamed[1].id = "other";
-  ok &= ExpectException("unpaired id", [&] { itk::EstimateTreatmentFromMarkers(planning, nullptr, scene, from, renamed); }, "gold2");
+  ok &= ExpectException(
+    "unpaired id", [&] { itk::EstimateTreatmentFromMarkers(planning, nullptr, scene, from, renamed); }, "gold2");
   auto inBone = from;
   inBone[0].point = { { c[0], c[1], c[2] - 200.0 } };
-  ok &= ExpectException("marker outside the box", [&] { itk::EstimateTreatmentFromMarkers(planning, nullptr, scene, inBone, to); }, "gold1");
+  ok &= ExpectException(
+    "marker outside the box",
+    [&] { itk::EstimateTreatmentFromMarkers(planning, nullptr, scene, inBone, to); },
+    "gold1");
   std::cout << (ok ? "itkMarkerPipelineTest passed" : "itkMarkerPipelineTest FAILED") << std::endl;
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
