@@ -240,7 +240,7 @@ ReadLabelsOrRTStruct(const std::string &       path,
   std::map<std::string, std::int32_t> roiNameToLabel;
   itk::RTStructRasterizationOptions   options;
   options.ignoreUnmappedROIs = ignoreUnmappedROIs;
-  bool                                backgroundSet = false;
+  bool backgroundSet = false;
   for (const auto & label : scene.labels)
   {
     if (label.role != bmr::LabelRoleEnum::Outside)

@@ -303,9 +303,9 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
   /** The fixed seed centers as a tracking system reports them: with Gaussian noise of
    * PhantomSettings::trackingNoiseMM per axis, seeded by the phantom's seed (itk::AddTrackingNoise). */
   std::vector<bmr::Landmark> trackedLandmarks;
-  OrganProbabilityImages               fixedFractions; ///< per objective organ, with PhantomSettings::fractions
-  std::size_t                          truthTetrahedra{ 0 }, truthNodes{ 0 };
-  std::vector<PipelineStage>           stages;
+  OrganProbabilityImages     fixedFractions; ///< per objective organ, with PhantomSettings::fractions
+  std::size_t                truthTetrahedra{ 0 }, truthNodes{ 0 };
+  std::vector<PipelineStage> stages;
 };
 
 /** Makes a pair: the fixed images are the moving ones warped by a forward simulation with known moduli on

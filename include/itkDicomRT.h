@@ -31,7 +31,8 @@ namespace itk {
 /** Label map made from an RTSTRUCT: one label value per ROI, 0 (or the chosen background) elsewhere.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 using DicomRTLabelImageType = Image<std::int32_t, 3>;
-/** Dose grid [Gy]. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
+/** Dose grid [Gy]. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT
+ */
 using DicomRTDoseImageType = Image<float, 3>;
 
 /** \brief The DICOM Modality (0008,0060) of \a path, without its padding ("RTSTRUCT", "RTDOSE", "CT", ...).

@@ -337,8 +337,7 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer, bmr::Tet
     pipeline::StageClock meshClock(observer, pair.stages);
     truthMesh = pipeline::MeshLabelImage(truthLabels, pair.truthScene, meshClock, "mesh (CGAL Mesh_3)");
   }
-  const SimulationResult truth =
-    SimulateMesh(truthMesh, pair.truthScene, fixedReference, truthLabels, observer, false);
+  const SimulationResult truth = SimulateMesh(truthMesh, pair.truthScene, fixedReference, truthLabels, observer, false);
   pair.truthField = truth.pullBack;
   pair.truthTetrahedra = truth.mesh.GetNumberOfTetrahedra();
   pair.truthNodes = truth.mesh.GetNumberOfPoints();
