@@ -7,19 +7,7 @@
 # is refused in one line naming the file and the ROI.
 # Run with: cmake -DCLI=<biomechreg> -DDRIVER=<test driver> -DDIR=<spheres phantom dir> -DOUT=<scratch dir>
 #   -P biomechregRTStructRegister.cmake
-find_program(PLASTIMATCH plastimatch)
-if(NOT PLASTIMATCH)
-  message(FATAL_ERROR "plastimatch is not installed (scripts/setup.sh installs Debian's package)")
-endif()
-file(REMOVE_RECURSE ${OUT})
-file(MAKE_DIRECTORY ${OUT})
-
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${ARGN}: exit code ${rc}\n${out}\n${err}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/plastimatchCommon.cmake)
 
 run(${DRIVER} itkDicomRTTest masks ${DIR}/fixed_labels.nrrd ${OUT}/masks outer=1 inner=2)
 run(${PLASTIMATCH} convert --input ${DIR}/fixed_ct.nrrd --input-prefix ${OUT}/masks --output-dicom ${OUT}/dicom)

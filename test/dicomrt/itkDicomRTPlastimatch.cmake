@@ -2,19 +2,7 @@
 # (NRRD), plastimatch (Debian's, installed by scripts/setup.sh) converts them into a CT series + RTSTRUCT and
 # an RTDOSE, and itkDicomRTTest reads them back (Dice per organ, dose error) and checks the refusals.
 # Run with: cmake -DDRIVER=<test driver> -DOUT=<scratch dir> -P itkDicomRTPlastimatch.cmake
-find_program(PLASTIMATCH plastimatch)
-if(NOT PLASTIMATCH)
-  message(FATAL_ERROR "plastimatch is not installed (scripts/setup.sh installs Debian's package)")
-endif()
-file(REMOVE_RECURSE ${OUT})
-file(MAKE_DIRECTORY ${OUT})
-
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${ARGN}: exit code ${rc}\n${out}\n${err}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/plastimatchCommon.cmake)
 
 run(${DRIVER} itkDicomRTTest make ${OUT})
 # Structure names come from the masks' file names (Body, BLADDER, prostate).
