@@ -38,6 +38,7 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
   u.seed = args.Count("--uncertainty-seed", static_cast<unsigned int>(u.seed), 0, 4000000000u);
   u.threads = args.Count("--uncertainty-threads", u.threads, 1, 64);
   u.correctBias = args.Choice("--uncertainty-bias-correction", { "off", "on" }) == "on";
+  u.warmStart = args.Choice("--uncertainty-warm-start", { "on", "off" }) == "on";
   // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
   const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
                                                        { "--uncertainty-shift-voxels", &u.shiftVoxels },

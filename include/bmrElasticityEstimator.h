@@ -58,7 +58,8 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
 {
   unsigned int numberOfSweepSamples{ 10 }; ///< per unknown modulus, >= 3
   unsigned int maximumInnerIterations{ 2000 };
-  unsigned int maximumOuterIterations{ 20 }; ///< function evaluations of the outer L-BFGS-B
+  unsigned int maximumOuterIterations{ 20 }; ///< function evaluations of the outer search
+  double       outerStepTolerance{ 1e-3 };   ///< one unknown: stop when the next step in log E is shorter
   double       innerGradientTolerance{ 1e-5 };
   double       outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
   double       flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds
@@ -66,23 +67,29 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
   double       uncertaintyStep{ 0.05 };        ///< delta in log E of the curvature's central differences
   bool         limitElementInversion{ false }; ///< one parameter per wall node only
   bool         gaussNewtonInner{ false };      ///< Levenberg-Marquardt inner solve (reduced wall basis)
+  /** Warm start [kPa, unknowns' order]: when given, there is no sweep (and no coarse objective is needed) and
+   * the outer search starts here, its first step from startRelativeCurvature (EstimationResult's, of an
+   * earlier estimate of nearly the same data). Used by the resamples of the stated interval. */
+  std::vector<double> startModuli;
+  double              startRelativeCurvature{ 0.0 };
 };
 
 /** What ElasticityEstimator::Run() found. Vectors over the unknowns are in the order they were given. */
 struct BiomechanicalRegistration_EXPORT EstimationResult
 {
-  std::vector<double>             youngsModuli;   ///< kPa
-  std::vector<double>             loadParameters; ///< at the estimate
-  std::vector<double>             displacement;   ///< mm, 3N on the fine mesh
-  std::vector<double>             boundaryForces; ///< mN, 3N
-  double                          value{ 0.0 };   ///< Phi* [mm^2]
-  std::vector<IterationRecord>    sweep, history, outerIterations;
-  std::string                     outerStopCondition;
-  bool                            identifiable{ true };
-  std::string                     identifiabilityMessage;
-  std::vector<double>             logModulusSigma; ///< standard deviations of log E; empty when not computed
-  std::vector<double>             curvature;       ///< d2 Phi* / dlogE_i dlogE_j [mm^2], row-major, or empty
-  double                          residualStandardDeviation{ 0.0 }; ///< mm
+  std::vector<double>          youngsModuli;   ///< kPa
+  std::vector<double>          loadParameters; ///< at the estimate
+  std::vector<double>          displacement;   ///< mm, 3N on the fine mesh
+  std::vector<double>          boundaryForces; ///< mN, 3N
+  double                       value{ 0.0 };   ///< Phi* [mm^2]
+  std::vector<IterationRecord> sweep, history, outerIterations;
+  std::string                  outerStopCondition;
+  bool                         identifiable{ true };
+  std::string                  identifiabilityMessage;
+  std::vector<double>          logModulusSigma; ///< standard deviations of log E; empty when not computed
+  std::vector<double>          curvature;       ///< d2 Phi* / dlogE_i dlogE_j [mm^2], row-major, or empty
+  double relativeCurvature{ 0.0 };         ///< one unknown: the outer search's last secant of d2 Phi*/dlogE2, / Phi*
+  double residualStandardDeviation{ 0.0 }; ///< mm
   std::vector<ResidualStatistics> residuals;
   std::size_t                     rejectedSteps{ 0 };
   std::size_t                     invertedElements{ 0 };
@@ -101,9 +108,12 @@ struct BiomechanicalRegistration_EXPORT EstimationResult
  *   minima); the minimum is bracketed by the first sign change of \f$d\Phi^{*}/d\log E_k\f$ from - to + and
  *   interpolated linearly in log E_k. One unknown gives one sweep (dissertation), two or more give one
  *   pass of coordinate descent, which only starts the joint outer search;
- * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the bounds by itk::LBFGSBOptimizerv4 with the envelope
- *   gradient \f$ d\Phi^{*}/d\log E_m = \partial\Phi/\partial\log E_m \f$ at the inner optimum; the result is
- *   the best point visited;
+ * - outer: \f$\min_{\log E} \Phi^*(E)\f$ within the bounds with the envelope gradient
+ *   \f$ d\Phi^{*}/d\log E_m = \partial\Phi/\partial\log E_m \f$ at the inner optimum. One unknown: SecantSearch
+ *   on \f$ d\Phi^{*}/d\log E = 0 \f$, its first step from the sweep's curvature relative to \f$\Phi^*\f$ (the
+ *   fine mesh's \f$\Phi^*\f$ differs from the coarse one's by the number of nodes, and so does its
+ *   curvature), stopping when the next step in log E is below outerStepTolerance (0.1 % of E) or the gradient
+ *   below outerGradientTolerance; two or more: itk::LBFGSBOptimizerv4. The result is the best point visited;
  * - identifiability, per unknown: flat (relative variation of Phi* over its bounds below
  *   flatnessThreshold), or the sweep's minimum on a bound, or the estimate on a bound;
  * - uncertainty: \f$ H = \partial^2\Phi^{*}/\partial\log E^2 \f$ by central differences of the envelope

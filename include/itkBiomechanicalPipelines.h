@@ -140,6 +140,9 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
    * Off by default: on the pelvis phantoms b came from the mesh jitter (the default mesh sits near a minimum of
    * the mesh dependence), and correcting by it made the estimate worse in both calibration runs. */
   bool correctBias{ false };
+  /** Each resample's outer search starts at the fit with the fit's curvature, without the sweep and its coarse
+   * mesh (on by default; off: each resample sweeps as the fit did). */
+  bool warmStart{ true };
 };
 
 /** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b

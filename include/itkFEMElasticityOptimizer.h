@@ -145,6 +145,16 @@ public:
   /** Step delta in log E of the central differences for the curvature of Phi* (default 0.05). */
   itkSetClampMacro(UncertaintyStep, double, 1e-4, 1.0);
   itkGetConstMacro(UncertaintyStep, double);
+  /** Warm start from an earlier estimate of nearly the same data: moduli [kPa] by unknown label name (all of
+   * them, within their bounds) and that estimate's GetResult().relativeCurvature. The sweep is then skipped (no
+   * coarse mesh needed) and the outer search starts there. Empty (default): sweep. */
+  void
+  SetWarmStart(const std::map<std::string, double> & youngsModuli, double relativeCurvature)
+  {
+    m_WarmStartModuli = youngsModuli;
+    m_WarmStartRelativeCurvature = relativeCurvature;
+    this->Modified();
+  }
 
   /** The mesh with displacement [mm] and estimated wall forces [mN]. */
   MeshObjectType *
@@ -250,20 +260,22 @@ private:
   bmr::Scene               m_Scene;
   std::vector<std::string> m_DistanceMapNames;
   // Defaults: those of the library's estimator and wall loads (one place, read by the CLI too).
-  unsigned int  m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
-  unsigned int  m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
-  unsigned int  m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
-  double        m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
-  double        m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
-  double        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
-  bool          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
-  bool          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
-  double        m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
-  double        m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
-  double        m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
-  bool          m_WallMotionAlongNormals{ bmr::WallLoadSettings{}.motion == bmr::WallMotionEnum::AlongNormals };
-  SizeValueType m_NumberOfRejectedSteps{ 0 };
-  SizeValueType m_NumberOfInvertedElements{ 0 };
+  unsigned int m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
+  unsigned int m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
+  unsigned int m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
+  double       m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
+  double       m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
+  double       m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
+  bool         m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
+  bool         m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
+  double       m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
+  double       m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
+  double       m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
+  bool         m_WallMotionAlongNormals{ bmr::WallLoadSettings{}.motion == bmr::WallMotionEnum::AlongNormals };
+  std::map<std::string, double> m_WarmStartModuli;
+  double                        m_WarmStartRelativeCurvature{ 0.0 };
+  SizeValueType                 m_NumberOfRejectedSteps{ 0 };
+  SizeValueType                 m_NumberOfInvertedElements{ 0 };
   std::map<std::string, double> m_ModulusUncertainty;
   double                        m_ResidualStandardDeviation{ 0.0 };
   double                        m_ModulusCurvature{ 0.0 };

@@ -20,6 +20,7 @@
 #include "bmrError.h"
 #include "bmrStopwatch.h"
 #include "bmrInnerSolve.h"
+#include "bmrSecantSearch.h"
 
 #include "itkLBFGSBOptimizerv4.h"
 
@@ -86,7 +87,8 @@ struct SweepAnalysis
 {
   double      modulus{ 0.0 };
   bool        identifiable{ true };
-  bool        onBound{ false }; ///< not flat, but no sign change of dPhi*/dlogE: the minimum is on a bound
+  bool        onBound{ false };         ///< not flat, but no sign change of dPhi*/dlogE: the minimum is on a bound
+  double      relativeCurvature{ 0.0 }; ///< (d2Phi*/dlogE2) / Phi* across the bracket; 0 without one
   std::string message;
 };
 
@@ -106,6 +108,7 @@ Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const Un
   std::size_t best = sweep.back().logModulusGradient[k] < 0.0 ? sweep.size() - 1 : 0;
   double      logE = std::log(sweep[best].youngsModuli[k]);
   bool        bracketed = false;
+  double      curvature = 0.0;
   for (std::size_t i = 0; i + 1 < sweep.size() && !bracketed; ++i)
   {
     const double g0 = sweep[i].logModulusGradient[k], g1 = sweep[i + 1].logModulusGradient[k];
@@ -114,11 +117,15 @@ Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const Un
       const double l0 = std::log(sweep[i].youngsModuli[k]), l1 = std::log(sweep[i + 1].youngsModuli[k]);
       logE = l0 + (l1 - l0) * g0 / (g0 - g1);
       bracketed = true;
+      // Phi* grows with the number of objective nodes and so does its curvature: relative to Phi*, the
+      // coarse sweep's curvature predicts the fine mesh's.
+      curvature = (g1 - g0) / (l1 - l0) / std::max(0.5 * (sweep[i].value + sweep[i + 1].value), 1e-300);
     }
   }
   SweepAnalysis      a;
   std::ostringstream msg;
   a.modulus = std::exp(logE);
+  a.relativeCurvature = curvature;
   const double variation = (vmax - vmin) / std::max(vmin, 1e-300);
   if (variation < flatness)
   {
@@ -251,8 +258,13 @@ struct ElasticityEstimator::Stages
   }
   void
   Sweep();
+  struct FineEvaluations;
   void
   Fine();
+  void
+  OuterSecant(FineEvaluations & fine);
+  void
+  OuterLBFGSB(FineEvaluations & fine);
   void
   JudgeIdentifiability(const std::vector<double> & estimate);
   void
@@ -290,100 +302,143 @@ ElasticityEstimator::Stages::Sweep()
   }
 }
 
+/** The fine stage's inner solves: each warm-started from the previous optimum, recorded, and the best
+ * visited kept (an outer search may end on a trial point). */
+struct ElasticityEstimator::Stages::FineEvaluations
+{
+  Stages &            stages;
+  LoadSolution        last;
+  unsigned int        evaluation{ 0 };
+  std::vector<double> bestModuli, bestLoads;
+  double              bestValue{ std::numeric_limits<double>::infinity() };
+
+  const LoadSolution &
+  At(const std::vector<double> & E)
+  {
+    if (evaluation > 0 && stages.result.history.back().youngsModuli == E)
+    {
+      return last; // an outer search starts by evaluating the point it was given
+    }
+    const auto ts = Clock::now();
+    last = stages.Solve(stages.estimator.m_Fine, E, stages.loads);
+    stages.loads = last.parameters;
+    stages.Record(MakeRecord("fine", evaluation, E, last, SecondsSince(ts)),
+                  stages.result.history,
+                  std::min(0.99, 0.5 + 0.02 * double(evaluation + 1)));
+    ++evaluation;
+    if (last.value < bestValue)
+    {
+      bestValue = last.value;
+      bestModuli = E;
+      bestLoads = stages.loads;
+    }
+    return last;
+  }
+};
+
 void
 ElasticityEstimator::Stages::Fine()
 {
-  EstimationObjective & fine = estimator.m_Fine;
-  LoadSolution          last;
-  unsigned int          evaluation = 0;
-  const auto            innerAt = [&](const std::vector<double> & E) {
-    if (!result.history.empty() && result.history.back().youngsModuli == E)
-    {
-      return last.value; // L-BFGS-B starts by evaluating the point it was given
-    }
-    const auto ts = Clock::now();
-    last = Solve(fine, E, loads);
-    loads = last.parameters;
-    Record(MakeRecord("fine", evaluation, E, last, SecondsSince(ts)),
-           result.history,
-           std::min(0.99, 0.5 + 0.02 * double(evaluation + 1)));
-    ++evaluation;
-    return last.value;
-  };
-  std::vector<double> bestModuli = moduli;
-  double              bestValue = innerAt(moduli);
-  std::vector<double> bestLoads = loads;
-  if (!moduli.empty())
+  FineEvaluations fine{ *this };
+  fine.At(moduli);
+  if (moduli.size() == 1)
   {
-    // Outer: bounded L-BFGS over log E (vnl's L-BFGS-B through ITK).
-    auto metric = FunctionMetric::New();
-    metric->m_Function = [&](const std::vector<double> & logE, std::vector<double> * g) {
-      std::vector<double> E(logE.size());
-      for (std::size_t m = 0; m < E.size(); ++m)
-      {
-        E[m] = std::exp(logE[m]);
-      }
-      const double value = innerAt(E);
-      if (value < bestValue)
-      {
-        bestValue = value;
-        bestModuli = E;
-        bestLoads = loads;
-      }
-      if (g)
-      {
-        *g = last.logModulusGradient;
-      }
-      return value;
-    };
-    const unsigned int                         m = static_cast<unsigned int>(moduli.size());
-    FunctionMetric::ParametersType             p(m);
-    itk::LBFGSBOptimizerv4::BoundValueType     lo(m), hi(m);
-    itk::LBFGSBOptimizerv4::BoundSelectionType select(m);
-    for (unsigned int k = 0; k < m; ++k)
-    {
-      p[k] = std::log(moduli[k]);
-      lo[k] = std::log(Unknowns()[k].lowerBound);
-      hi[k] = std::log(Unknowns()[k].upperBound);
-      select[k] = 2; // both bounds
-    }
-    metric->SetParameters(p);
-    auto optimizer = itk::LBFGSBOptimizerv4::New();
-    optimizer->SetMetric(metric);
-    optimizer->SetLowerBound(lo);
-    optimizer->SetUpperBound(hi);
-    optimizer->SetBoundSelection(select);
-    optimizer->SetNumberOfIterations(settings.maximumOuterIterations);
-    optimizer->SetMaximumNumberOfFunctionEvaluations(settings.maximumOuterIterations);
-    optimizer->SetGradientConvergenceTolerance(settings.outerGradientTolerance * std::max(bestValue, 1e-12));
-    optimizer->SetCostFunctionConvergenceFactor(1e7);
-    // The accepted iterates of L-BFGS-B (its line searches' trial points are in the history only).
-    optimizer->AddObserver(itk::IterationEvent(), [&](const itk::EventObject &) {
-      IterationRecord r = result.history.back();
-      r.stage = "outer";
-      r.iteration = static_cast<unsigned int>(optimizer->GetCurrentIteration());
-      if (!result.outerIterations.empty() && result.outerIterations.back().iteration == r.iteration)
-      {
-        result.outerIterations.pop_back(); // the event comes more than once per iteration
-      }
-      r.value = optimizer->GetCurrentMetricValue();
-      const auto & position = optimizer->GetCurrentPosition();
-      for (unsigned int k = 0; k < position.GetSize(); ++k)
-      {
-        r.youngsModuli[k] = std::exp(position[k]);
-      }
-      result.outerIterations.push_back(r);
-    });
-    {
-      const std::lock_guard<std::mutex> serialized(OuterSearchMutex());
-      optimizer->StartOptimization();
-    }
-    result.outerStopCondition = optimizer->GetStopConditionDescription();
+    OuterSecant(fine);
   }
-  // The best point visited (L-BFGS-B may end on a trial point).
-  result.value = bestValue;
-  moduli = bestModuli;
-  loads = bestLoads;
+  else if (!moduli.empty())
+  {
+    OuterLBFGSB(fine);
+  }
+  result.value = fine.bestValue;
+  moduli = fine.bestModuli;
+  loads = fine.bestLoads;
+}
+
+void
+ElasticityEstimator::Stages::OuterSecant(FineEvaluations & fine)
+{
+  const UnknownModulus & unknown = Unknowns()[0];
+  SecantSearchSettings   search;
+  search.lowerBound = std::log(unknown.lowerBound);
+  search.upperBound = std::log(unknown.upperBound);
+  search.curvatureGuess = status[0].relativeCurvature * fine.bestValue;
+  search.stepTolerance = settings.outerStepTolerance;
+  search.derivativeTolerance = settings.outerGradientTolerance * std::max(fine.bestValue, 1e-12);
+  search.maximumEvaluations = settings.maximumOuterIterations;
+  const auto evaluate = [&](double logE) {
+    const LoadSolution & s = fine.At({ std::exp(logE) });
+    IterationRecord      r = result.history.back();
+    r.stage = "outer";
+    r.iteration = static_cast<unsigned int>(result.outerIterations.size());
+    result.outerIterations.push_back(r);
+    return SecantPoint{ logE, s.value, s.logModulusGradient[0] };
+  };
+  const SecantSearchResult found = SecantSearch(evaluate, std::log(moduli[0]), search);
+  result.outerStopCondition = "secant search: " + found.stopCondition;
+  result.relativeCurvature = found.curvature / std::max(fine.bestValue, 1e-300);
+}
+
+void
+ElasticityEstimator::Stages::OuterLBFGSB(FineEvaluations & fine)
+{
+  // Bounded L-BFGS over log E (vnl's L-BFGS-B through ITK).
+  auto metric = FunctionMetric::New();
+  metric->m_Function = [&](const std::vector<double> & logE, std::vector<double> * g) {
+    std::vector<double> E(logE.size());
+    for (std::size_t m = 0; m < E.size(); ++m)
+    {
+      E[m] = std::exp(logE[m]);
+    }
+    const LoadSolution & s = fine.At(E);
+    if (g)
+    {
+      *g = s.logModulusGradient;
+    }
+    return s.value;
+  };
+  const unsigned int                         m = static_cast<unsigned int>(moduli.size());
+  FunctionMetric::ParametersType             p(m);
+  itk::LBFGSBOptimizerv4::BoundValueType     lo(m), hi(m);
+  itk::LBFGSBOptimizerv4::BoundSelectionType select(m);
+  for (unsigned int k = 0; k < m; ++k)
+  {
+    p[k] = std::log(moduli[k]);
+    lo[k] = std::log(Unknowns()[k].lowerBound);
+    hi[k] = std::log(Unknowns()[k].upperBound);
+    select[k] = 2; // both bounds
+  }
+  metric->SetParameters(p);
+  auto optimizer = itk::LBFGSBOptimizerv4::New();
+  optimizer->SetMetric(metric);
+  optimizer->SetLowerBound(lo);
+  optimizer->SetUpperBound(hi);
+  optimizer->SetBoundSelection(select);
+  optimizer->SetNumberOfIterations(settings.maximumOuterIterations);
+  optimizer->SetMaximumNumberOfFunctionEvaluations(settings.maximumOuterIterations);
+  optimizer->SetGradientConvergenceTolerance(settings.outerGradientTolerance * std::max(fine.bestValue, 1e-12));
+  optimizer->SetCostFunctionConvergenceFactor(1e7);
+  // The accepted iterates of L-BFGS-B (its line searches' trial points are in the history only).
+  optimizer->AddObserver(itk::IterationEvent(), [&](const itk::EventObject &) {
+    IterationRecord r = result.history.back();
+    r.stage = "outer";
+    r.iteration = static_cast<unsigned int>(optimizer->GetCurrentIteration());
+    if (!result.outerIterations.empty() && result.outerIterations.back().iteration == r.iteration)
+    {
+      result.outerIterations.pop_back(); // the event comes more than once per iteration
+    }
+    r.value = optimizer->GetCurrentMetricValue();
+    const auto & position = optimizer->GetCurrentPosition();
+    for (unsigned int k = 0; k < position.GetSize(); ++k)
+    {
+      r.youngsModuli[k] = std::exp(position[k]);
+    }
+    result.outerIterations.push_back(r);
+  });
+  {
+    const std::lock_guard<std::mutex> serialized(OuterSearchMutex());
+    optimizer->StartOptimization();
+  }
+  result.outerStopCondition = optimizer->GetStopConditionDescription();
 }
 
 void
@@ -481,6 +536,18 @@ ElasticityEstimator::ElasticityEstimator(EstimationObjective &       fine,
       Fail("ElasticityEstimator", "the bounds of \"" + u.name + "\" must satisfy 0 < lower < upper < inf [kPa]");
     }
   }
+  if (!m_Settings.startModuli.empty() && m_Settings.startModuli.size() != m_Unknowns.size())
+  {
+    Fail("ElasticityEstimator", "the warm start must give one modulus per unknown");
+  }
+  for (std::size_t k = 0; k < m_Settings.startModuli.size(); ++k)
+  {
+    const double E = m_Settings.startModuli[k];
+    if (!(E >= m_Unknowns[k].lowerBound && E <= m_Unknowns[k].upperBound))
+    {
+      Fail("ElasticityEstimator", "the warm start of \"" + m_Unknowns[k].name + "\" lies outside its bounds");
+    }
+  }
   if (m_Settings.numberOfSweepSamples < 3)
   {
     Fail("ElasticityEstimator",
@@ -497,7 +564,12 @@ ElasticityEstimator::Run()
 {
   Stages run(*this);
   auto   t0 = Clock::now();
-  if (!m_Unknowns.empty())
+  if (!m_Settings.startModuli.empty())
+  {
+    run.moduli = m_Settings.startModuli;
+    run.status[0].relativeCurvature = m_Settings.startRelativeCurvature;
+  }
+  else if (!m_Unknowns.empty())
   {
     run.Sweep();
   }

@@ -133,6 +133,19 @@ FEMElasticityOptimizer::Settings() const
   s.limitElementInversion = m_LimitElementInversion;
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
   s.gaussNewtonInner = m_WallControlSpacing > 0.0;
+  if (!m_WarmStartModuli.empty())
+  {
+    for (const bmr::UnknownModulus & u : bmr::SceneUnknownModuli(m_Scene))
+    {
+      const auto it = m_WarmStartModuli.find(u.name);
+      if (it == m_WarmStartModuli.end())
+      {
+        itkExceptionMacro(<< "the warm start gives no modulus for the unknown label \"" << u.name << "\"");
+      }
+      s.startModuli.push_back(it->second);
+    }
+    s.startRelativeCurvature = m_WarmStartRelativeCurvature;
+  }
   return s;
 }
 
@@ -229,6 +242,8 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
   os << indent << "EstimateUncertainty: " << (m_EstimateUncertainty ? "On" : "Off") << std::endl;
   os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;
+  os << indent << "WarmStart: " << m_WarmStartModuli.size() << " moduli, relative curvature "
+     << m_WarmStartRelativeCurvature << std::endl;
   os << indent << "LimitElementInversion: " << (m_LimitElementInversion ? "On" : "Off") << std::endl;
   os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
   os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;

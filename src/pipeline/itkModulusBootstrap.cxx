@@ -543,14 +543,21 @@ Resample(unsigned int                        k,
   StageClock                 quiet(nullptr, untimed);
   const bmr::Scene           scene = ScaledMeshSizes(*setup.scene, jitter);
   const bmr::TetrahedralMesh fine = MeshLabelImage(movingLabels, scene, quiet, "resample mesh");
-  bmr::TetrahedralMesh       coarse;
-  if (setup.coarse)
+  EstimationSetup            resample = setup;
+  resample.fine = &fine;
+  bmr::TetrahedralMesh coarse;
+  if (u.warmStart)
+  {
+    // The fit's neighbourhood is where a rescan's minimum lies: no sweep, hence no coarse mesh.
+    resample.coarse = nullptr;
+    resample.warmStartModuli = r.youngsModulus;
+    resample.warmStartRelativeCurvature = r.estimation.relativeCurvature;
+  }
+  else if (setup.coarse)
   {
     coarse = MeshLabelImage(movingLabels, ScaledMeshSizes(scene, setup.settings->coarseFactor), quiet, "coarse");
+    resample.coarse = &coarse;
   }
-  EstimationSetup resample = setup;
-  resample.fine = &fine;
-  resample.coarse = setup.coarse ? &coarse : nullptr;
   bmr::TetrahedralMesh deformed;
   if (sim)
   {

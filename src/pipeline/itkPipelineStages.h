@@ -95,6 +95,10 @@ struct EstimationSetup
   const RegistrationSettings *   settings{ nullptr };
   std::vector<std::string>       probabilityOrgans;        ///< objective organs whose fixed data are probabilities
   const OrganProbabilityImages * probabilities{ nullptr }; ///< those data (may be null when there are none)
+  /** When given (a resample's estimation), the outer search starts here instead of sweeping: moduli [kPa] by
+   * name and the relative curvature of the estimate (FEMElasticityOptimizer::SetWarmStart). */
+  std::map<std::string, double> warmStartModuli;
+  double                        warmStartRelativeCurvature{ 0.0 };
 };
 
 /** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels. */

@@ -354,6 +354,10 @@ RunEstimation(const EstimationSetup &                                 setup,
   optimizer->SetWallControlSpacing(walls.controlSpacing);
   optimizer->SetWallRegularization(walls.regularization);
   optimizer->SetWallMotionAlongNormals(walls.motion == bmr::WallMotionEnum::AlongNormals);
+  if (!setup.warmStartModuli.empty())
+  {
+    optimizer->SetWarmStart(setup.warmStartModuli, setup.warmStartRelativeCurvature);
+  }
   ObserveIterations(optimizer, observer);
   optimizer->Update();
   return optimizer;

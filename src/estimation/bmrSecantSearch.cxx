@@ -1,0 +1,150 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrSecantSearch.h"
+
+#include "bmrError.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace bmr {
+namespace {
+void
+CheckSettings(const SecantSearchSettings & s, double start)
+{
+  if (!(std::isfinite(s.lowerBound) && std::isfinite(s.upperBound) && s.lowerBound < s.upperBound))
+  {
+    Fail("SecantSearch", "the bounds must be finite with lower < upper");
+  }
+  if (!(s.maximumStep > 0.0) || !(s.stepTolerance >= 0.0) || !(s.derivativeTolerance >= 0.0) ||
+      s.maximumEvaluations < 1 || !std::isfinite(start))
+  {
+    Fail("SecantSearch", "needs a finite start, a positive maximum step, non-negative tolerances and an evaluation");
+  }
+}
+
+/** \a p lies lower than \a q, or as low within rounding and with a smaller |f'| (near the minimum, f changes
+ * by f'' e^2 / 2, below its own precision, while f' still tells which point is closer). */
+bool
+Better(const SecantPoint & p, const SecantPoint & q)
+{
+  const double rounding = 8.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(p.value), std::abs(q.value));
+  return p.value < q.value - rounding ||
+         (std::abs(p.value - q.value) <= rounding && std::abs(p.derivative) < std::abs(q.derivative));
+}
+
+/** The interval [lo, hi] known to hold a stationary point: each end is a bound or a point whose derivative
+ * points inwards (f'(lo) < 0, f'(hi) > 0). */
+struct Bracket
+{
+  double lo, hi;
+  bool   loSampled{ false }, hiSampled{ false };
+
+  void
+  Update(const SecantPoint & p)
+  {
+    if (p.derivative > 0.0 && p.x < hi)
+    {
+      hi = p.x;
+      hiSampled = true;
+    }
+    else if (p.derivative < 0.0 && p.x > lo)
+    {
+      lo = p.x;
+      loSampled = true;
+    }
+  }
+  /** \a next kept strictly inside: at the far side's bound when that is unsampled, else bisected. */
+  double
+  Keep(const SecantPoint & p, double next) const
+  {
+    if (next > lo && next < hi)
+    {
+      return next;
+    }
+    if (p.derivative > 0.0)
+    {
+      return loSampled ? 0.5 * (lo + std::min(p.x, hi)) : lo;
+    }
+    return hiSampled ? 0.5 * (hi + std::max(p.x, lo)) : hi;
+  }
+};
+} // namespace
+
+SecantSearchResult
+SecantSearch(const std::function<SecantPoint(double x)> & evaluate, double start, const SecantSearchSettings & s)
+{
+  CheckSettings(s, start);
+  SecantSearchResult r;
+  Bracket            bracket{ s.lowerBound, s.upperBound };
+  SecantPoint        p = evaluate(std::clamp(start, s.lowerBound, s.upperBound));
+  SecantPoint        previous = p;
+  double             curvature = s.curvatureGuess;
+  r.evaluations = 1;
+  r.best = p;
+  r.curvature = curvature;
+  for (;;)
+  {
+    if (!std::isfinite(p.value) || !std::isfinite(p.derivative))
+    {
+      std::ostringstream msg;
+      msg << "the function or its derivative is not finite at x = " << p.x;
+      Fail("SecantSearch", msg.str());
+    }
+    r.best = Better(p, r.best) ? p : r.best;
+    if (std::abs(p.derivative) <= s.derivativeTolerance)
+    {
+      r.stopCondition = "the derivative is within the tolerance";
+      break;
+    }
+    if ((p.x <= s.lowerBound && p.derivative > 0.0) || (p.x >= s.upperBound && p.derivative < 0.0))
+    {
+      r.onBound = true;
+      r.stopCondition = "the minimum lies on a bound";
+      break;
+    }
+    bracket.Update(p);
+    if (r.evaluations > 1 && p.x != previous.x)
+    {
+      curvature = (p.derivative - previous.derivative) / (p.x - previous.x);
+      r.curvature = curvature;
+    }
+    double step = curvature > 0.0 ? -p.derivative / curvature : std::copysign(s.maximumStep, -p.derivative);
+    step = std::clamp(step, -s.maximumStep, s.maximumStep);
+    const double next = bracket.Keep(p, p.x + step);
+    if (std::abs(next - p.x) < s.stepTolerance)
+    {
+      r.stopCondition = "the next step is below the step tolerance";
+      break;
+    }
+    if (r.evaluations >= s.maximumEvaluations)
+    {
+      r.stopCondition = "the maximum number of evaluations is reached";
+      break;
+    }
+    r.curvature = curvature;
+    previous = p;
+    p = evaluate(next);
+    ++r.evaluations;
+  }
+  return r;
+}
+
+} // namespace bmr
