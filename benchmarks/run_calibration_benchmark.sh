@@ -72,6 +72,6 @@ PY
 done < "$work/draws.txt"
 
 # The earlier runs (the resimulating bootstrap, seed 2026; the rescans on phantoms whose two scans share one
-# grid, seed 2027) are kept beside it for comparison.
-/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out/calibration_runs_rescan_v2.csv" \
-  "$out/calibration_runs_bootstrap_v1.csv" "$out"
+# grid, seed 2027; the rescans with a sweep each, seed 2028) are kept beside it for comparison.
+/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out/calibration_runs_rescan_v3.csv" \
+  "$out/calibration_runs_rescan_v2.csv" "$out/calibration_runs_bootstrap_v1.csv" "$out"
