@@ -65,7 +65,7 @@ StageTimer::Iteration(const bmr::IterationRecord & r)
   }
   if (r.stage == "sweep" && r.iteration == 0)
   {
-    PrintLine("  inner solves (sweep of E on the coarse mesh, then L-BFGS-B over log E on the fine mesh):");
+    PrintLine("  inner solves (sweep of E on the coarse mesh, then the outer search over log E on the fine mesh):");
   }
   PrintLine(itk::FormatIterationRecord(r));
 }

@@ -49,9 +49,9 @@ namespace itk {
  * - data bmr::SurfaceDistanceTerm:
  *   \f$ \Phi = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l)^2 \f$;
  * and runs bmr::ElasticityEstimator with this object's settings: the sweep of \f$\Phi^*(E) = \min_p \Phi(E,p)\f$
- * on the coarse mesh (a coordinate sweep over the unknowns), the outer bounded L-BFGS-B over log E with the
- * envelope gradient \f$ d\Phi^{*}/d\log E_m = -E_m \lambda^T \hat K_m u \f$, identifiability, and the
- * uncertainty of log E from the curvature of \f$\Phi^*\f$ and the residual noise
+ * on the coarse mesh (a coordinate sweep over the unknowns), the outer bounded search over log E (a secant for one
+ * unknown, L-BFGS-B for more) with the envelope gradient \f$ d\Phi^{*}/d\log E_m = -E_m \lambda^T \hat K_m u \f$,
+ * identifiability, and the uncertainty of log E from the curvature of \f$\Phi^*\f$ and the residual noise
  * (\f$ \mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1} \f$). The estimator's documentation gives the
  * stopping rules, the sweep and the uncertainty; docs/estimation.md the choices and why.
  *
@@ -181,7 +181,7 @@ public:
   {
     return m_History;
   }
-  /** The accepted iterates of the outer L-BFGS-B (Phi* at each, E); empty without unknown moduli. */
+  /** The accepted iterates of the outer search (Phi* at each, E); empty without unknown moduli. */
   const std::vector<IterationRecord> &
   GetOuterIterations() const
   {
