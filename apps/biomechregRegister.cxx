@@ -36,7 +36,10 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
                                      : itk::UncertaintyMethodEnum::None;
   u.resamples = args.Count("--resamples", u.resamples, 3, 1000);
   u.seed = args.Count("--uncertainty-seed", static_cast<unsigned int>(u.seed), 0, 4000000000u);
-  u.threads = args.Count("--uncertainty-threads", u.threads, 1, 64);
+  if (args.Has("--uncertainty-threads")) // else 0: as many as --threads
+  {
+    u.threads = args.Count("--uncertainty-threads", 1, 1, 64);
+  }
   u.correctBias = args.Choice("--uncertainty-bias-correction", { "off", "on" }) == "on";
   u.warmStart = args.Choice("--uncertainty-warm-start", { "on", "off" }) == "on";
   // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.

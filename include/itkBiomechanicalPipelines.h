@@ -126,9 +126,11 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   UncertaintyMethodEnum method{ UncertaintyMethodEnum::Rescan };
   unsigned int          resamples{ 8 }; ///< re-estimations (rescan, bootstrap)
   std::uint64_t         seed{ 1 };      ///< the resamples' random numbers: same seed, same interval
-  /** Resamples run at once. 1 (default) is bit-reproducible; more is faster but reproducible only to rounding:
-   * ITK's vnl numerics (netlib routines with static state, ITK issue #230) are shared by concurrent estimations. */
-  unsigned int threads{ 1 };
+  /** Resamples run at once; 0 (default): ITK's global default number of threads (`--threads`). Each resample
+   * holds its own meshes and factorization (about 280 MB on the 1 mm pelvis). With one unknown modulus the
+   * intervals are bit-identical whatever the number (biomechreg_determinism); with two or more, vnl's
+   * L-BFGS-B (static state, ITK issue #230) is serialized and the intervals agree to rounding. */
+  unsigned int threads{ 0 };
   double       simulationMeshScale{ 0.8 };    ///< resimulation mesh sizes relative to the estimation's
   double       meshJitter{ 0.15 };            ///< each resample re-meshes at the sizes x U(1 - this, 1 + this)
   double       shiftVoxels{ 0.5 };            ///< sub-voxel shift of the revoxelized grid, uniform in +-

@@ -26,6 +26,7 @@
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkGridGeometryConversion.h"
 #include "itkLinearInterpolateImageFunction.h"
+#include "itkMultiThreaderBase.h"
 #include "itkPhysicsDeformationFieldSource.h"
 #include "itkRegionOfInterestImageFilter.h"
 #include "itkSceneDistanceMaps.h"
@@ -628,8 +629,9 @@ BootstrapModuli(const EstimationSetup &             setup,
       }
     }
   };
+  const unsigned int       threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
   std::vector<std::thread> workers;
-  for (unsigned int t = 1; t < std::min(u.threads, u.resamples); ++t)
+  for (unsigned int t = 1; t < std::min(threads, u.resamples); ++t)
   {
     workers.emplace_back(work);
   }

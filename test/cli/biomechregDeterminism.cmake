@@ -1,7 +1,7 @@
 # Determinism: the same inputs give bit-identical outputs with 1 and 2 threads (ITK's work units and
 # OpenBLAS's threads, through ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS and OPENBLAS_NUM_THREADS), for the joint
-# estimation (`register`: fields, warped images, the recovered modulus, the rescan interval) and for the
-# Demons baseline.
+# estimation (`register`: fields, warped images, the recovered modulus, the rescan interval, whose resamples
+# run one at a time with 1 thread and two at once with 2, the default concurrency) and for the Demons baseline.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregDeterminism.cmake
 foreach(threads 1 2)
   set(ENV{ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS} ${threads})
