@@ -42,6 +42,9 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
   }
   u.correctBias = args.Choice("--uncertainty-bias-correction", { "off", "on" }) == "on";
   u.warmStart = args.Choice("--uncertainty-warm-start", { "on", "off" }) == "on";
+  u.quantiles = args.Choice("--uncertainty-quantiles", { "calibrated", "student" }) == "student"
+                  ? itk::IntervalQuantilesEnum::Student
+                  : itk::IntervalQuantilesEnum::Calibrated;
   // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
   const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
                                                        { "--uncertainty-shift-voxels", &u.shiftVoxels },

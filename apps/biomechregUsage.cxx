@@ -52,7 +52,7 @@ const std::pair<const char *, const char *> commands[] = {
     "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F] [--uncertainty-smoothing-voxels "
     "S]\n"
     "                      [--uncertainty-simulation-mesh-scale F] [--uncertainty-bias-correction off|on]\n"
-    "                      [--uncertainty-warm-start on|off]\n"
+    "                      [--uncertainty-warm-start on|off] [--uncertainty-quantiles calibrated|student]\n"
     "                      [--fixed-probabilities ORGAN=FILE,...] [--unmapped-rois refuse|ignore]\n"
     "                      [--outputs LIST|all|default (field,warped_ct,warped_labels,report; also "
     "forward_field,mesh,\n"

@@ -32,8 +32,17 @@ def covers(r, lo, hi):
     return lower_ok and upper_ok
 
 
+def calibrated(r):
+    """Whether the row's binary stated conformal half-widths (itk::IntervalHalfWidths); older rows had Student's."""
+    return r.get("quantiles") == "calibrated"
+
+
 def level_interval(r, p):
-    """The stated interval at two-sided level p (bootstrap: centre x exp(+-t s sqrt(1 + 1/n)))."""
+    """The interval at two-sided level p as the row's binary would state it: Student's centre x exp(+-t s
+    sqrt(1 + 1/n)); calibrated rows have only their stated 68 and 95 % intervals (None at other levels)."""
+    if calibrated(r):
+        stated = {0.68: ("lo68_kPa", "hi68_kPa"), 0.95: ("lo95_kPa", "hi95_kPa")}.get(p)
+        return (float(r[stated[0]]), float(r[stated[1]])) if stated else None
     n = int(r["resamples"] or 0)
     s = float(r["sigma_log_E"])
     z = statistics.NormalDist().inv_cdf(0.5 + p / 2)
@@ -66,6 +75,25 @@ def fit_centred(r):
     return r
 
 
+# The calibration set of the conformal half-widths (itkBiomechanicalPipelines.h, RescanCalibratedHalfWidth68/95):
+# the rescan runs on two-grid phantoms stated with Student's half-widths, pairs with no resample on a bound.
+CONFORMAL_TAGS = ("rescan-shifted-sweep", "rescan-warm")
+
+
+def conformal_half_widths(rows):
+    """The split-conformal half-widths: the ceil((m + 1) p)-th smallest of the m scores |log fit - log E| / s."""
+    scores = []
+    for r in rows:
+        resamples = [float(x) for x in r["resamples_kPa"].split(";")]
+        if r["tag"] not in CONFORMAL_TAGS or calibrated(r) or max(resamples) >= 599.4 or min(resamples) <= 20.02:
+            continue
+        s = statistics.stdev(math.log(x) for x in resamples)
+        scores.append(abs(math.log(float(r["fit_kPa"]) / float(r["true_E_kPa"]))) / s)
+    scores.sort()
+    m = len(scores)
+    return m, [scores[min(m, math.ceil((m + 1) * p)) - 1] if m else float("nan") for p in (0.68, 0.95)]
+
+
 recentred = sum(1 for r in rows if r.get("bias_corrected") == "1")
 rows = [fit_centred(r) for r in rows]
 if recentred:
@@ -80,7 +108,8 @@ for tag, rs in tags.items():
     determined = [r for r in rs if r["lower_determined"] == "1" and r["upper_determined"] == "1"]
     cov68 = sum(covers(r, float(r["lo68_kPa"]), float(r["hi68_kPa"])) for r in rs) / len(rs)
     cov95 = sum(covers(r, float(r["lo95_kPa"]), float(r["hi95_kPa"])) for r in rs) / len(rs)
-    summary.append(dict(tag=tag, band="all", n=len(rs), cov68=cov68, cov95=cov95,
+    cov68d = sum(covers(r, float(r["lo68_kPa"]), float(r["hi68_kPa"])) for r in determined) / max(1, len(determined))
+    summary.append(dict(tag=tag, band="all", n=len(rs), cov68=cov68, cov95=cov95, cov68d=cov68d,
                         bounds=sum(1 for r in rs if r not in determined) / len(rs),
                         med=pct([abs(float(r["estimate_kPa"]) / float(r["true_E_kPa"]) - 1) for r in determined], 0.5),
                         p90=pct([abs(float(r["estimate_kPa"]) / float(r["true_E_kPa"]) - 1) for r in determined], 0.9),
@@ -92,7 +121,8 @@ for tag, rs in tags.items():
             continue
         bd = [r for r in b if r in determined]
         err = [abs(float(r["estimate_kPa"]) / float(r["true_E_kPa"]) - 1) for r in bd]
-        summary.append(dict(tag=tag, band=f"{lo}-{hi}", n=len(b),
+        cov68d = sum(covers(r, float(r["lo68_kPa"]), float(r["hi68_kPa"])) for r in bd) / len(bd) if bd else math.nan
+        summary.append(dict(tag=tag, band=f"{lo}-{hi}", n=len(b), cov68d=cov68d,
                             cov68=sum(covers(r, float(r["lo68_kPa"]), float(r["hi68_kPa"])) for r in b) / len(b),
                             cov95=sum(covers(r, float(r["lo95_kPa"]), float(r["hi95_kPa"])) for r in b) / len(b),
                             bounds=(len(b) - len(bd)) / len(b), med=pct(err, 0.5), p90=pct(err, 0.9),
@@ -101,17 +131,22 @@ for tag, rs in tags.items():
 
 with open(f"{out}/calibration.csv", "w") as f:
     f.write("tag,band_kPa,pairs,coverage68,coverage95,bound_fraction,median_abs_error,p90_abs_error,"
-            "fit_median_abs_error,median_ratio_hi95_lo95\n")
+            "fit_median_abs_error,median_ratio_hi95_lo95,coverage68_determined\n")
     for d in summary:
         f.write(f'{d["tag"]},{d["band"]},{d["n"]},{d["cov68"]:.3f},{d["cov95"]:.3f},{d["bounds"]:.3f},{d["med"]:.4f},'
-                f'{d["p90"]:.4f},{d["fitmed"]:.4f},{d["width"]:.3f}\n')
+                f'{d["p90"]:.4f},{d["fitmed"]:.4f},{d["width"]:.3f},{d["cov68d"]:.3f}\n')
 
-print("\n| settings | true E band [kPa] | pairs | 68 % coverage | 95 % coverage | bound stated | median abs. error "
-      "(stated) | 90th pct abs. error | median abs. error (fit) | median hi95/lo95 |")
-print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+print("\n| settings | true E band [kPa] | pairs | 68 % coverage | 68 % coverage, no bound | 95 % coverage | bound stated "
+      "| median abs. error (stated) | 90th pct abs. error | median abs. error (fit) | median hi95/lo95 |")
+print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for d in summary:
-    print(f'| {d["tag"]} | {d["band"]} | {d["n"]} | {d["cov68"]:.2f} | {d["cov95"]:.2f} | {d["bounds"]:.2f} | '
-          f'{100 * d["med"]:.1f} % | {100 * d["p90"]:.1f} % | {100 * d["fitmed"]:.1f} % | {d["width"]:.2f} |')
+    print(f'| {d["tag"]} | {d["band"]} | {d["n"]} | {d["cov68"]:.2f} | {d["cov68d"]:.2f} | {d["cov95"]:.2f} | '
+          f'{d["bounds"]:.2f} | {100 * d["med"]:.1f} % | {100 * d["p90"]:.1f} % | {100 * d["fitmed"]:.1f} % | '
+          f'{d["width"]:.2f} |')
+m, (k68, k95) = conformal_half_widths(rows)
+if m:
+    print(f"\nconformal half-widths from {m} scores of {', '.join(CONFORMAL_TAGS)}: k68 {k68:.3f}, k95 {k95:.3f} "
+          "(RescanCalibratedHalfWidth68/95)")
 
 print("\n| settings | pair | true E | fit | stated | 68 % | 95 % | covered 68/95 |")
 print("|---|---:|---:|---:|---|---|---|---|")
@@ -128,8 +163,9 @@ for tag, rs in tags.items():
 fig, ax = plt.subplots(1, 3, figsize=(16, 5))
 levels = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.68, 0.8, 0.9, 0.95, 0.99]
 for tag, rs in tags.items():
-    cov = [sum(covers(r, *level_interval(r, p)) for r in rs) / len(rs) for p in levels]
-    ax[0].plot(levels, cov, "o-", label=f"{tag} ({len(rs)} pairs)")
+    stated = [p for p in levels if all(level_interval(r, p) for r in rs)]
+    cov = [sum(covers(r, *level_interval(r, p)) for r in rs) / len(rs) for p in stated]
+    ax[0].plot(stated, cov, "o-", label=f"{tag} ({len(rs)} pairs)")
     E = [float(r["true_E_kPa"]) for r in rs]
     est = [float(r["estimate_kPa"]) for r in rs]
     lo = [e - float(r["lo95_kPa"]) for e, r in zip(est, rs)]

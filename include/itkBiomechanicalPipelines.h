@@ -119,6 +119,32 @@ enum class UncertaintyMethodEnum : std::uint8_t
   Rescan     ///< rescan the fixed anatomy at random sub-voxel shifts, re-mesh and re-estimate (default)
 };
 
+/** How the spread s of the resamples' log E becomes an interval's half-width k s.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+enum class IntervalQuantilesEnum : std::uint8_t
+{
+  /** Rescans: k from split-conformal calibration on pelvis phantoms (RescanCalibratedHalfWidth68/95); the
+   * bootstrap, which was not calibrated, falls back to Student. Default. */
+  Calibrated,
+  Student ///< k = t_(n-1) sqrt(1 + 1/n) at 68 % and 95 %: the resamples' log E taken as normal
+};
+
+/** Half-width of the rescans' 68 % interval in units of their spread s (8 resamples): the ceil(0.68 (m + 1))-th
+ * smallest of m = 55 calibration scores |log Ehat - log E_true| / s (split-conformal prediction: coverage >= 68 %
+ * for a pair exchangeable with the calibration set). The scores are the pelvis phantom pairs of calibration runs 3
+ * and 4 (benchmarks/results/calibration_runs_rescan_v3.csv, seed 2028, and calibration_runs_rescan_v4.csv, seed
+ * 2029; 1 mm voxels, moduli log-uniform in 30-500 kPa, the pairs with no resample on a search bound). Student's
+ * 1.14 covered 0.85 of them: the errors are heavy-tailed in units of s (most fits are better than s, a few 2.5 s). */
+constexpr double RescanCalibratedHalfWidth68 = 0.779;
+/** The same at 95 % (the 54th of 55 scores; Student's 2.51 is nearly the same). */
+constexpr double RescanCalibratedHalfWidth95 = 2.465;
+
+/** Half-widths {k68, k95} of the intervals, in units of the resamples' spread s, for \a resamples resamples of
+ * \a method: Student's t_(n-1) sqrt(1 + 1/n), or the calibrated ones (rescans only) scaled by Student's ratio
+ * between n and the calibration's 8 resamples. Fewer than 3 resamples: infinite. */
+BiomechanicalRegistration_EXPORT std::array<double, 2>
+IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles, std::size_t resamples);
+
 /** Settings of the modulus uncertainty (the rescans or the parametric bootstrap of ModulusInterval).
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT UncertaintySettings
@@ -145,6 +171,8 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   /** Each resample's outer search starts at the fit with the fit's curvature, without the sweep and its coarse
    * mesh (on by default; off: each resample sweeps as the fit did). */
   bool warmStart{ true };
+  /** Half-widths from the calibration (default, rescans) or Student's t (IntervalQuantilesEnum). */
+  IntervalQuantilesEnum quantiles{ IntervalQuantilesEnum::Calibrated };
 };
 
 /** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b
@@ -164,10 +192,11 @@ constexpr double BootstrapBiasSignificance = 3.0;
  *
  * With \f$ \ell_k = \log E^*_k \f$ of the resamples: \f[ b = \mathrm{median}_k \ell_k - \log \hat E, \quad s =
  * \mathrm{SD}_k \ell_k, \quad \log \tilde E = \log \hat E \; (- b \text{ if asked and } |b| > 3 \cdot 1.2533\, s /
- * \sqrt n), \quad I_{1-\alpha} = \tilde E \exp(\pm t_{1-\alpha/2,n-1} s \sqrt{1+1/n}) \f] (centred on the fit;
+ * \sqrt n), \quad I_{1-\alpha} = \tilde E \exp(\pm k_{1-\alpha} s) \f] (centred on the fit;
  * corrected for the resamples' offset b only when asked and when it exceeds three standard errors of their median;
- * Student's t for the few resamples). An interval end beyond the scene's bounds is not determined by the images: the
- * modulus is then reported as a bound ("E >= lower end"). */
+ * k from IntervalHalfWidths(): calibrated on phantoms for the rescans, else \f$ t_{1-\alpha/2,n-1} \sqrt{1+1/n} \f$).
+ * An interval end beyond the scene's bounds is not determined by the images: the modulus is then reported as a bound
+ * ("E >= lower end"). */
 struct BiomechanicalRegistration_EXPORT ModulusInterval
 {
   double                fit{ 0.0 };                 ///< kPa: the estimate of the fit (the state and fields use it)
@@ -181,6 +210,7 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
   bool                  upperDetermined{ true };    ///< false: only "at least interval95[0]"
   std::vector<double>   resampleModuli;             ///< kPa, in resample order
   std::string           method;                     ///< "rescan", "bootstrap", "curvature"
+  std::string           quantiles;                  ///< "calibrated", "student" or "normal" (curvature)
 };
 
 /** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.

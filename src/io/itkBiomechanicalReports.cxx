@@ -91,6 +91,7 @@ ModulusSection(const RegistrationResult & r)
       resamples.push_back(Number(E));
     }
     intervals[kv.first] = { { "method", i.method },
+                            { "quantiles", i.quantiles },
                             { "estimate_kPa", Number(i.estimate) },
                             { "fit_kPa", Number(i.fit) },
                             { "log_bias", Number(i.logBias) },

@@ -655,8 +655,15 @@ BootstrapModuli(const EstimationSetup &             setup,
       }
     }
     const bmr::UnknownModulus & unknown = r.unknowns[m];
-    intervals[unknown.name] = BootstrapInterval(r.youngsModulus.at(unknown.name), samples, unknown, u.correctBias);
-    intervals[unknown.name].method = rescan ? "rescan" : "bootstrap";
+    const bool                  calibrated = rescan && u.quantiles == IntervalQuantilesEnum::Calibrated;
+    ModulusInterval &           interval = intervals[unknown.name];
+    interval = BootstrapInterval(r.youngsModulus.at(unknown.name),
+                                 samples,
+                                 unknown,
+                                 u.correctBias,
+                                 IntervalHalfWidths(u.method, u.quantiles, samples.size()));
+    interval.method = rescan ? "rescan" : "bootstrap";
+    interval.quantiles = calibrated ? "calibrated" : "student";
   }
   for (unsigned int k = 0; k < u.resamples; ++k)
   {

@@ -19,7 +19,9 @@
 #include "itkPipelineStages.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace itk {
 namespace pipeline {
@@ -72,13 +74,45 @@ JudgeBounds(ModulusInterval & i, const bmr::UnknownModulus & u, bool lowerReache
   }
   i.estimate = std::min(std::max(i.estimate, u.lowerBound), u.upperBound);
 }
-} // namespace
 
+/** Student's half-widths t_(n-1) sqrt(1 + 1/n) at 68 % and 95 % (the predictive interval of one more draw). */
+std::array<double, 2>
+StudentHalfWidths(std::size_t n)
+{
+  const double predictive = std::sqrt(1.0 + 1.0 / double(n));
+  return { { StudentQuantile(0.994457883, double(n - 1)) * predictive,
+             StudentQuantile(1.959963985, double(n - 1)) * predictive } };
+}
+} // namespace
+} // namespace pipeline
+
+std::array<double, 2>
+IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles, std::size_t resamples)
+{
+  if (resamples < 3)
+  {
+    const double inf = std::numeric_limits<double>::infinity();
+    return { { inf, inf } };
+  }
+  const std::array<double, 2> student = pipeline::StudentHalfWidths(resamples);
+  if (quantiles == IntervalQuantilesEnum::Student || method != UncertaintyMethodEnum::Rescan)
+  {
+    return student;
+  }
+  // The calibration used 8 resamples; another n changes how well s is known as Student's factor says.
+  constexpr std::size_t       calibrationResamples = 8;
+  const std::array<double, 2> reference = pipeline::StudentHalfWidths(calibrationResamples);
+  return { { RescanCalibratedHalfWidth68 * student[0] / reference[0],
+             RescanCalibratedHalfWidth95 * student[1] / reference[1] } };
+}
+
+namespace pipeline {
 ModulusInterval
-BootstrapInterval(double                      fit,
-                  const std::vector<double> & resamples,
-                  const bmr::UnknownModulus & unknown,
-                  bool                        correctBias)
+BootstrapInterval(double                        fit,
+                  const std::vector<double> &   resamples,
+                  const bmr::UnknownModulus &   unknown,
+                  bool                          correctBias,
+                  const std::array<double, 2> & halfWidths)
 {
   ModulusInterval i;
   i.method = "bootstrap";
@@ -118,9 +152,8 @@ BootstrapInterval(double                      fit,
   i.biasCorrected =
     correctBias && std::abs(i.logBias) > BootstrapBiasSignificance * 1.2533 * i.logSigma / std::sqrt(double(n));
   const double center = std::log(fit) - (i.biasCorrected ? i.logBias : 0.0);
-  const double predictive = std::sqrt(1.0 + 1.0 / double(n));
-  const double half68 = StudentQuantile(0.994457883, double(n - 1)) * i.logSigma * predictive;
-  const double half95 = StudentQuantile(1.959963985, double(n - 1)) * i.logSigma * predictive;
+  const double half68 = halfWidths[0] * i.logSigma;
+  const double half95 = halfWidths[1] * i.logSigma;
   i.estimate = std::exp(center);
   i.interval68 = { { std::exp(center - half68), std::exp(center + half68) } };
   i.interval95 = { { std::exp(center - half95), std::exp(center + half95) } };
@@ -133,6 +166,7 @@ CurvatureInterval(double fit, double logSigma, const bmr::UnknownModulus & unkno
 {
   ModulusInterval i;
   i.method = "curvature";
+  i.quantiles = "normal";
   i.fit = i.estimate = fit;
   i.logSigma = logSigma;
   if (!std::isfinite(logSigma))

@@ -124,13 +124,15 @@ BootstrapModuli(const EstimationSetup &             setup,
                 const BiomechanicalLabelImageType * fixedLabels,
                 StageClock &                        clock);
 
-/** The interval of \a resamples [kPa] around \a fit (ModulusInterval; corrected for their offset when
- * \a correctBias and it is significant); fewer than 3 resamples leave the whole search range. */
+/** The interval fit x/ exp(k s) of \a resamples [kPa] (ModulusInterval; k = \a halfWidths at 68 and 95 %, from
+ * IntervalHalfWidths(); corrected for their offset when \a correctBias and it is significant); fewer than 3
+ * resamples leave the whole search range. */
 ModulusInterval
-BootstrapInterval(double                      fit,
-                  const std::vector<double> & resamples,
-                  const bmr::UnknownModulus & unknown,
-                  bool                        correctBias);
+BootstrapInterval(double                        fit,
+                  const std::vector<double> &   resamples,
+                  const bmr::UnknownModulus &   unknown,
+                  bool                          correctBias,
+                  const std::array<double, 2> & halfWidths);
 
 /** The interval fit x exp(+-z sigma) of the curvature's \a logSigma (infinite: the whole search range). */
 ModulusInterval
