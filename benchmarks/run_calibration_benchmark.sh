@@ -8,7 +8,8 @@
 #        REGISTER_ARGS="--wall-motion free" adds settings to every register run; PHANTOM_ARGS to every phantom
 #        (default "--fixed-grid-shift-voxels 0.5": the fixed scan on its own grid, offset by a random sub-voxel
 #        shift from the moving one, as two real scans are); TAG names the run (default "rescan-shifted");
-#        APPEND=1 adds rows to calibration_runs.csv instead of starting it afresh; START=K skips the
+#        RUNS_NAME names the rows' file (default calibration_runs: benchmarks/results/RUNS_NAME.csv);
+#        APPEND=1 adds rows to it instead of starting it afresh; START=K skips the
 #        draws before pair K (to resume a run).
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
@@ -23,7 +24,7 @@ out="$root/benchmarks/results"
 mkdir -p "$out"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-csv="$out/calibration_runs.csv"
+csv="$out/${RUNS_NAME:-calibration_runs}.csv"
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
   echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles" > "$csv"
 fi
@@ -72,9 +73,12 @@ PY
   tail -1 "$csv"
 done < "$work/draws.txt"
 
-# The earlier runs (the resimulating bootstrap, seed 2026; the rescans on phantoms whose two scans share one
-# grid, seed 2027; the rescans with a sweep each, seed 2028; the rescans warm-started at the fit, seed 2029; the
-# last two, stated with Student's half-widths, are the calibration set of the conformal ones) are kept beside it.
-/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "$out/calibration_runs_rescan_v4.csv" \
-  "$out/calibration_runs_rescan_v3.csv" "$out/calibration_runs_rescan_v2.csv" \
-  "$out/calibration_runs_bootstrap_v1.csv" "$out"
+# The earlier runs are kept beside it (calibration_runs_*.csv; docs/benchmarks.md): the resimulating bootstrap
+# (seed 2026), the rescans on phantoms whose two scans share one grid (2027), the rescans with a sweep each (2028)
+# and warm-started at the fit (2029), the last two stated with Student's half-widths and the calibration set of
+# the conformal ones; the conformal rescans (2030, calibration_runs.csv) and variants of them.
+others=()
+for f in "$out"/calibration_runs*.csv; do
+  if [ "$f" != "$csv" ]; then others+=("$f"); fi
+done
+/usr/bin/python3 "$root/benchmarks/summarize_calibration.py" "$csv" "${others[@]}" "$out"

@@ -84,8 +84,10 @@ def conformal_half_widths(rows):
     """The split-conformal half-widths: the ceil((m + 1) p)-th smallest of the m scores |log fit - log E| / s."""
     scores = []
     for r in rows:
+        if r["tag"] not in CONFORMAL_TAGS or calibrated(r):
+            continue
         resamples = [float(x) for x in r["resamples_kPa"].split(";")]
-        if r["tag"] not in CONFORMAL_TAGS or calibrated(r) or max(resamples) >= 599.4 or min(resamples) <= 20.02:
+        if max(resamples) >= 599.4 or min(resamples) <= 20.02:
             continue
         s = statistics.stdev(math.log(x) for x in resamples)
         scores.append(abs(math.log(float(r["fit_kPa"]) / float(r["true_E_kPa"]))) / s)
