@@ -134,7 +134,7 @@ enum class IntervalQuantilesEnum : std::uint8_t
  * for a pair exchangeable with the calibration set). The scores are the pelvis phantom pairs of calibration runs 3
  * and 4 (benchmarks/results/calibration_runs_rescan_v3.csv, seed 2028, and calibration_runs_rescan_v4.csv, seed
  * 2029; 1 mm voxels, moduli log-uniform in 30-500 kPa, the pairs with no resample on a search bound). Student's
- * 1.14 covered 0.85 of them: the errors are heavy-tailed in units of s (most fits are better than s, a few 2.5 s). */
+ * 1.14 covered 0.84 of them: the errors are heavy-tailed in units of s (most fits are better than s, a few 2.5 s). */
 constexpr double RescanCalibratedHalfWidth68 = 0.779;
 /** The same at 95 % (the 54th of 55 scores; Student's 2.51 is nearly the same). */
 constexpr double RescanCalibratedHalfWidth95 = 2.465;
