@@ -139,6 +139,10 @@ constexpr double RescanCalibratedHalfWidth68 = 0.779;
 /** The same at 95 % (the 54th of 55 scores; Student's 2.51 is nearly the same). */
 constexpr double RescanCalibratedHalfWidth95 = 2.465;
 
+/** Whether \a method states its intervals with the calibrated half-widths under \a quantiles (rescans only). */
+BiomechanicalRegistration_EXPORT bool
+UsesCalibratedHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles);
+
 /** Half-widths {k68, k95} of the intervals, in units of the resamples' spread s, for \a resamples resamples of
  * \a method: Student's t_(n-1) sqrt(1 + 1/n), or the calibrated ones (rescans only) scaled by Student's ratio
  * between n and the calibration's 8 resamples. Fewer than 3 resamples: infinite. */

@@ -655,7 +655,6 @@ BootstrapModuli(const EstimationSetup &             setup,
       }
     }
     const bmr::UnknownModulus & unknown = r.unknowns[m];
-    const bool                  calibrated = rescan && u.quantiles == IntervalQuantilesEnum::Calibrated;
     ModulusInterval &           interval = intervals[unknown.name];
     interval = BootstrapInterval(r.youngsModulus.at(unknown.name),
                                  samples,
@@ -663,7 +662,7 @@ BootstrapModuli(const EstimationSetup &             setup,
                                  u.correctBias,
                                  IntervalHalfWidths(u.method, u.quantiles, samples.size()));
     interval.method = rescan ? "rescan" : "bootstrap";
-    interval.quantiles = calibrated ? "calibrated" : "student";
+    interval.quantiles = UsesCalibratedHalfWidths(u.method, u.quantiles) ? "calibrated" : "student";
   }
   for (unsigned int k = 0; k < u.resamples; ++k)
   {

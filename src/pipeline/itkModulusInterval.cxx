@@ -86,6 +86,12 @@ StudentHalfWidths(std::size_t n)
 } // namespace
 } // namespace pipeline
 
+bool
+UsesCalibratedHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles)
+{
+  return method == UncertaintyMethodEnum::Rescan && quantiles == IntervalQuantilesEnum::Calibrated;
+}
+
 std::array<double, 2>
 IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles, std::size_t resamples)
 {
@@ -95,7 +101,7 @@ IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles
     return { { inf, inf } };
   }
   const std::array<double, 2> student = pipeline::StudentHalfWidths(resamples);
-  if (quantiles == IntervalQuantilesEnum::Student || method != UncertaintyMethodEnum::Rescan)
+  if (!UsesCalibratedHalfWidths(method, quantiles))
   {
     return student;
   }

@@ -58,6 +58,10 @@ itkIntervalHalfWidthsTest(int, char *[])
   const auto bootstrap =
     itk::IntervalHalfWidths(UncertaintyMethodEnum::Bootstrap, IntervalQuantilesEnum::Calibrated, 8);
   Check(bootstrap == student8, "the bootstrap was not calibrated: Student's half-widths");
+  Check(itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated) &&
+          !itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student) &&
+          !itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Bootstrap, IntervalQuantilesEnum::Calibrated),
+        "the calibrated half-widths are the rescans' only, and only when asked");
   const auto two = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 2);
   Check(std::isinf(two[0]) && std::isinf(two[1]), "2 resamples: no finite half-width");
   return Check.ExitCode();
