@@ -5,6 +5,9 @@
 # (default settings: the rescan interval). Records per pair the fit, the stated estimate, the 68 % / 95 %
 # intervals, whether a bound was stated instead, and the resampled moduli.
 # Usage: benchmarks/run_calibration_benchmark.sh [N (default 30)] [SEED (default 2026)]
+#        DESIGN=table31: instead of random draws, the dissertation's Table 3.1 rows (two scenes x 50..350 kPa)
+#        with N realizations (phantom seeds) each; the rows go to table31_runs.csv and are summarized per row
+#        (summarize_table31.py: mean and SD of the error, coverage; table31.csv, table31.png).
 #        REGISTER_ARGS="--wall-motion free" adds settings to every register run; PHANTOM_ARGS to every phantom
 #        (default "--fixed-grid-shift-voxels 0.5": the fixed scan on its own grid, offset by a random sub-voxel
 #        shift from the moving one, as two real scans are); TAG names the run (default "rescan-shifted");
@@ -18,24 +21,33 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
 count="${1:-30}"
 seed="${2:-2026}"
+design="${DESIGN:-random}"
 tag="${TAG:-rescan-shifted}"
 phantom_args="${PHANTOM_ARGS---fixed-grid-shift-voxels 0.5}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-csv="$out/${RUNS_NAME:-calibration_runs}.csv"
+default_runs=calibration_runs
+[ "$design" = table31 ] && default_runs=table31_runs
+csv="$out/${RUNS_NAME:-$default_runs}.csv"
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
   echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles" > "$csv"
 fi
 
-# The draws: reproducible from SEED (Python's Mersenne Twister), one line per pair: E bladder rectum seed.
-/usr/bin/python3 - "$count" "$seed" > "$work/draws.txt" <<'PY'
+# The draws, one line per pair: E bladder rectum seed. Random: reproducible from SEED (Python's Mersenne
+# Twister). table31: the dissertation's rows (scenes A, walls 8/4 mm, and B, 5/6 mm, x 50..350 kPa), N
+# realizations of each, realization-major so that a run stopped early still has every row.
+/usr/bin/python3 - "$count" "$seed" "$design" > "$work/draws.txt" <<'PY'
 import math, random, sys
-n, seed = int(sys.argv[1]), int(sys.argv[2]); rng = random.Random(seed)
-for k in range(n):
-    E = math.exp(rng.uniform(math.log(30), math.log(500)))
-    print(f"{E:.1f} {rng.uniform(3, 10):.2f} {rng.uniform(2, 6):.2f} {seed * 100 + k + 1}")
+n, seed, design = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]; rng = random.Random(seed)
+if design == "table31":
+    pairs = [(E, b, r) for _ in range(n) for b, r in ((8, 4), (5, 6)) for E in range(50, 351, 50)]
+else:
+    pairs = [(math.exp(rng.uniform(math.log(30), math.log(500))), rng.uniform(3, 10), rng.uniform(2, 6))
+             for _ in range(n)]
+for k, (E, b, r) in enumerate(pairs):
+    print(f"{E:.1f} {b:.2f} {r:.2f} {seed * 100 + k + 1}")
 PY
 
 k=0
@@ -77,6 +89,10 @@ done < "$work/draws.txt"
 # (seed 2026), the rescans on phantoms whose two scans share one grid (2027), the rescans with a sweep each (2028)
 # and warm-started at the fit (2029), the last two stated with Student's half-widths and the calibration set of
 # the conformal ones; the conformal rescans (2030, calibration_runs.csv) and variants of them.
+if [ "$design" = table31 ]; then
+  /usr/bin/python3 "$root/benchmarks/summarize_table31.py" "$csv" "$out"
+  exit 0
+fi
 others=()
 for f in "$out"/calibration_runs*.csv; do
   if [ "$f" != "$csv" ]; then others+=("$f"); fi

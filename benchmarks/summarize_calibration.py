@@ -13,6 +13,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from interval_rows import covers  # noqa: E402
 
 BANDS = ((30, 150), (150, 300), (300, 500))
 
@@ -22,14 +23,6 @@ def student(z, dof):
     z3, z5, z7 = z ** 3, z ** 5, z ** 7
     return (z + (z3 + z) / (4 * dof) + (5 * z5 + 16 * z3 + 3 * z) / (96 * dof ** 2)
             + (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * dof ** 3))
-
-
-def covers(r, lo, hi):
-    """Whether the statement covers the truth: an interval, or a one-sided bound when an end is not determined."""
-    E = float(r["true_E_kPa"])
-    lower_ok = r["lower_determined"] == "0" or E >= lo
-    upper_ok = r["upper_determined"] == "0" or E <= hi
-    return lower_ok and upper_ok
 
 
 def calibrated(r):

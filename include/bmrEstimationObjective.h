@@ -18,9 +18,12 @@
 #ifndef bmrEstimationObjective_h
 #define bmrEstimationObjective_h
 
+#include "bmrCompressionBarrier.h"
 #include "bmrDataTerm.h"
 #include "bmrForwardModel.h"
 #include "bmrLoadParameterization.h"
+
+#include <memory>
 
 namespace bmr {
 
@@ -38,9 +41,10 @@ struct BiomechanicalRegistration_EXPORT LoadSolution
 /** \brief The estimation objective composed of a forward model, a load parameterization and data terms,
  * with its adjoint gradients.
  *
- * \f[ \Phi(E, p) = \sum_t \Phi_t(u) + R(p), \qquad f_{int}(u; E) = f(p) \text{ on free dofs},\ u = \bar u(p)
+ * \f[ \Phi(E, p) = \sum_t \Phi_t(u) + \Phi_b(u) + R(p), \qquad f_{int}(u; E) = f(p) \text{ on free dofs},\ u = \bar u(p)
  *     \text{ on constrained dofs}, \f]
- * with \f$g = \partial\sum_t\Phi_t/\partial u\f$. Adjoint (one solve with the cached factorization):
+ * with \f$g = \partial(\sum_t\Phi_t + \Phi_b)/\partial u\f$; \f$\Phi_b\f$ is the CompressionBarrier of a
+ * nonlinear model (0 for a linear one). Adjoint (one solve with the cached factorization):
  * \f$K_T\lambda = g\f$ on the free dofs, \f$\lambda = 0\f$ on the constrained ones; then
  * \f[ \partial\Phi/\partial p = \Big(\frac{\partial\bar u}{\partial p}\Big)^T (g - K_T\lambda)_c
  *     + \Big(\frac{\partial f}{\partial p}\Big)^T \lambda + \nabla R, \qquad
@@ -113,6 +117,15 @@ public:
   LoadSolution
   SolveLoadsGaussNewton(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
 
+  /** The barrier against crushed elements added to Phi with a nonlinear model (CompressionBarrier, J_0 = 0.25,
+   * w = 1); null with a linear model, whose states may invert elements. In SolveLoadsGaussNewton() it is part of
+   * the value that accepts a step, not of the residuals' Jacobian. */
+  const CompressionBarrier *
+  GetCompressionBarrier() const
+  {
+    return m_Barrier.get();
+  }
+
   ForwardModel &
   GetForwardModel()
   {
@@ -135,6 +148,7 @@ private:
   std::size_t                   m_Inverted{ 0 };
   std::size_t                   m_Infeasible{ 0 };
   double                        m_LastFeasibleValue{ 0.0 };
+  std::unique_ptr<CompressionBarrier> m_Barrier;
 };
 
 } // namespace bmr

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "bmrEstimationObjective.h"
 
+#include "bmrCompressionBarrier.h"
 #include "bmrError.h"
 
 #include <Eigen/Dense>
@@ -72,6 +73,10 @@ EstimationObjective::EstimationObjective(ForwardModel &                model,
          "the scene has neither an unknown modulus (role unknown_material) nor a force surface: nothing to estimate");
   }
   m_Model.SetConstrainedNodes(m_Loads.GetConstrainedNodes());
+  if (!m_Model.IsLinear())
+  {
+    m_Barrier = std::make_unique<CompressionBarrier>(m_Model.GetMesh());
+  }
 }
 
 EstimationObjective::~EstimationObjective() = default;
@@ -119,6 +124,10 @@ EstimationObjective::Evaluate(const std::vector<double> & p,
   for (const DataTerm * term : m_Terms)
   {
     value += term->Evaluate(u, wantGradient ? &g : nullptr);
+  }
+  if (m_Barrier)
+  {
+    value += m_Barrier->Evaluate(u, wantGradient ? &g : nullptr);
   }
   value += m_Loads.EvaluatePrior(p);
   m_LastFeasibleValue = value;
@@ -430,7 +439,10 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
         }
       }
     }
-    return 0.5 * rp.squaredNorm() + 0.5 * alpha * p.squaredNorm();
+    // The barrier (nonlinear models) enters the value that accepts or rejects a step, not the Jacobian: few
+    // elements are compressed at a fit, and the value alone keeps the steps from crushing more.
+    const double barrier = m_Barrier ? m_Barrier->Evaluate(u, nullptr) : 0.0;
+    return 0.5 * rp.squaredNorm() + 0.5 * alpha * p.squaredNorm() + barrier;
   };
   // Levenberg-Marquardt: (J^T J + mu diag(J^T J)) delta = -J^T r; mu shrinks after a success, grows after a failure.
   Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(start.data(), static_cast<Eigen::Index>(np));
