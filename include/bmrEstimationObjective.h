@@ -118,7 +118,7 @@ public:
   SolveLoadsGaussNewton(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
 
   /** The barrier against crushed elements added to Phi with a nonlinear model (CompressionBarrier, J_0 = 0.25,
-   * w = 1); null with a linear model, whose states may invert elements. In SolveLoadsGaussNewton() it is part of
+   * w = 0.1); null with a linear model, whose states may invert elements. In SolveLoadsGaussNewton() it is part of
    * the value that accepts a step, not of the residuals' Jacobian. */
   const CompressionBarrier *
   GetCompressionBarrier() const
