@@ -51,6 +51,7 @@ struct BiomechanicalRegistration_EXPORT IterationRecord
   std::vector<double> logModulusGradient;
   unsigned int        innerIterations{ 0 };
   double              seconds{ 0.0 };
+  SolverWork          work; ///< the inner solve's model work (LoadSolution::work; nonlinear models count it)
 };
 
 /** Settings of ElasticityEstimator; the defaults are those of FEMElasticityOptimizer and biomechreg. */

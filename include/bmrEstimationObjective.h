@@ -36,6 +36,7 @@ struct BiomechanicalRegistration_EXPORT LoadSolution
   std::vector<double> logModulusGradient; ///< dPhi*/dlog E (envelope theorem) [mm^2]
   unsigned int        iterations{ 0 };
   std::string         stop;
+  SolverWork          work; ///< the model's solves during it (filled by the estimator)
 };
 
 /** \brief The estimation objective composed of a forward model, a load parameterization and data terms,

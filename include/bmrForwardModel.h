@@ -39,6 +39,15 @@ namespace bmr {
  * Units: u in mm, f in mN, E in kPa.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationFEM
  */
+/** What a model's solves cost since it was constructed: counts, for speed studies and progress reports. */
+struct BiomechanicalRegistration_EXPORT SolverWork
+{
+  std::uint64_t stateSolves{ 0 };                 ///< SolveState() / TrySolveState() calls
+  std::uint64_t newtonIterations{ 0 };            ///< a nonlinear model's Newton iterations (0 for a linear one)
+  std::uint64_t factorizations{ 0 };              ///< numeric sparse Cholesky factorizations (nonlinear models)
+  std::uint64_t conjugateGradientIterations{ 0 }; ///< preconditioned CG iterations that replaced factorizations
+};
+
 class BiomechanicalRegistration_EXPORT ForwardModel
 {
 public:
@@ -92,6 +101,12 @@ public:
    * du/dp can be computed once per modulus (the Gauss-Newton inner solver needs it). */
   virtual bool
   IsLinear() const = 0;
+  /** The work of every solve since construction (zeros for a model that does not count it). */
+  virtual SolverWork
+  GetSolverWork() const
+  {
+    return {};
+  }
 };
 
 /** \brief The linear-elastic forward model: P1 tetrahedra, standard or nodal-averaged pressure per

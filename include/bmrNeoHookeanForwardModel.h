@@ -160,6 +160,8 @@ public:
   ForgetState() override;
   const NewtonStatistics &
   GetStatistics() const;
+  SolverWork
+  GetSolverWork() const override;
 
 private:
   struct Impl;

@@ -73,7 +73,19 @@ MakeRecord(const char *                stage,
   r.logModulusGradient = s.logModulusGradient;
   r.innerIterations = s.iterations;
   r.seconds = seconds;
+  r.work = s.work;
   return r;
+}
+
+SolverWork
+WorkSince(const SolverWork & now, const SolverWork & before)
+{
+  SolverWork w;
+  w.stateSolves = now.stateSolves - before.stateSolves;
+  w.newtonIterations = now.newtonIterations - before.newtonIterations;
+  w.factorizations = now.factorizations - before.factorizations;
+  w.conjugateGradientIterations = now.conjugateGradientIterations - before.conjugateGradientIterations;
+  return w;
 }
 
 bool
@@ -244,7 +256,10 @@ struct ElasticityEstimator::Stages
     inner.tolerance = settings.innerGradientTolerance;
     inner.gaussNewton = settings.gaussNewtonInner;
     inner.limitInversion = settings.limitElementInversion;
-    return SolveInner(objective, E, start, inner, result.rejectedSteps);
+    const SolverWork before = objective.GetForwardModel().GetSolverWork();
+    LoadSolution     s = SolveInner(objective, E, start, inner, result.rejectedSteps);
+    s.work = WorkSince(objective.GetForwardModel().GetSolverWork(), before);
+    return s;
   }
   void
   Record(const IterationRecord & record, std::vector<IterationRecord> & list, double newProgress)

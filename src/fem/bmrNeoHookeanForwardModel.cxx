@@ -88,9 +88,21 @@ struct NeoHookeanForwardModel::Impl
   bool                hasState{ false };
   std::vector<double> state, stateForces, statePrescribed;
   NewtonStatistics    statistics;
+  SolverWork          earlierWork; // of the solves before the one \a statistics describes
   std::string         lastFailure;
 
   Impl(const TetrahedralMesh & m, const std::map<std::int32_t, MaterialParameters> & mats, const NewtonSettings & s);
+
+  /** The work of every solve so far: the earlier ones and the current statistics (its adjoints included). */
+  SolverWork
+  Work() const
+  {
+    SolverWork w = earlierWork;
+    w.newtonIterations += statistics.iterations;
+    w.factorizations += statistics.factorizations;
+    w.conjugateGradientIterations += statistics.conjugateGradientIterations;
+    return w;
+  }
 
   // Setup.
   void
@@ -856,6 +868,8 @@ NeoHookeanForwardModel::TrySolveState(const std::vector<double> & forces,
     }
     (d.constrained[i] ? g1 : f1)[i] = value;
   }
+  d.earlierWork = d.Work();
+  ++d.earlierWork.stateSolves;
   d.statistics = NewtonStatistics();
   IncrementFailure failure;
   double           reached = 0.0;
@@ -1057,6 +1071,12 @@ const NewtonStatistics &
 NeoHookeanForwardModel::GetStatistics() const
 {
   return m_Impl->statistics;
+}
+
+SolverWork
+NeoHookeanForwardModel::GetSolverWork() const
+{
+  return m_Impl->Work();
 }
 
 } // namespace bmr

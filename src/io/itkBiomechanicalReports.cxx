@@ -194,7 +194,7 @@ IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std
   {
     o << ",dphi_dlogE_" << n << "_mm2";
   }
-  o << ",inner_iterations,seconds\n" << std::setprecision(10);
+  o << ",inner_iterations,seconds,newton_iterations,factorizations\n" << std::setprecision(10);
   for (const auto & r : records)
   {
     o << r.stage << "," << r.iteration;
@@ -207,7 +207,8 @@ IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std
     {
       o << "," << g;
     }
-    o << "," << r.innerIterations << "," << r.seconds << "\n";
+    o << "," << r.innerIterations << "," << r.seconds << "," << r.work.newtonIterations << "," << r.work.factorizations
+      << "\n";
   }
   return o.str();
 }
@@ -300,6 +301,11 @@ FormatIterationRecord(const bmr::IterationRecord & r)
   }
   o << "  |dPhi/dp| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4) << r.innerIterations
     << "  " << std::fixed << std::setprecision(2) << r.seconds << " s";
+  if (r.work.newtonIterations > 0)
+  {
+    o << "  (" << r.work.stateSolves << " solves, " << r.work.newtonIterations << " Newton iterations, "
+      << r.work.factorizations << " factorizations)";
+  }
   return o.str();
 }
 

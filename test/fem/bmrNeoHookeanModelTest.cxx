@@ -331,6 +331,19 @@ bmrNeoHookeanModelTest(int, char *[])
     ok &= Expect(pairs >= 1 && worstRatio <= 100.0,
                  "quadratic Newton rate: r_{k+1} / r_k^2 <= 100 over " + ToString(pairs) + " asymptotic pairs (got " +
                    ToString(worstRatio) + ")");
+    // The cumulative work counts this solve and, after a second one, both (the estimator's per-solve reports).
+    const bmr::NewtonStatistics first = model.GetStatistics();
+    model.SolveAdjoint(u);
+    const unsigned int        withAdjoint = model.GetStatistics().factorizations;
+    const std::vector<double> half(cube.forces.size(), 0.0);
+    model.SolveState(half, half);
+    const bmr::SolverWork work = model.GetSolverWork();
+    std::cout << "solver work: " << work.stateSolves << " solves, " << work.newtonIterations << " Newton iterations, "
+              << work.factorizations << " factorizations, " << work.conjugateGradientIterations << " CG iterations"
+              << std::endl;
+    ok &= Expect(work.stateSolves == 2 && work.newtonIterations == first.iterations + model.GetStatistics().iterations &&
+                   work.factorizations == withAdjoint + model.GetStatistics().factorizations && first.iterations > 0,
+                 "GetSolverWork() sums the Newton iterations and factorizations of both solves and the adjoint's");
   }
 
   // 3. Small loads: the neo-Hookean state differs from the linear one by O(load^2).
