@@ -4,6 +4,7 @@ stated 68 % and 95 % intervals (a stated bound covers when it is true), and how 
 Writes table31.csv and table31.png into the output directory and prints a markdown table.
 Usage: summarize_table31.py TABLE31_RUNS.csv OUT_DIR"""
 import csv
+import math
 import statistics
 import sys
 from collections import OrderedDict
@@ -47,9 +48,16 @@ print("\nTable 3.1 with realizations (errors of the stated estimate over the rea
 print("| scene | true E [kPa] | realizations | bounds stated | mean error | SD error | fit: mean / SD error "
       "| 68 % coverage | 95 % coverage | median hi95/lo95 | median register [s] |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+
+
+def percent(x, sign=""):
+    """x as a percentage, or a dash when undetermined (every realization a bound, or one realization's SD)."""
+    return "–" if math.isnan(x) else f"{100 * x:{sign}.1f} %"
+
+
 for d in rows:
-    print(f'| {d["scene"]} | {d["E"]:g} | {d["n"]} | {d["bounds"]} | {100 * d["mean"]:+.1f} % | {100 * d["sd"]:.1f} % | '
-          f'{100 * d["fit_mean"]:+.1f} / {100 * d["fit_sd"]:.1f} % | {d["cov68"]:.2f} | {d["cov95"]:.2f} | '
+    print(f'| {d["scene"]} | {d["E"]:g} | {d["n"]} | {d["bounds"]} | {percent(d["mean"], "+")} | {percent(d["sd"])} | '
+          f'{percent(d["fit_mean"], "+")} / {percent(d["fit_sd"])} | {d["cov68"]:.2f} | {d["cov95"]:.2f} | '
           f'{d["width"]:.2f} | {d["seconds"]:.0f} |')
 every = [r for rs in groups.values() for r in rs]
 print(f'\nall {len(every)} pairs: 68 % coverage '

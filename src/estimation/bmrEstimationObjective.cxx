@@ -439,8 +439,8 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
         }
       }
     }
-    // The barrier (nonlinear models) enters the value that accepts or rejects a step, not the Jacobian: few
-    // elements are compressed at a fit, and the value alone keeps the steps from crushing more.
+    // The barrier (nonlinear models) enters the value that accepts or rejects a step, not the Jacobian (which
+    // would need du/dp at every dof): a step that crushes elements is rejected like any rise of Phi.
     const double barrier = m_Barrier ? m_Barrier->Evaluate(u, nullptr) : 0.0;
     return 0.5 * rp.squaredNorm() + 0.5 * alpha * p.squaredNorm() + barrier;
   };
