@@ -46,6 +46,8 @@ struct BiomechanicalRegistration_EXPORT SolverWork
   std::uint64_t newtonIterations{ 0 };            ///< a nonlinear model's Newton iterations (0 for a linear one)
   std::uint64_t factorizations{ 0 };              ///< numeric sparse Cholesky factorizations (nonlinear models)
   std::uint64_t conjugateGradientIterations{ 0 }; ///< preconditioned CG iterations that replaced factorizations
+  std::uint64_t rejectedIncrements{ 0 };          ///< load increments halved (nonlinear models)
+  std::uint64_t coldStarts{ 0 };                  ///< solves whose warm start failed and that began again at u = 0
 };
 
 class BiomechanicalRegistration_EXPORT ForwardModel

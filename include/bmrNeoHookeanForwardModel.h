@@ -42,6 +42,10 @@ struct BiomechanicalRegistration_EXPORT NewtonSettings
   double minimumIncrement{ 1.0 / 4096.0 };
   /** An increment that converged in at most this many iterations doubles the next one. */
   unsigned int easyIterations{ 5 };
+  /** When the path from the last equilibrium fails, try the loads again from u = 0. An estimator turns it off:
+   * its trial points whose warm path fails are declared infeasible at once (on the pelvis every such restart
+   * failed as well, and each cost ~5 s). */
+  bool restartFromRest{ true };
 };
 
 /** What the last NeoHookeanForwardModel::SolveState() did. */

@@ -19,6 +19,7 @@
 #define bmrSimulation_h
 
 #include "bmrForwardModel.h"
+#include "bmrNeoHookeanForwardModel.h"
 #include "bmrLinearElasticModel.h"
 #include "bmrScene.h"
 
@@ -84,11 +85,12 @@ struct BiomechanicalRegistration_EXPORT ForwardSimulation
 
 /** The forward model of the scene's tissue model (Scene::model: LinearForwardModel or
  * NeoHookeanForwardModel) on \a mesh, which must outlive it, with \a materials (SceneMaterials() or
- * estimated moduli). */
+ * estimated moduli); \a newton: the neo-Hookean model's Newton settings. */
 BiomechanicalRegistration_EXPORT std::unique_ptr<ForwardModel>
                                  MakeForwardModel(const Scene &                                      scene,
                                                   const TetrahedralMesh &                            mesh,
-                                                  const std::map<std::int32_t, MaterialParameters> & materials);
+                                                  const std::map<std::int32_t, MaterialParameters> & materials,
+                                                  const NewtonSettings &                             newton = NewtonSettings{});
 
 /** Von Mises stress [kPa] of every element in the state \a u [mm] under the scene's model: of the linear
  * stress, or of the Cauchy stress of the neo-Hookean model. */

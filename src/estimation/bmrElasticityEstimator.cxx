@@ -85,6 +85,8 @@ WorkSince(const SolverWork & now, const SolverWork & before)
   w.newtonIterations = now.newtonIterations - before.newtonIterations;
   w.factorizations = now.factorizations - before.factorizations;
   w.conjugateGradientIterations = now.conjugateGradientIterations - before.conjugateGradientIterations;
+  w.rejectedIncrements = now.rejectedIncrements - before.rejectedIncrements;
+  w.coldStarts = now.coldStarts - before.coldStarts;
   return w;
 }
 

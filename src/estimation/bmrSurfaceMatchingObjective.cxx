@@ -111,7 +111,9 @@ SceneObjectiveParts::SceneObjectiveParts(const TetrahedralMesh &       mesh,
   BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
   loads.reset(
     new WallLoads(mesh, bc.dirichletNodes, bc.dirichletValues, std::move(bc.forces), SceneLoadedWalls(scene, mesh)));
-  model = MakeForwardModel(scene, mesh, SceneMaterials(scene));
+  NewtonSettings newton;
+  newton.restartFromRest = false; // a trial point whose warm path fails is infeasible
+  model = MakeForwardModel(scene, mesh, SceneMaterials(scene), newton);
 }
 } // namespace detail
 

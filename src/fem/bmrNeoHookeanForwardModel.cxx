@@ -101,6 +101,7 @@ struct NeoHookeanForwardModel::Impl
     w.newtonIterations += statistics.iterations;
     w.factorizations += statistics.factorizations;
     w.conjugateGradientIterations += statistics.conjugateGradientIterations;
+    w.rejectedIncrements += statistics.rejectedIncrements;
     return w;
   }
 
@@ -891,8 +892,9 @@ NeoHookeanForwardModel::TrySolveState(const std::vector<double> & forces,
     d.statistics.warmStart = true;
     ok = d.FollowPath(u, d.stateForces, d.statePrescribed, f1, g1, reached, failure);
   }
-  if (!ok)
+  if (!ok && (!d.hasState || d.settings.restartFromRest))
   {
+    d.earlierWork.coldStarts += d.hasState; // a warm start was tried and failed
     d.statistics.warmStart = false;
     u.assign(d.ndof, 0.0);
     const std::vector<double> zero(d.ndof, 0.0);

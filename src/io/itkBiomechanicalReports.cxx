@@ -304,7 +304,8 @@ FormatIterationRecord(const bmr::IterationRecord & r)
   if (r.work.newtonIterations > 0)
   {
     o << "  (" << r.work.stateSolves << " solves, " << r.work.newtonIterations << " Newton iterations, "
-      << r.work.factorizations << " factorizations)";
+      << r.work.factorizations << " factorizations, " << r.work.rejectedIncrements << " halved increments, "
+      << r.work.coldStarts << " cold starts)";
   }
   return o.str();
 }

@@ -369,11 +369,12 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
 std::unique_ptr<ForwardModel>
 MakeForwardModel(const Scene &                                      scene,
                  const TetrahedralMesh &                            mesh,
-                 const std::map<std::int32_t, MaterialParameters> & materials)
+                 const std::map<std::int32_t, MaterialParameters> & materials,
+                 const NewtonSettings &                             newton)
 {
   if (scene.model == MaterialModelEnum::NeoHookean)
   {
-    return std::make_unique<NeoHookeanForwardModel>(mesh, materials);
+    return std::make_unique<NeoHookeanForwardModel>(mesh, materials, newton);
   }
   return std::make_unique<LinearForwardModel>(mesh, materials);
 }

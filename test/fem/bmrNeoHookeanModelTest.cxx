@@ -567,6 +567,33 @@ bmrNeoHookeanModelTest(int, char *[])
         model.SolveState({}, prescribed);
       },
       "could not be applied");
+    // The same unreachable load after a reachable one (5 % of it): the warm path fails, and only with
+    // restartFromRest is the load tried again from u = 0 (what an estimator's infeasible trial points cost).
+    for (bool restart : { true, false })
+    {
+      bmr::NewtonSettings settings;
+      settings.minimumIncrement = 1.0 / 64.0;
+      settings.restartFromRest = restart;
+      bmr::NeoHookeanForwardModel model(mesh, { { 1, { 10.0, 0.3 } } }, settings);
+      const auto                  boundary =
+        NodesWhere(mesh, [](const double * X) { return X[0] != 1.0 || X[1] != 1.0 || X[2] != 1.0; });
+      model.SetConstrainedNodes(boundary);
+      std::vector<double> mirrored(mesh.points.size(), 0.0), small(mesh.points.size(), 0.0), u;
+      for (std::int32_t n : boundary)
+      {
+        mirrored[3 * n] = 2.0 - 2.0 * mesh.points[3 * n];
+        small[3 * n] = 0.05 * mirrored[3 * n];
+      }
+      const bool reachable = model.TrySolveState({}, small, u);
+      const bool unreachable = model.TrySolveState({}, mirrored, u);
+      const bmr::SolverWork work = model.GetSolverWork();
+      std::cout << "restartFromRest " << restart << ": " << work.stateSolves << " solves, " << work.coldStarts
+                << " cold starts, " << work.rejectedIncrements << " halved increments" << std::endl;
+      ok &= Expect(reachable && !unreachable && work.stateSolves == 2 && work.coldStarts == (restart ? 1u : 0u) &&
+                     work.rejectedIncrements >= 6,
+                   std::string("a failed warm path ") + (restart ? "is" : "is not") +
+                     " retried from rest, and the halvings (>= 6 down to 1/64) are counted");
+    }
   }
   // 8. The thick hollow sphere (5 to 10 mm) inflated by 2.5 mm at its inner wall, outer surface free, against
   // the radial solution of the 1-D equilibrium ODE (solved here to 1e-8 mm: RK4 on 4000 and 8000 steps agree).
