@@ -42,8 +42,8 @@ struct BiomechanicalRegistration_EXPORT LoadSolution
 /** \brief The estimation objective composed of a forward model, a load parameterization and data terms,
  * with its adjoint gradients.
  *
- * \f[ \Phi(E, p) = \sum_t \Phi_t(u) + \Phi_b(u) + R(p), \qquad f_{int}(u; E) = f(p) \text{ on free dofs},\ u = \bar u(p)
- *     \text{ on constrained dofs}, \f]
+ * \f[ \Phi(E, p) = \sum_t \Phi_t(u) + \Phi_b(u) + R(p), \f]
+ * \f[ f_{int}(u; E) = f(p) \text{ on free dofs},\ u = \bar u(p) \text{ on constrained dofs}, \f]
  * with \f$g = \partial(\sum_t\Phi_t + \Phi_b)/\partial u\f$; \f$\Phi_b\f$ is the CompressionBarrier of a
  * nonlinear model (0 for a linear one). Adjoint (one solve with the cached factorization):
  * \f$K_T\lambda = g\f$ on the free dofs, \f$\lambda = 0\f$ on the constrained ones; then
@@ -142,13 +142,13 @@ private:
   double
   InfeasibleValue(std::vector<double> * gradientP, std::vector<double> * gradientLogE);
 
-  ForwardModel &                m_Model;
-  LoadParameterization &        m_Loads;
-  std::vector<const DataTerm *> m_Terms;
-  std::vector<std::int32_t>     m_UnknownLabels;
-  std::size_t                   m_Inverted{ 0 };
-  std::size_t                   m_Infeasible{ 0 };
-  double                        m_LastFeasibleValue{ 0.0 };
+  ForwardModel &                      m_Model;
+  LoadParameterization &              m_Loads;
+  std::vector<const DataTerm *>       m_Terms;
+  std::vector<std::int32_t>           m_UnknownLabels;
+  std::size_t                         m_Inverted{ 0 };
+  std::size_t                         m_Infeasible{ 0 };
+  double                              m_LastFeasibleValue{ 0.0 };
   std::unique_ptr<CompressionBarrier> m_Barrier;
 };
 

@@ -341,9 +341,10 @@ bmrNeoHookeanModelTest(int, char *[])
     std::cout << "solver work: " << work.stateSolves << " solves, " << work.newtonIterations << " Newton iterations, "
               << work.factorizations << " factorizations, " << work.conjugateGradientIterations << " CG iterations"
               << std::endl;
-    ok &= Expect(work.stateSolves == 2 && work.newtonIterations == first.iterations + model.GetStatistics().iterations &&
-                   work.factorizations == withAdjoint + model.GetStatistics().factorizations && first.iterations > 0,
-                 "GetSolverWork() sums the Newton iterations and factorizations of both solves and the adjoint's");
+    ok &=
+      Expect(work.stateSolves == 2 && work.newtonIterations == first.iterations + model.GetStatistics().iterations &&
+               work.factorizations == withAdjoint + model.GetStatistics().factorizations && first.iterations > 0,
+             "GetSolverWork() sums the Newton iterations and factorizations of both solves and the adjoint's");
   }
 
   // 3. Small loads: the neo-Hookean state differs from the linear one by O(load^2).
@@ -584,8 +585,8 @@ bmrNeoHookeanModelTest(int, char *[])
         mirrored[3 * n] = 2.0 - 2.0 * mesh.points[3 * n];
         small[3 * n] = 0.05 * mirrored[3 * n];
       }
-      const bool reachable = model.TrySolveState({}, small, u);
-      const bool unreachable = model.TrySolveState({}, mirrored, u);
+      const bool            reachable = model.TrySolveState({}, small, u);
+      const bool            unreachable = model.TrySolveState({}, mirrored, u);
       const bmr::SolverWork work = model.GetSolverWork();
       std::cout << "restartFromRest " << restart << ": " << work.stateSolves << " solves, " << work.coldStarts
                 << " cold starts, " << work.rejectedIncrements << " halved increments" << std::endl;
