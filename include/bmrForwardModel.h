@@ -20,9 +20,23 @@
 
 #include "bmrLinearElasticModel.h"
 
+#include <cstdint>
 #include <memory>
 
 namespace bmr {
+
+/** What a model's solves cost since it was constructed: counts, for speed studies and progress reports.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationFEM
+ */
+struct BiomechanicalRegistration_EXPORT SolverWork
+{
+  std::uint64_t stateSolves{ 0 };                 ///< SolveState() / TrySolveState() calls
+  std::uint64_t newtonIterations{ 0 };            ///< a nonlinear model's Newton iterations (0 for a linear one)
+  std::uint64_t factorizations{ 0 };              ///< numeric sparse Cholesky factorizations (nonlinear models)
+  std::uint64_t conjugateGradientIterations{ 0 }; ///< preconditioned CG iterations that replaced factorizations
+  std::uint64_t rejectedIncrements{ 0 };          ///< load increments halved (nonlinear models)
+  std::uint64_t coldStarts{ 0 };                  ///< solves whose warm start failed and that began again at u = 0
+};
 
 /** \brief The forward model of an estimation: the state u for given loads and moduli, and what the
  * adjoint gradients need from it.
@@ -39,17 +53,6 @@ namespace bmr {
  * Units: u in mm, f in mN, E in kPa.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationFEM
  */
-/** What a model's solves cost since it was constructed: counts, for speed studies and progress reports. */
-struct BiomechanicalRegistration_EXPORT SolverWork
-{
-  std::uint64_t stateSolves{ 0 };                 ///< SolveState() / TrySolveState() calls
-  std::uint64_t newtonIterations{ 0 };            ///< a nonlinear model's Newton iterations (0 for a linear one)
-  std::uint64_t factorizations{ 0 };              ///< numeric sparse Cholesky factorizations (nonlinear models)
-  std::uint64_t conjugateGradientIterations{ 0 }; ///< preconditioned CG iterations that replaced factorizations
-  std::uint64_t rejectedIncrements{ 0 };          ///< load increments halved (nonlinear models)
-  std::uint64_t coldStarts{ 0 };                  ///< solves whose warm start failed and that began again at u = 0
-};
-
 class BiomechanicalRegistration_EXPORT ForwardModel
 {
 public:
