@@ -44,7 +44,7 @@ struct BiomechanicalRegistration_EXPORT NewtonSettings
   unsigned int easyIterations{ 5 };
   /** When the path from the last equilibrium fails, try the loads again from u = 0. An estimator turns it off:
    * its trial points whose warm path fails are declared infeasible at once (on the pelvis every such restart
-   * failed as well, and each cost ~5 s). */
+   * failed as well, and each cost ~6 s). */
   bool restartFromRest{ true };
 };
 
