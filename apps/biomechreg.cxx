@@ -53,6 +53,11 @@ ParsePhantomSettings(const Arguments & args)
   o.grid = GridFromArguments(args, o.grid);
   o.prostateE = args.Number("--true-E-kPa", o.prostateE);
   o.prostateNu = args.Number("--true-nu", o.prostateNu);
+  o.tissueE = args.Number("--tissue-E-kPa", o.tissueE);
+  if (!(o.tissueE > 0.0))
+  {
+    throw UsageError("--tissue-E-kPa must be > 0 (the truth's soft tissue; the estimation scene assumes 10 kPa)");
+  }
   o.bladderMM = args.Number("--bladder-mm", o.bladderMM);
   o.rectumMM = args.Number("--rectum-mm", o.rectumMM);
   o.fractions = args.Choice("--fractions", { "off", "on" }) == "on";

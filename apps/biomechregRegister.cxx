@@ -112,8 +112,10 @@ ParseRegistrationSettings(const Arguments & args)
   {
     throw UsageError("--wall-regularization must be >= 0");
   }
-  s.walls.motion = args.Choice("--wall-motion", { "normal", "free" }) == "normal" ? bmr::WallMotionEnum::AlongNormals
-                                                                                  : bmr::WallMotionEnum::Free;
+  const std::string motion = args.Choice("--wall-motion", { "normal", "free", "traction" });
+  s.walls.motion = motion == "normal" ? bmr::WallMotionEnum::AlongNormals
+                   : motion == "free" ? bmr::WallMotionEnum::Free
+                                      : bmr::WallMotionEnum::NormalTraction;
   e.limitElementInversion = args.Choice("--element-inversion", { "allow", "limit" }) == "limit";
   if (e.limitElementInversion && s.walls.controlSpacing > 0.0)
   {

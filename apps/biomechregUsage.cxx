@@ -33,7 +33,7 @@ const std::pair<const char *, const char *> commands[] = {
     "  biomechreg phantom --out DIR [--scene pelvis|spheres] [--size NX,NY,NZ] [--spacing SX,SY,SZ mm]\n"
     "                     [--origin X,Y,Z mm] [--rotate-z-deg A] [--true-E-kPa E] [--true-nu NU] [--bladder-mm D]\n"
     "                     [--rectum-mm D] [--wall-load normal|point] [--truth-mesh-scale F] [--fractions off|on]\n"
-    "                     [--model linear|neo_hookean]\n"
+    "                     [--model linear|neo_hookean] [--tissue-E-kPa E (truth's soft tissue; scene assumes 10)]\n"
     "                     [--bladder-kPa P --rectum-kPa P (pressure loads instead)]\n"
     "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
     "                     [--tracking-noise-mm S (landmarks_tracked.csv: the fixed seeds + N(0, S^2); 0.5)]\n"
@@ -45,7 +45,7 @@ const std::pair<const char *, const char *> commands[] = {
   { "register",
     "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
     "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
-    "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free]\n"
+    "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free|traction]\n"
     "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
     "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
     "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"

@@ -102,7 +102,10 @@ enum class WallMotionEnum : std::uint8_t
   /** Every wall node moves along its wall's normal: one scalar per control point. */
   AlongNormals,
   /** Every wall node moves in any direction: three parameters per control point. */
-  Free
+  Free,
+  /** The walls are not prescribed: each control point carries an unknown traction along the wall's normal (a
+   * lumen pressure that may vary along the wall), and the walls move as the tissue lets them. */
+  NormalTraction
 };
 BiomechanicalRegistration_EXPORT std::ostream &
                                  operator<<(std::ostream & os, WallMotionEnum value);
@@ -125,7 +128,8 @@ struct BiomechanicalRegistration_EXPORT LoadedWall
   std::int32_t              faceLabel{ 0 };
 };
 
-/** \brief Unknown loads as displacements of the loaded walls (the control nodes), dissertation ch. 3.
+/** \brief Unknown loads on the loaded walls (the control nodes), as the wall displacements they cause or as
+ * normal tractions, dissertation ch. 3.
  *
  * For a given E the map between the wall displacement d and the nodal forces F on the walls is the
  * (invertible) Schur complement, F = S(E) d, so \f$\min_F \Phi(E,F) = \min_d \Phi(E,d)\f$: both give the
@@ -139,6 +143,15 @@ struct BiomechanicalRegistration_EXPORT LoadedWall
  *   n_k the unit wall normal at control node k: area-weighted face normals averaged over 4 mm of the same
  *   wall, which removes the tilt of the voxel staircase. The distance objective sees only the normal part
  *   of a wall's motion; left free, the tangential part shapes the stiff organ's surface and biases E;
+ * - WallMotionEnum::NormalTraction: the walls are free dofs loaded by the nodal forces
+ *   \f$ f_k = \kappa_k A_k n_k (W s)_k \f$ [mN], with \f$A_k\f$ the node's share of its wall's area [mm²]
+ *   (a third of each adjacent face's) and \f$\kappa_k = 4\mu / a_w\f$ [kPa per unit s] for the wall w of
+ *   node k, \f$a_w = \sqrt{A_w / 4\pi}\f$ its equivalent radius and \f$\mu\f$ the surrounding tissue's
+ *   shear modulus (SetTractionShearModulus()): the pressure that moves the wall of a spherical cavity in an
+ *   infinite medium by s mm (Lamé's solution, u = p a / 4μ), so that s reads as millimetres of wall motion
+ *   and the same prior weight serves both. A lumen under pressure moves its wall this way, tangentially as
+ *   well, where prescribed normal motions force the tissue to follow the normal. Only the held nodes are
+ *   constrained, so some label must be held (a fixed bone, or a fixed region-of-interest boundary);
  * - prior \f$ R(p) = \tfrac{\alpha}{2} |p|^2 \f$ (SetRegularization()): independent of E, so it does not
  *   push the moduli one way, and it picks the least-displacement optimum along the near-null directions
  *   of a wall sliding along itself.
@@ -166,10 +179,16 @@ public:
   /** Weight alpha [1] of the prior alpha/2 |p|^2 (default 0); finite and >= 0. */
   void
   SetRegularization(double alpha);
+  /** Along the normals, free, or normal tractions; GetConstrainedNodes() changes with it (the held nodes
+   * only for NormalTraction), so set it before the forward model takes the constrained nodes. Throws for
+   * NormalTraction when no node is held (nothing would keep the mesh in place). */
   void
   SetMotion(WallMotionEnum motion);
   WallMotionEnum
   GetMotion() const;
+  /** mu [kPa] of the traction scale of NormalTraction (default 1): the tissue around the walls. */
+  void
+  SetTractionShearModulus(double mu);
   /** The load-controlled wall nodes, sorted. */
   const std::vector<std::int32_t> &
   GetControlNodes() const;

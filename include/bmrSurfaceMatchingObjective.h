@@ -74,6 +74,10 @@ public:
   /** WallLoads::SetMotion(): along the normals (true, default) or free. */
   void
   SetWallMotionAlongNormals(bool normal);
+  /** WallLoads::SetMotion(), and the forward model's constrained nodes with it (NormalTraction frees the walls;
+   * its traction scale takes the shear modulus of the scene's gauge label). */
+  void
+  SetWallMotion(WallMotionEnum motion);
   /** The initial wall parameters by surface matching (EstimateInitialParameters()). */
   std::vector<double>
   MatchSurfaces() const

@@ -296,6 +296,9 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   bmr::GridGeometry    grid{ bmr::PelvisPhantomParameters().grid };
   double               prostateE{ 50.0 };  ///< kPa (the core of the spheres)
   double               prostateNu{ 0.40 }; ///< the estimation scene assumes 0.40
+  /** kPa: the truth's soft tissue (the spheres' outer shell). The estimation scene assumes 10 kPa whatever this is,
+   * so that a truth with 20 kPa tests a wrong assumption (dissertation Table 3.7: the estimate scales with it). */
+  double tissueE{ 10.0 };
   double               bladderMM{ 4.0 };   ///< filling [mm]; the spheres: inward motion of the outer boundary
   double               rectumMM{ 3.0 };
   bmr::WallFillingEnum filling{ bmr::WallFillingEnum::AlongNormals };
@@ -344,7 +347,10 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
   std::vector<bmr::Landmark> trackedLandmarks;
   OrganProbabilityImages     fixedFractions; ///< per objective organ, with PhantomSettings::fractions
   std::size_t                truthTetrahedra{ 0 }, truthNodes{ 0 };
-  std::vector<PipelineStage> stages;
+  /** How far each loaded wall moved in the truth [mm]: the largest and the mean |u| over the truth mesh's nodes on
+   * the wall, per load surface. For pressure loads the filling a pressure made (bladder filling = its max). */
+  std::map<std::string, std::array<double, 2>> wallMotionMaxMeanMM;
+  std::vector<PipelineStage>                   stages;
 };
 
 /** Makes a pair: the fixed images are the moving ones warped by a forward simulation with known moduli on

@@ -44,7 +44,7 @@ namespace itk {
  * GenerateData() composes the scene's objective, bmr::SurfaceMatchingObjective, from its three parts:
  * - forward model bmr::LinearForwardModel: \f$ K(E) u = f \f$, P1 tetrahedra, u = 0 on fixed walls;
  * - loads bmr::WallLoads: the wall displacements they cause, along the walls' normals by default
- *   (WallMotionAlongNormals), optionally in a smooth reduced basis (WallControlSpacing), with the
+ *   (WallMotion: or free, or normal tractions), optionally in a smooth reduced basis (WallControlSpacing), with the
  *   E-independent prior WallRegularization/2 |p|^2;
  * - data bmr::SurfaceDistanceTerm:
  *   \f$ \Phi = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l)^2 \f$;
@@ -123,9 +123,22 @@ public:
   /** Weight of the E-independent prior alpha/2 |p|^2 on the wall parameters (bmr::WallLoads::SetRegularization()). */
   itkSetMacro(WallRegularization, double);
   itkGetConstMacro(WallRegularization, double);
-  /** Walls move along their normals (default on; bmr::WallLoads::SetMotion()). */
-  itkSetMacro(WallMotionAlongNormals, bool);
-  itkGetConstMacro(WallMotionAlongNormals, bool);
+  /** How the walls' unknown loads act (bmr::WallLoads::SetMotion()): displacements along the walls' normals
+   * (default), free displacements, or normal tractions (lumen pressures) under which the walls move as the tissue
+   * lets them. */
+  itkSetEnumMacro(WallMotion, bmr::WallMotionEnum);
+  itkGetEnumMacro(WallMotion, bmr::WallMotionEnum);
+  /** Shorthand: along the normals (on) or free (off). */
+  void
+  SetWallMotionAlongNormals(bool normal)
+  {
+    this->SetWallMotion(normal ? bmr::WallMotionEnum::AlongNormals : bmr::WallMotionEnum::Free);
+  }
+  bool
+  GetWallMotionAlongNormals() const
+  {
+    return m_WallMotion == bmr::WallMotionEnum::AlongNormals;
+  }
   itkBooleanMacro(WallMotionAlongNormals);
   itkSetMacro(FlatnessThreshold, double);
   itkGetConstMacro(FlatnessThreshold, double);
@@ -260,18 +273,18 @@ private:
   bmr::Scene               m_Scene;
   std::vector<std::string> m_DistanceMapNames;
   // Defaults: those of the library's estimator and wall loads (one place, read by the CLI too).
-  unsigned int m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
-  unsigned int m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
-  unsigned int m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
-  double       m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
-  double       m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
-  double       m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
-  bool         m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
-  bool         m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
-  double       m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
-  double       m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
-  double       m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
-  bool         m_WallMotionAlongNormals{ bmr::WallLoadSettings{}.motion == bmr::WallMotionEnum::AlongNormals };
+  unsigned int                  m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
+  unsigned int                  m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
+  unsigned int                  m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
+  double                        m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
+  double                        m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
+  double                        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
+  bool                          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
+  bool                          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
+  double                        m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
+  double                        m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
+  double                        m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
+  bmr::WallMotionEnum           m_WallMotion{ bmr::WallLoadSettings{}.motion };
   std::map<std::string, double> m_WarmStartModuli;
   double                        m_WarmStartRelativeCurvature{ 0.0 };
   SizeValueType                 m_NumberOfRejectedSteps{ 0 };

@@ -111,6 +111,11 @@ SceneObjectiveParts::SceneObjectiveParts(const TetrahedralMesh &       mesh,
   BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
   loads.reset(
     new WallLoads(mesh, bc.dirichletNodes, bc.dirichletValues, std::move(bc.forces), SceneLoadedWalls(scene, mesh)));
+  if (const SceneLabel * gauge = scene.GaugeLabel())
+  {
+    // The tissue around the walls: the scale that makes a normal traction's parameter read as mm of wall motion.
+    loads->SetTractionShearModulus(gauge->youngsModulus / (2.0 * (1.0 + gauge->poissonRatio)));
+  }
   NewtonSettings newton;
   newton.restartFromRest = false; // a trial point whose warm path fails is infeasible
   model = MakeForwardModel(scene, mesh, SceneMaterials(scene), newton);
@@ -139,7 +144,14 @@ SurfaceMatchingObjective::SetWallRegularization(double alpha)
 void
 SurfaceMatchingObjective::SetWallMotionAlongNormals(bool normal)
 {
-  loads->SetMotion(normal ? WallMotionEnum::AlongNormals : WallMotionEnum::Free);
+  SetWallMotion(normal ? WallMotionEnum::AlongNormals : WallMotionEnum::Free);
+}
+
+void
+SurfaceMatchingObjective::SetWallMotion(WallMotionEnum motion)
+{
+  loads->SetMotion(motion);
+  model->SetConstrainedNodes(loads->GetConstrainedNodes());
 }
 
 } // namespace bmr

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <ostream>
 #include <set>
 
@@ -68,6 +69,43 @@ FaceNormalSums(const TetrahedralMesh &           mesh,
   return normals;
 }
 
+/** Each control node's share of the area of the boundary faces labeled \a faceLabels (a third of each adjacent
+ * face's) [mm^2], and the area of the faces of each label [mm^2]. */
+std::vector<double>
+NodalFaceAreas(const TetrahedralMesh &           mesh,
+               const std::set<std::int32_t> &    faceLabels,
+               const std::vector<std::int32_t> & controlIndex,
+               std::size_t                       numberOfControlNodes,
+               std::map<std::int32_t, double> &  areaOfLabel)
+{
+  std::vector<double> areas(numberOfControlNodes, 0.0);
+  for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
+  {
+    if (faceLabels.count(mesh.boundaryFaceLabels[f]) == 0)
+    {
+      continue;
+    }
+    const std::int32_t * v = &mesh.boundaryFaces[3 * f];
+    const double *       x0 = &mesh.points[3 * static_cast<std::size_t>(v[0])];
+    const double *       x1 = &mesh.points[3 * static_cast<std::size_t>(v[1])];
+    const double *       x2 = &mesh.points[3 * static_cast<std::size_t>(v[2])];
+    const double         a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+    const double         b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+    const double         area =
+      0.5 * std::sqrt(std::pow(a[1] * b[2] - a[2] * b[1], 2) + std::pow(a[2] * b[0] - a[0] * b[2], 2) +
+                      std::pow(a[0] * b[1] - a[1] * b[0], 2));
+    areaOfLabel[mesh.boundaryFaceLabels[f]] += area;
+    for (int i = 0; i < 3; ++i)
+    {
+      if (controlIndex[v[i]] >= 0)
+      {
+        areas[static_cast<std::size_t>(controlIndex[v[i]])] += area / 3.0;
+      }
+    }
+  }
+  return areas;
+}
+
 /** The faces of a mesh of a voxelized wall tilt with the voxel staircase: Gaussian average of the face
  * normals over NormalSmoothing mm of the same wall, so that "along the normal" means the organ's normal;
  * then unit length (a node on no wall face gets the zero vector). */
@@ -109,6 +147,40 @@ SmoothedUnitNormals(const TetrahedralMesh & mesh, const WallList & walls, const 
   return smoothed;
 }
 
+/** NormalTraction's force per unit parameter and unit shear modulus at each control node k (3 values):
+ * 4 A_k n_k / a_w [mm], A_k the node's share of its walls' area, n_k its smoothed normal and
+ * a_w = sqrt(A_w / 4 pi) the equivalent radius of the first wall it lies on. */
+std::vector<double>
+TractionForcesPerUnit(const TetrahedralMesh &           mesh,
+                      const std::vector<LoadedWall> &   walls,
+                      const std::set<std::int32_t> &    faceLabels,
+                      const std::vector<std::int32_t> & controlIndex,
+                      const WallList &                  wallNodes,
+                      const std::vector<double> &       normals)
+{
+  std::map<std::int32_t, double> areaOfLabel;
+  const std::vector<double> nodeArea = NodalFaceAreas(mesh, faceLabels, controlIndex, normals.size() / 3, areaOfLabel);
+  std::vector<double>       forces(normals.size(), 0.0);
+  std::vector<char>         done(nodeArea.size(), 0);
+  for (std::size_t w = 0; w < walls.size(); ++w)
+  {
+    const double radius = std::sqrt(areaOfLabel[walls[w].faceLabel] / (4.0 * 3.14159265358979323846));
+    for (const auto & node : wallNodes[w])
+    {
+      const auto k = static_cast<std::size_t>(node.first);
+      if (!done[k] && radius > 0.0)
+      {
+        done[k] = 1;
+        for (int c = 0; c < 3; ++c)
+        {
+          forces[3 * k + c] = 4.0 * nodeArea[k] * normals[3 * k + c] / radius;
+        }
+      }
+    }
+  }
+  return forces;
+}
+
 std::vector<double>
 FirstComponents(const std::vector<double> & q)
 {
@@ -130,6 +202,8 @@ operator<<(std::ostream & os, WallMotionEnum value)
       return os << "bmr::WallMotionEnum::AlongNormals";
     case WallMotionEnum::Free:
       return os << "bmr::WallMotionEnum::Free";
+    case WallMotionEnum::NormalTraction:
+      return os << "bmr::WallMotionEnum::NormalTraction";
   }
   return os << "INVALID VALUE FOR bmr::WallMotionEnum";
 }
@@ -144,24 +218,32 @@ struct WallLoads::Impl
   std::vector<double>        forces;         // 3N or empty
   WallList                   walls;          // per wall: (control index, mesh node)
   std::vector<double>        normals;        // 3 per control node
+  std::vector<double>        tractionForces; // 3 per control node: 4 A_k n_k / a_w [mm], the force per unit s and mu
+  std::vector<std::int32_t>  heldSorted;
   std::unique_ptr<WallBasis> basis;
   double                     regularization{ 0.0 };
+  double                     shearModulus{ 1.0 }; // kPa
   WallMotionEnum             motion{ WallMotionEnum::AlongNormals };
 
   explicit Impl(const TetrahedralMesh & m)
     : mesh(m)
   {}
   bool
-  AlongNormals() const
+  Scalar() const
   {
-    return motion == WallMotionEnum::AlongNormals;
+    return motion != WallMotionEnum::Free;
   }
-  /** Wall displacement d (3 per control node): d = W p, or along the normals d_k = n_k (W s)_k, the
-   * scalar s blended by the same weights (component 0 of the 3-vector basis). */
-  std::vector<double>
-  Expand(const std::vector<double> & p) const
+  bool
+  Traction() const
   {
-    if (!AlongNormals())
+    return motion == WallMotionEnum::NormalTraction;
+  }
+  /** Per control node, 3 values: d = W p, or for a scalar per control point (W s)_k times \a directions_k (the
+   * scalar s blended by the same weights: component 0 of the 3-vector basis). */
+  std::vector<double>
+  Expand(const std::vector<double> & p, const std::vector<double> & directions) const
+  {
+    if (!Scalar())
     {
       return basis->Expand(p);
     }
@@ -176,24 +258,50 @@ struct WallLoads::Impl
       const double amplitude = d[3 * k];
       for (int c = 0; c < 3; ++c)
       {
-        d[3 * k + c] = amplitude * normals[3 * k + c];
+        d[3 * k + c] = amplitude * directions[3 * k + c];
       }
     }
     return d;
   }
-  /** Per-control-node vectors projected on the normals into component 0. */
+  /** Wall displacement d (3 per control node): d = W p, or along the normals d_k = n_k (W s)_k. */
   std::vector<double>
-  NormalComponents(const std::vector<double> & v) const
+  Expand(const std::vector<double> & p) const
+  {
+    return Expand(p, normals);
+  }
+  /** NormalTraction's nodal forces [mN] (3N): the base forces plus mu 4 A_k n_k / a_w (W s)_k at control node k. */
+  std::vector<double>
+  TractionForces(std::vector<double> base, const std::vector<double> & s) const
+  {
+    base.resize(basePrescribed.size(), 0.0);
+    const std::vector<double> f = Expand(s, tractionForces);
+    for (std::size_t k = 0; k < controlNodes.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        base[3 * static_cast<std::size_t>(controlNodes[k]) + c] += shearModulus * f[3 * k + c];
+      }
+    }
+    return base;
+  }
+  /** Per-control-node vectors projected on \a directions (3 per control node) into component 0. */
+  std::vector<double>
+  Components(const std::vector<double> & v, const std::vector<double> & directions) const
   {
     std::vector<double> n(v.size(), 0.0);
     for (std::size_t k = 0; k < controlNodes.size(); ++k)
     {
       for (int c = 0; c < 3; ++c)
       {
-        n[3 * k] += normals[3 * k + c] * v[3 * k + c];
+        n[3 * k] += directions[3 * k + c] * v[3 * k + c];
       }
     }
     return n;
+  }
+  std::vector<double>
+  NormalComponents(const std::vector<double> & v) const
+  {
+    return Components(v, normals);
   }
   /** The 3 values per control node of a nodal vector (3N). */
   std::vector<double>
@@ -225,7 +333,7 @@ struct WallLoads::Impl
   std::size_t
   ParametersPerControlPoint() const
   {
-    return AlongNormals() ? 1 : 3;
+    return Scalar() ? 1 : 3;
   }
   void
   CheckSize(const std::vector<double> & p, const char * where) const
@@ -296,6 +404,9 @@ WallLoads::WallLoads(const TetrahedralMesh &           mesh,
   }
   d.basis.reset(new WallBasis(mesh.points, d.walls, d.controlNodes.size(), 0.0));
   d.normals = SmoothedUnitNormals(mesh, d.walls, FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size()));
+  d.tractionForces = TractionForcesPerUnit(mesh, walls, faceLabels, controlIndex, d.walls, d.normals);
+  d.heldSorted = heldNodes;
+  std::sort(d.heldSorted.begin(), d.heldSorted.end());
   d.constrained = heldNodes;
   d.constrained.insert(d.constrained.end(), d.controlNodes.begin(), d.controlNodes.end());
   std::sort(d.constrained.begin(), d.constrained.end());
@@ -326,7 +437,23 @@ WallLoads::SetRegularization(double alpha)
 void
 WallLoads::SetMotion(WallMotionEnum motion)
 {
+  if (motion == WallMotionEnum::NormalTraction && m_Impl->heldNodes.empty())
+  {
+    Fail("WallLoads::SetMotion",
+         "normal tractions on the walls leave no node held: nothing keeps the mesh in place "
+         "(the scene needs a fixed label or a fixed region-of-interest boundary)");
+  }
   m_Impl->motion = motion;
+}
+
+void
+WallLoads::SetTractionShearModulus(double mu)
+{
+  if (!(std::isfinite(mu) && mu > 0.0))
+  {
+    Fail("WallLoads::SetTractionShearModulus", "the shear modulus must be finite and > 0 kPa");
+  }
+  m_Impl->shearModulus = mu;
 }
 
 WallMotionEnum
@@ -350,7 +477,7 @@ WallLoads::GetNumberOfParameters() const
 const std::vector<std::int32_t> &
 WallLoads::GetConstrainedNodes() const
 {
-  return m_Impl->constrained;
+  return m_Impl->Traction() ? m_Impl->heldSorted : m_Impl->constrained;
 }
 
 const std::vector<std::int32_t> &
@@ -363,6 +490,10 @@ BoundaryLoad
 WallLoads::Apply(const std::vector<double> & p) const
 {
   m_Impl->CheckSize(p, "WallLoads::Apply");
+  if (m_Impl->Traction())
+  {
+    return { m_Impl->TractionForces(m_Impl->forces, p), m_Impl->basePrescribed };
+  }
   return { m_Impl->forces, m_Impl->WithWalls(m_Impl->basePrescribed, m_Impl->Expand(p)) };
 }
 
@@ -371,19 +502,37 @@ WallLoads::Direction(std::size_t j) const
 {
   std::vector<double> unit(GetNumberOfParameters(), 0.0);
   unit.at(j) = 1.0;
-  return { {}, m_Impl->WithWalls(std::vector<double>(m_Impl->basePrescribed.size(), 0.0), m_Impl->Expand(unit)) };
+  const std::vector<double> zero(m_Impl->basePrescribed.size(), 0.0);
+  if (m_Impl->Traction())
+  {
+    return { m_Impl->TractionForces(zero, unit), zero };
+  }
+  return { {}, m_Impl->WithWalls(zero, m_Impl->Expand(unit)) };
 }
 
 std::vector<double>
 WallLoads::PullBackGradient(const std::vector<double> & p,
                             const std::vector<double> & prescribedSensitivity,
-                            const std::vector<double> &) const
+                            const std::vector<double> & forceSensitivity) const
 {
-  const Impl &              d = *m_Impl;
-  const std::vector<double> atWalls = d.AtControlNodes(prescribedSensitivity);
-  std::vector<double>       gradient = d.AlongNormals()
-                                         ? FirstComponents(d.basis->ExpandTranspose(d.NormalComponents(atWalls)))
-                                         : d.basis->ExpandTranspose(atWalls);
+  const Impl & d = *m_Impl;
+  // Traction: dPhi/df at the walls (the adjoint), through f_k = mu 4 A_k n_k / a_w (W s)_k.
+  const std::vector<double> atWalls = d.AtControlNodes(d.Traction() ? forceSensitivity : prescribedSensitivity);
+  std::vector<double>       gradient;
+  if (d.Traction())
+  {
+    std::vector<double> h = d.Components(atWalls, d.tractionForces);
+    for (double & x : h)
+    {
+      x *= d.shearModulus;
+    }
+    gradient = FirstComponents(d.basis->ExpandTranspose(h));
+  }
+  else
+  {
+    gradient = d.Scalar() ? FirstComponents(d.basis->ExpandTranspose(d.NormalComponents(atWalls)))
+                          : d.basis->ExpandTranspose(atWalls);
+  }
   for (std::size_t i = 0; i < p.size(); ++i)
   {
     gradient[i] += d.regularization * p[i];
@@ -402,7 +551,8 @@ WallLoads::FitDisplacement(const std::vector<double> & u) const
 {
   const Impl &              d = *m_Impl;
   const std::vector<double> atWalls = d.AtControlNodes(u);
-  return d.AlongNormals() ? FirstComponents(d.basis->Fit(d.NormalComponents(atWalls))) : d.basis->Fit(atWalls);
+  // Traction: s reads as millimetres of normal wall motion (the Lamé scale), so the normal motion is the start.
+  return d.Scalar() ? FirstComponents(d.basis->Fit(d.NormalComponents(atWalls))) : d.basis->Fit(atWalls);
 }
 
 std::vector<double>

@@ -158,7 +158,7 @@ FEMElasticityOptimizer::MakeObjective(
     new bmr::SurfaceMatchingObjective(mesh, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, mesh, samplers)));
   objective->SetWallControlSpacing(m_WallControlSpacing);
   objective->SetWallRegularization(m_WallRegularization);
-  objective->SetWallMotionAlongNormals(m_WallMotionAlongNormals);
+  objective->SetWallMotion(m_WallMotion);
   return objective;
 }
 
@@ -249,7 +249,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
   os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
-  os << indent << "WallMotionAlongNormals: " << (m_WallMotionAlongNormals ? "On" : "Off") << std::endl;
+  os << indent << "WallMotion: " << m_WallMotion << std::endl;
   os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
   for (const auto & kv : m_EstimatedYoungsModuli)
   {

@@ -265,6 +265,13 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
   j["poisson_ratio"] = ratios;
   j["tumour_volume_fraction"] = pelvis ? settings.tumourFraction : 0.0;
   j["wall_loads"] = loads;
+  // What the loads did: for pressure loads the filling (the wall's largest motion) is known only from the truth.
+  Json motion = Json::object();
+  for (const auto & wall : pair.wallMotionMaxMeanMM)
+  {
+    motion[wall.first] = { { "max", Compact(wall.second[0]) }, { "mean", Compact(wall.second[1]) } };
+  }
+  j["wall_motion_mm"] = motion;
   j["truth_mesh"] = { { "tetrahedra", pair.truthTetrahedra },
                       { "nodes", pair.truthNodes },
                       { "cell_size_mm", pair.truthScene.mesh.cellSize } };

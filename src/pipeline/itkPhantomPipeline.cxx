@@ -21,9 +21,11 @@
 
 #include "bmrError.h"
 #include "bmrDisplacementFieldRasterizer.h"
+#include "bmrTetrahedralMesh.h"
 #include "itkGridGeometryConversion.h"
 #include "itkVectorLinearInterpolateImageFunction.h"
 
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 #include <random>
@@ -75,6 +77,13 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
                                                  : bmr::SpherePhantomScene(s.prostateE, false),
                                      s.truthRefinement);
   truth.mesh.randomSeed = 12345;
+  for (bmr::SceneLabel & label : truth.labels)
+  {
+    if (label.name == (IsPelvis(s) ? "soft_tissue" : "outer"))
+    {
+      label.youngsModulus = s.tissueE;
+    }
+  }
   // The surfaces a further 0.8 x closer to the labels than the cells' scale: no uniform mesh scale of the
   // estimation scene (register --mesh-scale) can reproduce the truth's mesh.
   truth.mesh.facetDistance *= 0.8;
@@ -299,6 +308,27 @@ MoveSeeds(PhantomPair & pair, const std::vector<bmr::Seed> & seeds, const bmr::T
     pair.fixedLandmarks.push_back({ "seed" + std::to_string(i), { { X[0] + u[0], X[1] + u[1], X[2] + u[2] } } });
   }
 }
+/** Per load surface of \a scene: the largest and the mean |u| [mm] over \a mesh's nodes on that wall (the
+ * boundary faces towards the surface's label). */
+std::map<std::string, std::array<double, 2>>
+WallMotion(const bmr::Scene & scene, const bmr::TetrahedralMesh & mesh)
+{
+  std::map<std::string, std::array<double, 2>> motion;
+  for (const bmr::SceneLoad & load : scene.loads)
+  {
+    const std::vector<std::int32_t> nodes = bmr::NodesOnBoundary(mesh, scene.FindLabel(load.surface)->value);
+    double                          largest = 0.0, sum = 0.0;
+    for (std::int32_t n : nodes)
+    {
+      const double * u = &mesh.displacement[3 * std::size_t(n)];
+      const double   length = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+      largest = std::max(largest, length);
+      sum += length;
+    }
+    motion[load.surface] = { { largest, nodes.empty() ? 0.0 : sum / double(nodes.size()) } };
+  }
+  return motion;
+}
 } // namespace
 
 PhantomPair
@@ -341,6 +371,7 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer, bmr::Tet
   pair.truthField = truth.pullBack;
   pair.truthTetrahedra = truth.mesh.GetNumberOfTetrahedra();
   pair.truthNodes = truth.mesh.GetNumberOfPoints();
+  pair.wallMotionMaxMeanMM = WallMotion(pair.truthScene, truth.mesh);
   pair.stages.insert(pair.stages.end(), truth.stages.begin(), truth.stages.end());
 
   clock.Begin("warp to the fixed volume");

@@ -353,7 +353,7 @@ RunEstimation(const EstimationSetup &                                 setup,
   const bmr::WallLoadSettings & walls = setup.settings->walls;
   optimizer->SetWallControlSpacing(walls.controlSpacing);
   optimizer->SetWallRegularization(walls.regularization);
-  optimizer->SetWallMotionAlongNormals(walls.motion == bmr::WallMotionEnum::AlongNormals);
+  optimizer->SetWallMotion(walls.motion);
   if (!setup.warmStartModuli.empty())
   {
     optimizer->SetWarmStart(setup.warmStartModuli, setup.warmStartRelativeCurvature);
