@@ -4,16 +4,19 @@
 # mesh, loaded by pressure in the bladder and the rectum (the walls move as the tissue lets them; prescribed wall
 # motions squeeze thin tissue flat, which no neo-Hookean state allows), registered with `biomechreg register`.
 # Usage: benchmarks/run_neo_hookean_benchmark.sh [N realizations per row (default 3)] [SEED (default 36)]
-#   DESIGN=table36 (default): scenes A (bladder 1.0 kPa, rectum 0.5 kPa) and B (0.6 and 1.0 kPa) x prostate
-#     E in {50, 100, 150, 200} kPa; neo-Hookean truth and estimation.
-#   DESIGN=table37: scene A, truth soft tissue 20 kPa while the estimation scene assumes 10 kPa (phantom
-#     --tissue-E-kPa 20); the modulus is determined only relative to the tissue's, so expect half the truth.
+#   DESIGN=table36 (default): scenes A (bladder 2.2 kPa, rectum 1.0 kPa) and B (1.35 and 1.5 kPa), whose
+#     largest wall motions (about 8/4 and 5/6 mm at 10 kPa tissue) are Table 3.1's scenes', x prostate E in
+#     {50, 100, 150, 200} kPa; neo-Hookean truth and estimation.
+#   DESIGN=table37: scene A with the truth's soft tissue at 20 kPa (and the pressures doubled, so that the walls
+#     move as much) while the estimation scene assumes 10 kPa (phantom --tissue-E-kPa 20): the images fix only
+#     the ratio of the moduli, so expect half the truth.
 #   DESIGN=filling: bladder fillings of 5, 10, 20 and 25 mm (the bladder wall's largest motion in the truth; the
 #     pressure found by a secant search on a coarser truth mesh), prostate 100 kPa, rectum 0.5 kPa; each pair
 #     estimated with the neo-Hookean and with the linear model: E error, surface RMS, seed TRE, times.
-#   REGISTER_ARGS adds settings to every register run (default "--mesh-scale 1.5": ~37k tetrahedra, the size the
-#   issue's 60 s target names; add "--uncertainty none" for point estimates only); APPEND=1 adds rows; START=K
-#   skips the pairs before K.
+#   REGISTER_ARGS: the settings of every register run (default "--wall-motion traction --wall-spacing-mm 30
+#   --wall-regularization 0.0001": smooth normal tractions on the walls, docs/estimation.md; add "--uncertainty
+#   none" for point estimates only, "--mesh-scale 1.5" for the ~37k-tetrahedron mesh); APPEND=1 adds rows;
+#   START=K skips the pairs before K.
 # Writes benchmarks/results/neo_hookean_runs_DESIGN.csv (one row per estimation) and, through
 # summarize_neo_hookean.py, neo_hookean_DESIGN.csv, neo_hookean_DESIGN.png and a printed table.
 set -euo pipefail
@@ -22,7 +25,7 @@ bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
 count="${1:-3}"
 seed="${2:-36}"
 design="${DESIGN:-table36}"
-register_args="${REGISTER_ARGS---mesh-scale 1.5}"
+register_args="${REGISTER_ARGS---wall-motion traction --wall-spacing-mm 30 --wall-regularization 0.0001}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
 work="$(mktemp -d)"
@@ -38,9 +41,9 @@ fi
 import sys
 n, seed, design = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 if design == "table36":
-    rows = [(f"{name}", E, 10, b, r, 0) for name, b, r in (("A", 1.0, 0.5), ("B", 0.6, 1.0)) for E in (50, 100, 150, 200)]
+    rows = [(f"{name}", E, 10, b, r, 0) for name, b, r in (("A", 2.2, 1.0), ("B", 1.35, 1.5)) for E in (50, 100, 150, 200)]
 elif design == "table37":
-    rows = [("A-tissue20", E, 20, 1.0, 0.5, 0) for E in (50, 100, 150, 200)]
+    rows = [("A-tissue20", E, 20, 4.4, 2.0, 0) for E in (50, 100, 150, 200)]
 elif design == "filling":
     rows = [(f"fill{f}", 100, 10, 0, 0.5, f) for f in (5, 10, 20, 25)]
 else:
