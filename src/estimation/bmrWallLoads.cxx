@@ -21,6 +21,7 @@
 #include "bmrWallBasis.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <ostream>
@@ -33,6 +34,19 @@ namespace {
 constexpr double NormalSmoothing = 4.0;
 
 using WallList = std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>>;
+
+/** The area-weighted normal (x1 - x0) x (x2 - x0) of boundary face \a f: twice the face's area long. */
+std::array<double, 3>
+FaceAreaNormal(const TetrahedralMesh & mesh, std::size_t f)
+{
+  const std::int32_t * v = &mesh.boundaryFaces[3 * f];
+  const double *       x0 = &mesh.points[3 * static_cast<std::size_t>(v[0])];
+  const double *       x1 = &mesh.points[3 * static_cast<std::size_t>(v[1])];
+  const double *       x2 = &mesh.points[3 * static_cast<std::size_t>(v[2])];
+  const double         a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+  const double         b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+  return { { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] } };
+}
 
 /** Area-weighted normals of the boundary faces labeled \a faceLabels, summed at each control node. */
 std::vector<double>
@@ -48,13 +62,8 @@ FaceNormalSums(const TetrahedralMesh &           mesh,
     {
       continue;
     }
-    const std::int32_t * v = &mesh.boundaryFaces[3 * f];
-    const double *       x0 = &mesh.points[3 * static_cast<std::size_t>(v[0])];
-    const double *       x1 = &mesh.points[3 * static_cast<std::size_t>(v[1])];
-    const double *       x2 = &mesh.points[3 * static_cast<std::size_t>(v[2])];
-    const double         a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
-    const double         b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
-    const double areaNormal[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
+    const std::int32_t *        v = &mesh.boundaryFaces[3 * f];
+    const std::array<double, 3> areaNormal = FaceAreaNormal(mesh, f);
     for (int i = 0; i < 3; ++i)
     {
       if (controlIndex[v[i]] >= 0)
@@ -85,15 +94,9 @@ NodalFaceAreas(const TetrahedralMesh &           mesh,
     {
       continue;
     }
-    const std::int32_t * v = &mesh.boundaryFaces[3 * f];
-    const double *       x0 = &mesh.points[3 * static_cast<std::size_t>(v[0])];
-    const double *       x1 = &mesh.points[3 * static_cast<std::size_t>(v[1])];
-    const double *       x2 = &mesh.points[3 * static_cast<std::size_t>(v[2])];
-    const double         a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
-    const double         b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
-    const double         area =
-      0.5 * std::sqrt(std::pow(a[1] * b[2] - a[2] * b[1], 2) + std::pow(a[2] * b[0] - a[0] * b[2], 2) +
-                      std::pow(a[0] * b[1] - a[1] * b[0], 2));
+    const std::int32_t *        v = &mesh.boundaryFaces[3 * f];
+    const std::array<double, 3> n = FaceAreaNormal(mesh, f);
+    const double                area = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     areaOfLabel[mesh.boundaryFaceLabels[f]] += area;
     for (int i = 0; i < 3; ++i)
     {
