@@ -292,14 +292,14 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
     Pelvis,
     Spheres
   };
-  AnatomyEnum          anatomy{ AnatomyEnum::Pelvis };
-  bmr::GridGeometry    grid{ bmr::PelvisPhantomParameters().grid };
-  double               prostateE{ 50.0 };  ///< kPa (the core of the spheres)
-  double               prostateNu{ 0.40 }; ///< the estimation scene assumes 0.40
+  AnatomyEnum       anatomy{ AnatomyEnum::Pelvis };
+  bmr::GridGeometry grid{ bmr::PelvisPhantomParameters().grid };
+  double            prostateE{ 50.0 };  ///< kPa (the core of the spheres)
+  double            prostateNu{ 0.40 }; ///< the estimation scene assumes 0.40
   /** kPa: the truth's soft tissue (the spheres' outer shell). The estimation scene assumes 10 kPa whatever this is,
    * so that a truth with 20 kPa tests a wrong assumption (dissertation Table 3.7: the estimate scales with it). */
-  double tissueE{ 10.0 };
-  double               bladderMM{ 4.0 };   ///< filling [mm]; the spheres: inward motion of the outer boundary
+  double               tissueE{ 10.0 };
+  double               bladderMM{ 4.0 }; ///< filling [mm]; the spheres: inward motion of the outer boundary
   double               rectumMM{ 3.0 };
   bmr::WallFillingEnum filling{ bmr::WallFillingEnum::AlongNormals };
   double               tumourFraction{ 0.0 }; ///< volume fraction of the prostate taken by a stiffer tumour
