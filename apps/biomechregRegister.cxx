@@ -46,11 +46,11 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
                   ? itk::IntervalQuantilesEnum::Student
                   : itk::IntervalQuantilesEnum::Calibrated;
   // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
-  const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
-                                                       { "--uncertainty-shift-voxels", &u.shiftVoxels },
-                                                       { "--uncertainty-rotation-deg", &u.rotationDegrees },
-                                                       { "--uncertainty-wall-slip", &u.tangentialWallFraction },
-                                                       { "--uncertainty-smoothing-voxels", &u.smoothingVoxels } };
+  const std::pair<const char *, double *> scales[] = {
+    { "--uncertainty-mesh-jitter", &u.meshJitter },           { "--uncertainty-shift-voxels", &u.shiftVoxels },
+    { "--uncertainty-rotation-deg", &u.rotationDegrees },     { "--uncertainty-wall-slip", &u.tangentialWallFraction },
+    { "--uncertainty-smoothing-voxels", &u.smoothingVoxels }, { "--uncertainty-step-tolerance", &u.stepTolerance }
+  };
   for (const auto & [key, value] : scales)
   {
     *value = args.Number(key, *value);

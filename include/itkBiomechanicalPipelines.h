@@ -175,6 +175,10 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   /** Each resample's outer search starts at the fit with the fit's curvature, without the sweep and its coarse
    * mesh (on by default; off: each resample sweeps as the fit did). */
   bool warmStart{ true };
+  /** Each resample's outer search over log E stops when its next step would be shorter than this (one unknown
+   * modulus). The estimate's own search resolves 1e-3; a resample needs only a fraction of the resamples'
+   * spread (sigma of log E 0.04-0.1 on the pelvis phantoms), and every step saved is a factorization. */
+  double stepTolerance{ 0.01 };
   /** Half-widths from the calibration (default, rescans) or Student's t (IntervalQuantilesEnum). */
   IntervalQuantilesEnum quantiles{ IntervalQuantilesEnum::Calibrated };
 };

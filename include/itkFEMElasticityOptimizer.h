@@ -117,6 +117,10 @@ public:
   itkGetConstMacro(InnerGradientTolerance, double);
   itkSetMacro(OuterGradientTolerance, double);
   itkGetConstMacro(OuterGradientTolerance, double);
+  /** One unknown modulus: the secant search stops when its next step in log E would be shorter than this
+   * (default 1e-3, 0.1 % of E). */
+  itkSetMacro(OuterStepTolerance, double);
+  itkGetConstMacro(OuterStepTolerance, double);
   /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node. */
   itkSetMacro(WallControlSpacing, double);
   itkGetConstMacro(WallControlSpacing, double);
@@ -278,6 +282,7 @@ private:
   unsigned int                  m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
   double                        m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
   double                        m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
+  double                        m_OuterStepTolerance{ bmr::EstimatorSettings{}.outerStepTolerance };
   double                        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
   bool                          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
   bool                          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };

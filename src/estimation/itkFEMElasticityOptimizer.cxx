@@ -3,6 +3,7 @@
 #include "itkGridGeometryConversion.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace itk {
 namespace {
@@ -111,6 +112,10 @@ FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
   {
     itkExceptionMacro(<< "the gradient tolerances must be positive");
   }
+  if (!(m_OuterStepTolerance >= 0.0 && std::isfinite(m_OuterStepTolerance)))
+  {
+    itkExceptionMacro(<< "OuterStepTolerance must be finite and not negative, got " << m_OuterStepTolerance);
+  }
   if (m_LimitElementInversion && m_WallControlSpacing > 0.0)
   {
     itkExceptionMacro(<< "LimitElementInversion needs one parameter per wall node (WallControlSpacing 0, got "
@@ -127,6 +132,7 @@ FEMElasticityOptimizer::Settings() const
   s.maximumOuterIterations = m_MaximumNumberOfOuterIterations;
   s.innerGradientTolerance = m_InnerGradientTolerance;
   s.outerGradientTolerance = m_OuterGradientTolerance;
+  s.outerStepTolerance = m_OuterStepTolerance;
   s.flatnessThreshold = m_FlatnessThreshold;
   s.estimateUncertainty = m_EstimateUncertainty;
   s.uncertaintyStep = m_UncertaintyStep;
@@ -239,6 +245,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "MaximumNumberOfOuterIterations: " << m_MaximumNumberOfOuterIterations << std::endl;
   os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
   os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
+  os << indent << "OuterStepTolerance: " << m_OuterStepTolerance << std::endl;
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
   os << indent << "EstimateUncertainty: " << (m_EstimateUncertainty ? "On" : "Off") << std::endl;
   os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;

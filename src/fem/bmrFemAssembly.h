@@ -24,6 +24,7 @@
 #include "bmrTetrahedralMesh.h"
 
 #include <Eigen/SparseCore>
+#include <cholmod.h>
 
 #include <cstdint>
 #include <string>
@@ -52,6 +53,10 @@ MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio);
 /** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
 void
 PinBlasToOneThread();
+
+/** Orders the factorizations of \a common by METIS nested dissection alone (see the definition). */
+void
+OrderByNestedDissection(cholmod_common & common);
 
 /** Each node with itself and its neighbors of higher or equal index. */
 using NodeAdjacency = std::vector<std::vector<std::int32_t>>;

@@ -431,6 +431,7 @@ LinearElasticModel::Factorize()
   if (!d.analyzed)
   {
     t0 = Clock::now();
+    fem::OrderByNestedDissection(d.solver.cholmod());
     d.solver.analyzePattern(d.Kff);
     d.analyzed = true;
     d.timings.analyze = SecondsSince(t0);

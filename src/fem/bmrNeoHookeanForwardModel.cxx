@@ -413,6 +413,7 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
 {
   if (!analyzed)
   {
+    fem::OrderByNestedDissection(solver.cholmod());
     solver.analyzePattern(Kff);
     analyzed = true;
   }

@@ -544,7 +544,10 @@ Resample(unsigned int                        k,
   StageClock                 quiet(nullptr, untimed);
   const bmr::Scene           scene = ScaledMeshSizes(*setup.scene, jitter);
   const bmr::TetrahedralMesh fine = MeshLabelImage(movingLabels, scene, quiet, "resample mesh");
-  EstimationSetup            resample = setup;
+  RegistrationSettings       settings = *setup.settings;
+  settings.estimator.outerStepTolerance = u.stepTolerance;
+  EstimationSetup resample = setup;
+  resample.settings = &settings;
   resample.fine = &fine;
   bmr::TetrahedralMesh coarse;
   if (u.warmStart)

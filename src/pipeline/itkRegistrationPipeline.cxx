@@ -159,11 +159,11 @@ ProbabilityOrgans(const OrganProbabilityImages & probabilities, const bmr::Scene
 void
 CheckUncertaintySettings(const UncertaintySettings & u)
 {
-  const std::pair<const char *, double> scales[] = { { "meshJitter", u.meshJitter },
-                                                     { "shiftVoxels", u.shiftVoxels },
-                                                     { "rotationDegrees", u.rotationDegrees },
-                                                     { "tangentialWallFraction", u.tangentialWallFraction },
-                                                     { "smoothingVoxels", u.smoothingVoxels } };
+  const std::pair<const char *, double> scales[] = {
+    { "meshJitter", u.meshJitter },           { "shiftVoxels", u.shiftVoxels },
+    { "rotationDegrees", u.rotationDegrees }, { "tangentialWallFraction", u.tangentialWallFraction },
+    { "smoothingVoxels", u.smoothingVoxels }, { "stepTolerance", u.stepTolerance }
+  };
   for (const auto & [name, value] : scales)
   {
     if (!(value >= 0.0) || !std::isfinite(value))
@@ -346,6 +346,7 @@ RunEstimation(const EstimationSetup &                                 setup,
   optimizer->SetMaximumNumberOfOuterIterations(e.maximumOuterIterations);
   optimizer->SetInnerGradientTolerance(e.innerGradientTolerance);
   optimizer->SetOuterGradientTolerance(e.outerGradientTolerance);
+  optimizer->SetOuterStepTolerance(e.outerStepTolerance);
   optimizer->SetFlatnessThreshold(e.flatnessThreshold);
   optimizer->SetEstimateUncertainty(curvature && e.estimateUncertainty);
   optimizer->SetUncertaintyStep(e.uncertaintyStep);

@@ -29,6 +29,7 @@
 #include "itkBiomechanicalReports.h"
 #include "itkIntervalTestSupport.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -37,12 +38,16 @@ namespace {
 itk::test::Checks Check;
 
 itk::ModulusInterval
-Rescan(const itk::PhantomPair & pair, const itk::BiomechanicalLabelImageType * fixed, double meshJitter)
+Rescan(const itk::PhantomPair &                 pair,
+       const itk::BiomechanicalLabelImageType * fixed,
+       double                                   meshJitter,
+       double                                   stepTolerance = itk::UncertaintySettings().stepTolerance)
 {
   itk::RegistrationSettings settings;
   settings.uncertainty.method = itk::UncertaintyMethodEnum::Rescan;
   settings.uncertainty.resamples = 4;
   settings.uncertainty.meshJitter = meshJitter;
+  settings.uncertainty.stepTolerance = stepTolerance;
   const itk::RegistrationResult r = itk::RegisterSegmentedPair(pair.movingLabels, fixed, nullptr, pair.scene, settings);
   const itk::ModulusInterval    i = r.modulusInterval.at("inner");
   std::cout << "  " << itk::ModulusIntervalText("inner", i) << "; b " << i.logBias << ", s " << i.logSigma
@@ -78,17 +83,37 @@ itkModulusRescanTest(int, char *[])
   Check(again.resampleModuli == one.resampleModuli && again.interval95 == one.interval95,
         "the same seed gives bit-identical rescans");
 
+  // The resamples' looser outer search: it stops once the next secant step in log E would be shorter than the
+  // tolerance, and the secant's steps shrink superlinearly, so each rescan lies within that tolerance (plus the
+  // strict search's own 1e-3) of where the strict search ends.
+  const itk::ModulusInterval strict = Rescan(pair, pair.fixedLabels, jitter, 1e-3);
+  double                     largest = 0.0;
+  for (std::size_t k = 0; k < one.resampleModuli.size(); ++k)
+  {
+    largest = std::max(largest, std::abs(std::log(one.resampleModuli[k] / strict.resampleModuli[k])));
+  }
+  std::cout << "  largest |log E| difference between step tolerances 0.01 and 0.001: " << largest << std::endl;
+  Check(largest <= itk::UncertaintySettings().stepTolerance + 1e-3,
+        "each rescan with the default step tolerance lies within it of the strict search's");
+
+  const auto refusal = [&](const itk::RegistrationSettings & bad) {
+    std::string message;
+    try
+    {
+      itk::RegisterSegmentedPair(pair.movingLabels, pair.fixedLabels, nullptr, pair.scene, bad);
+    }
+    catch (const itk::ExceptionObject & e)
+    {
+      message = e.GetDescription();
+    }
+    return message;
+  };
   itk::RegistrationSettings bad;
   bad.uncertainty.meshJitter = 1.5; // mesh sizes x U(-0.5, 2.5)
-  std::string message;
-  try
-  {
-    itk::RegisterSegmentedPair(pair.movingLabels, pair.fixedLabels, nullptr, pair.scene, bad);
-  }
-  catch (const itk::ExceptionObject & e)
-  {
-    message = e.GetDescription();
-  }
-  Check(message.find("meshJitter") != std::string::npos, "a mesh jitter of 1.5 is refused, naming the setting");
+  Check(refusal(bad).find("meshJitter") != std::string::npos, "a mesh jitter of 1.5 is refused, naming the setting");
+  bad = itk::RegistrationSettings();
+  bad.uncertainty.stepTolerance = -0.01;
+  Check(refusal(bad).find("stepTolerance") != std::string::npos,
+        "a negative step tolerance is refused, naming the setting");
   return Check.ExitCode();
 }
