@@ -8,6 +8,10 @@
 #        DESIGN=table31: instead of random draws, the dissertation's Table 3.1 rows (two scenes x 50..350 kPa)
 #        with N realizations (phantom seeds) each; the rows go to table31_runs.csv and are summarized per row
 #        (summarize_table31.py: mean and SD of the error, coverage; table31.csv, table31.png).
+#        DESIGN=pressure: the same draws, but each lumen filled by a pressure [kPa] instead of a prescribed
+#        motion of its wall along the normals: bladder mm / 3.25 and rectum mm / 3.78 (the linear truth's
+#        largest wall motion per kPa at 100 kPa), so that the walls also slide as a pressurized lumen's do; the
+#        rows record the truth's largest wall motions (truth.json). Default RUNS_NAME calibration_runs_pressure.
 #        REGISTER_ARGS="--wall-motion free" adds settings to every register run; PHANTOM_ARGS to every phantom
 #        (default "--fixed-grid-shift-voxels 0.5": the fixed scan on its own grid, offset by a random sub-voxel
 #        shift from the moving one, as two real scans are); TAG names the run (default "rescan-shifted");
@@ -30,6 +34,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 default_runs=calibration_runs
 [ "$design" = table31 ] && default_runs=table31_runs
+[ "$design" = pressure ] && default_runs=calibration_runs_pressure
 csv="$out/${RUNS_NAME:-$default_runs}.csv"
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
   echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles" > "$csv"
@@ -56,10 +61,14 @@ while read -r E bladder rectum s; do
   [ "$k" -lt "${START:-1}" ] && continue
   ph="$work/ph"
   rm -rf "$ph" "$work/reg"
+  walls=(--bladder-mm "$bladder" --rectum-mm "$rectum")
+  if [ "$design" = pressure ]; then
+    walls=(--bladder-kPa "$(awk "BEGIN{print $bladder / 3.25}")" --rectum-kPa "$(awk "BEGIN{print $rectum / 3.78}")")
+  fi
   t0=$(date +%s.%N)
   # shellcheck disable=SC2086
-  "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" --bladder-mm "$bladder" \
-    --rectum-mm "$rectum" --seed "$s" $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
+  "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" "${walls[@]}" \
+    --seed "$s" $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
   t1=$(date +%s.%N)
   # shellcheck disable=SC2086
   "$bin" register --moving-ct "$ph/moving_ct.nrrd" --moving-labels "$ph/moving_labels.nrrd" \
@@ -70,14 +79,17 @@ while read -r E bladder rectum s; do
     "$(awk "BEGIN{print $t1 - $t0}")" "$(awk "BEGIN{print $t2 - $t1}")" >> "$csv" <<'PY'
 import json, sys
 rep = json.load(open(sys.argv[1])); truth = json.load(open(sys.argv[2]))
+num = lambda x: float("nan") if x is None else x  # a modulus not determined has no sigma
 tag, k, E, bladder, rectum, s, tph, treg = sys.argv[3:11]
+if "wall_motion_mm" in truth:  # the fillings the truth reached (pressure loads), not the draws
+    bladder, rectum = (f'{truth["wall_motion_mm"][w]["max"]:.2f}' for w in ("bladder", "rectum"))
 i = rep["youngs_modulus_interval"]["prostate"]
 curv = rep.get("youngs_modulus_uncertainty", {}).get("prostate", {}).get("sigma_log_E", "")
 tets = truth.get("truth_mesh", {}).get("tetrahedra", "")
 print(f'{tag},{k},{truth["youngs_modulus_kPa"]["prostate"]:g},{bladder},{rectum},{s},{i["fit_kPa"]:.3f},'
       f'{i["estimate_kPa"]:.3f},{i["interval_68_kPa"][0]:.3f},{i["interval_68_kPa"][1]:.3f},'
       f'{i["interval_95_kPa"][0]:.3f},{i["interval_95_kPa"][1]:.3f},{int(i["lower_end_determined"])},'
-      f'{int(i["upper_end_determined"])},{i["sigma_log_E"]:.4f},{i["log_bias"]:.4f},{len(i["resamples_kPa"])},{curv},'
+      f'{int(i["upper_end_determined"])},{num(i["sigma_log_E"]):.4f},{num(i["log_bias"]):.4f},{len(i["resamples_kPa"])},{curv},'
       f'{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{tets},{float(tph):.1f},{float(treg):.1f},'
       f'{int(i.get("bias_corrected", True))},{";".join(f"{x:.3f}" for x in i["resamples_kPa"])},'
       f'{i.get("quantiles", "student")}')
