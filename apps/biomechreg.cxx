@@ -199,6 +199,7 @@ DemoCommand()
             << std::noshowpos << " %), fit " << result.youngsModulus.at("prostate") << " kPa"
             << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
             << "\n  (coverage of the interval over 30-500 kPa: docs/benchmarks.md, calibration benchmark)"
+            << "\n  note: " << itk::WallLawCaveat(itk::RegistrationSettings().walls.motion)
             << (result.estimation.identifiable ? "" : "\n  warning: ")
             << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
             << "\n  Dice after warping:";

@@ -224,6 +224,10 @@ RegisterCommand(const Arguments & args)
     std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa"
               << itk::UncertaintyText(result, kv.first);
   }
+  if (!result.modulusInterval.empty())
+  {
+    std::cout << "\n  note: " << itk::WallLawCaveat(settings.walls.motion);
+  }
   if (!result.estimation.identifiable)
   {
     std::cout << "\n  warning: " << result.estimation.identifiabilityMessage;

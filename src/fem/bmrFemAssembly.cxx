@@ -100,6 +100,18 @@ OrderByNestedDissection(cholmod_common & common)
   common.postorder = 1;
 }
 
+/** METIS draws from GKlib's process-wide random generator, which it reseeds at the start of every call: two
+ * analyses at once (the concurrent rescans of ModulusInterval) interleave their draws, and the ordering, and
+ * with it the rounding of every result, then depends on the threads' timing (seen as rescans that differed in
+ * the last bits between two runs with the same seed). The analysis is a fraction of a factorization, so
+ * serializing it costs little. */
+std::unique_lock<std::mutex>
+LockOrdering()
+{
+  static std::mutex ordering;
+  return std::unique_lock<std::mutex>(ordering);
+}
+
 void
 LameParameters(double E, double nu, double & lambda, double & mu)
 {

@@ -27,6 +27,7 @@
 #include <cholmod.h>
 
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,11 @@ PinBlasToOneThread();
 /** Orders the factorizations of \a common by METIS nested dissection alone (see the definition). */
 void
 OrderByNestedDissection(cholmod_common & common);
+
+/** Held around every symbolic analysis (see the definition): concurrent analyses would make the ordering depend
+ * on the threads' timing. */
+std::unique_lock<std::mutex>
+LockOrdering();
 
 /** Each node with itself and its neighbors of higher or equal index. */
 using NodeAdjacency = std::vector<std::vector<std::int32_t>>;

@@ -432,6 +432,7 @@ LinearElasticModel::Factorize()
   {
     t0 = Clock::now();
     fem::OrderByNestedDissection(d.solver.cholmod());
+    const auto serialized = fem::LockOrdering();
     d.solver.analyzePattern(d.Kff);
     d.analyzed = true;
     d.timings.analyze = SecondsSince(t0);

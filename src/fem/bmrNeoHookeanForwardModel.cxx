@@ -414,6 +414,7 @@ NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
   if (!analyzed)
   {
     fem::OrderByNestedDissection(solver.cholmod());
+    const auto serialized = fem::LockOrdering();
     solver.analyzePattern(Kff);
     analyzed = true;
   }

@@ -65,7 +65,7 @@ Units()
 }
 
 Json
-ModulusSection(const RegistrationResult & r)
+ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
 {
   Json uncertainty = Json::object();
   for (const auto & kv : r.modulusUncertainty)
@@ -102,6 +102,7 @@ ModulusSection(const RegistrationResult & r)
                             { "lower_end_determined", i.lowerDetermined },
                             { "upper_end_determined", i.upperDetermined },
                             { "statement", ModulusIntervalText(kv.first, i) },
+                            { "assumes", WallLawCaveat(motion) },
                             { "resamples_kPa", resamples } };
   }
   j["youngs_modulus_interval"] = intervals;
@@ -116,7 +117,7 @@ RegistrationReportJson(const RegistrationResult &         r,
 {
   Json j;
   j["units"] = Units();
-  j.update(ModulusSection(r));
+  j.update(ModulusSection(r, settings.walls.motion));
   j["residual_standard_deviation_mm"] = r.estimation.residualStandardDeviation;
   j["final_phi_mm2"] = r.estimation.value;
   Json surfaces = Json::object();
@@ -331,6 +332,28 @@ StageTable(const std::vector<PipelineStage> & stages)
   }
   o << "  " << std::left << std::setw(36) << "total" << std::right << std::setw(8) << total << "\n";
   return o.str();
+}
+
+std::string
+WallLawCaveat(bmr::WallMotionEnum motion)
+{
+  switch (motion)
+  {
+    case bmr::WallMotionEnum::AlongNormals:
+      return "the interval assumes walls that move along their normals (--wall-motion normal) and does not contain "
+             "the wall law's influence: its coverage holds for such walls; on pressure-filled lumens it covered 7 of "
+             "12 truths at 95 % and the fit was up to 2x too stiff; use --wall-motion traction there "
+             "(docs/benchmarks.md, pressure-filled lumens)";
+    case bmr::WallMotionEnum::Free:
+      return "the interval assumes walls that may also slide (--wall-motion free), which read the prostate a fifth "
+             "to a third too soft on walls that move along their normals (docs/benchmarks.md); its coverage is not "
+             "calibrated";
+    case bmr::WallMotionEnum::NormalTraction:
+      return "the interval assumes lumens loaded by normal tractions (--wall-motion traction): on pressure-filled "
+             "lumens it covered 12 of 12 truths at 95 % and 9 of 12 at 68 % with the default half-widths; such "
+             "tractions cannot fit walls that move along their normals (docs/benchmarks.md, pressure-filled lumens)";
+  }
+  return std::string();
 }
 
 std::string

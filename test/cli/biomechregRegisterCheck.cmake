@@ -9,7 +9,8 @@
 # - the accepted outer iterates (history.csv, stage "outer") never increase Phi*;
 # - the interval's standard deviation of log E lies in [0.01, 0.3] (the calibration benchmark's spread at
 #   30-150 kPa); outside it the resamples or their statistics are wrong;
-# - every promised output exists and report.json names the gauge.
+# - every promised output exists, report.json names the gauge, and the interval says which wall law it assumes
+#   (the default's: walls along their normals).
 # Run with: cmake -DDIR=<phantom dir> -P biomechregRegisterCheck.cmake
 file(READ ${DIR}/truth.json truth)
 file(READ ${DIR}/reg/report.json report)
@@ -42,6 +43,10 @@ if(NOT sigma GREATER 0.01 OR NOT sigma LESS 0.3)
 endif()
 if(NOT gauge STREQUAL "soft_tissue")
   message(SEND_ERROR "report.json: gauge is '${gauge}', expected soft_tissue")
+endif()
+string(JSON assumes GET "${report}" youngs_modulus_interval prostate assumes)
+if(NOT assumes MATCHES "along their normals")
+  message(SEND_ERROR "report.json: the interval's 'assumes' does not name the default wall law: '${assumes}'")
 endif()
 
 file(STRINGS ${DIR}/reg/history.csv lines REGEX "^outer,")
