@@ -100,7 +100,9 @@ done < "$work/draws.txt"
 # The earlier runs are kept beside it (calibration_runs_*.csv; docs/benchmarks.md): the resimulating bootstrap
 # (seed 2026), the rescans on phantoms whose two scans share one grid (2027), the rescans with a sweep each (2028)
 # and warm-started at the fit (2029), the last two stated with Student's half-widths and the calibration set of
-# the conformal ones; the conformal rescans (2030, calibration_runs.csv) and variants of them.
+# the conformal ones; the conformal rescans (2030, calibration_runs.csv) and variants of them; and the
+# pressure-filled lumens (DESIGN=pressure, 2031) under the default and under smooth tractions
+# (calibration_runs_pressure*.csv, summarized apart in calibration_pressure.csv/png).
 if [ "$design" = table31 ]; then
   /usr/bin/python3 "$root/benchmarks/summarize_table31.py" "$csv" "$out"
   exit 0
