@@ -62,7 +62,8 @@ struct BiomechanicalRegistration_EXPORT RegistrationOutputs
   static RegistrationOutputs
   All();
   /** From a comma-separated list of field, forward_field, warped_ct, warped_labels, mesh, history, sweep,
-   * report, or "all" or "default"; throws naming the unknown item. */
+   * report, "all" and "default" (the sets, alone or with more items: "default,history"); throws naming the unknown
+   * item. */
   static RegistrationOutputs
   Parse(const std::string & list);
 };

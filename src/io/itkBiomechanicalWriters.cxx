@@ -88,35 +88,36 @@ RegistrationOutputs::All()
 RegistrationOutputs
 RegistrationOutputs::Parse(const std::string & list)
 {
-  if (list == "all")
-  {
-    return All();
-  }
+  using Flag = bool                   RegistrationOutputs::*;
+  const std::pair<const char *, Flag> items[] = {
+    { "field", &RegistrationOutputs::field },        { "forward_field", &RegistrationOutputs::forwardField },
+    { "warped_ct", &RegistrationOutputs::warpedCT }, { "warped_labels", &RegistrationOutputs::warpedLabels },
+    { "mesh", &RegistrationOutputs::mesh },          { "history", &RegistrationOutputs::history },
+    { "sweep", &RegistrationOutputs::sweep },        { "report", &RegistrationOutputs::report }
+  };
   RegistrationOutputs o;
-  if (list == "default")
+  for (const auto & item : items)
   {
-    return o;
+    o.*item.second = false;
   }
-  o.field = o.warpedCT = o.warpedLabels = o.report = false;
-  const std::pair<const char *, bool *> items[] = { { "field", &o.field },        { "forward_field", &o.forwardField },
-                                                    { "warped_ct", &o.warpedCT }, { "warped_labels", &o.warpedLabels },
-                                                    { "mesh", &o.mesh },          { "history", &o.history },
-                                                    { "sweep", &o.sweep },        { "report", &o.report } };
-  std::stringstream                     in(list);
-  for (std::string item; std::getline(in, item, ',');)
+  std::stringstream in(list);
+  for (std::string name; std::getline(in, name, ',');)
   {
-    bool known = false;
-    for (const auto & [name, flag] : items)
+    // "all" and "default" stand for their sets, alone or with more items ("default,history").
+    const bool          isSet = name == "all" || name == "default";
+    RegistrationOutputs set = name == "all" ? All() : RegistrationOutputs();
+    bool                known = isSet;
+    for (const auto & [item, flag] : items)
     {
-      if (item == name)
+      if (isSet ? set.*flag : name == item)
       {
-        *flag = known = true;
+        o.*flag = known = true;
       }
     }
     if (!known)
     {
       bmr::Fail("RegistrationOutputs",
-                "unknown output \"" + item +
+                "unknown output \"" + name +
                   "\" (outputs: field, forward_field, warped_ct, warped_labels, mesh, history, sweep, report, all, "
                   "default)");
     }

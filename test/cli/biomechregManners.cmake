@@ -109,9 +109,9 @@ nrrd_header(${OUT}/reg/field.nrrd header)
 if(NOT header MATCHES "type: float" OR NOT header MATCHES "encoding: gzip")
   message(SEND_ERROR "the default field is not gzip-compressed float: ${header}")
 endif()
-expect_rc(outputs_chosen 0 ${register} --outputs field,history --field-precision double --compression-level 0
+expect_rc(outputs_chosen 0 ${register} --outputs default,history --field-precision double --compression-level 0
   --out ${OUT}/reg_chosen)
-expect_files(${OUT}/reg_chosen field.nrrd history.csv)
+expect_files(${OUT}/reg_chosen field.nrrd warped_ct.nrrd warped_labels.nrrd report.json history.csv)
 nrrd_header(${OUT}/reg_chosen/field.nrrd header)
 if(NOT header MATCHES "type: double" OR NOT header MATCHES "encoding: raw")
   message(SEND_ERROR "--field-precision double --compression-level 0 gave: ${header}")
