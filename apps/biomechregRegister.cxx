@@ -150,7 +150,10 @@ ParseRegistrationOutputs(const Arguments & args)
     throw UsageError(std::string("--outputs: ") + e.GetDescription());
   }
   o.doubleFields = args.Choice("--field-precision", { "float", "double" }) == "double";
-  o.compressionLevel = static_cast<int>(args.Count("--compression-level", o.compressionLevel, 0, 9));
+  if (args.Has("--compression-level")) // else label maps at 1, fields and CT uncompressed
+  {
+    o.compressionLevel = static_cast<int>(args.Count("--compression-level", 1, 0, 9));
+  }
   return o;
 }
 

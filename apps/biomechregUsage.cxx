@@ -57,7 +57,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                      [--fixed-probabilities ORGAN=FILE,...] [--unmapped-rois refuse|ignore]\n"
     "                      [--outputs LIST|all|default (field,warped_ct,warped_labels,report; also "
     "forward_field,mesh,\n"
-    "                      history,sweep)] [--field-precision float|double] [--compression-level 0-9 (1)]\n"
+    "                      history,sweep)] [--field-precision float|double] [--compression-level 0-9 (labels 1, others "
+    "0)]\n"
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
     "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
   { "demons",

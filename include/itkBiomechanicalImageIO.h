@@ -181,14 +181,30 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
   return image;
 }
 
+/** The gzip level WriteImageAtomically uses by default for images of \a TImage: 1 (the fastest) for integer pixels
+ * (label maps: 20 MB -> 1 MB on the 1 mm pelvis), 0 for floating-point ones (CT, fields, dose), which gzip barely
+ * shrinks (a float field 59 -> 54 MB, a float CT 20 -> 17 MB) for most of the write's time (register on the demo
+ * pair: writing 2.2 s at level 1 against 0.35 s uncompressed). */
+template<typename TImage>
+constexpr int
+DefaultCompressionLevel()
+{
+  using Component = typename NumericTraits<typename TImage::PixelType>::ValueType;
+  return std::is_integral<Component>::value ? 1 : 0;
+}
+
 /** Writes \a image to \a path (format by the extension; gzip at \a compressionLevel, 1 fastest ... 9 smallest, 0
- * uncompressed, where the format compresses) through a temporary
+ * uncompressed, where the format compresses; negative: DefaultCompressionLevel()) through a temporary
  * file renamed when complete, so that a failed write leaves no partial file. \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO */
 template<typename TImage>
 void
-WriteImageAtomically(const TImage * image, const std::string & path, int compressionLevel = 1)
+WriteImageAtomically(const TImage * image, const std::string & path, int compressionLevel = -1)
 {
+  if (compressionLevel < 0)
+  {
+    compressionLevel = DefaultCompressionLevel<TImage>();
+  }
   const std::string tmp = bmr::TemporaryPathFor(path);
   auto              writer = ImageFileWriter<TImage>::New();
   writer->SetInput(image);

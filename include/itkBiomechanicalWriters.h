@@ -55,8 +55,9 @@ struct BiomechanicalRegistration_EXPORT RegistrationOutputs
   bool sweep{ false };        ///< sweep.csv: Phi*(E) of the sweep
   bool report{ true };        ///< report.json: moduli, intervals, distances, Dice, wall times
   bool doubleFields{ false }; ///< the fields as double vectors; float (default) is exact to 1e-7 relative
-  /** gzip level of the NRRD images: 0 none, 1 (default) fastest ... 9 smallest. */
-  int compressionLevel{ 1 };
+  /** gzip level of the NRRD images: 0 none, 1 fastest ... 9 smallest; -1 (default): label maps at 1, fields and
+   * CT uncompressed (DefaultCompressionLevel). */
+  int compressionLevel{ -1 };
 
   /** Every file (the forward field too). */
   static RegistrationOutputs
