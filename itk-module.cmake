@@ -12,6 +12,7 @@ itk_module(BiomechanicalRegistration
     ITKImageGrid
     ITKTransform
     ITKDisplacementField
+    ITKPath
     ITKDistanceMap
     ITKOptimizersv4
     ITKPDEDeformableRegistration

@@ -28,6 +28,7 @@
 //   biomechreg cohort-stats ...     the statistics of a cohort's registrations (the workflow's last step)
 //   biomechreg markers ...          the treatment anatomy from tracked markers (FEM vs rigid vs spline)
 //   biomechreg dose ...             per-organ DVHs, D95/D2/Dmean, V-doses and gEUD of a dose or a synthetic plan
+//   biomechreg rt-export ...        a label map as a DICOM RTSTRUCT, a dose as an RTDOSE (for a planning system)
 //   biomechreg help [SUB], biomechreg SUB --help, biomechreg --version
 // Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
 // written to temporary names and renamed when complete.
@@ -227,6 +228,8 @@ int
 DoseCommand(const Arguments & args); // biomechregDose.cxx
 int
 MarkersCommand(const Arguments & args); // biomechregMarkers.cxx
+int
+RTExportCommand(const Arguments & args); // biomechregRTExport.cxx
 
 void
 WritePhantom(const std::string &          out,
@@ -314,6 +317,10 @@ main(int argc, char * argv[])
     if (command == "markers")
     {
       return bmrcli::MarkersCommand(options);
+    }
+    if (command == "rt-export")
+    {
+      return bmrcli::RTExportCommand(options);
     }
     throw UsageError("unknown command \"" + command + "\"");
   }

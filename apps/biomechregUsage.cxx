@@ -113,6 +113,13 @@ const std::pair<const char *, const char *> commands[] = {
     "    cumulative and differential DVH (dvh.csv, dvh.png), gEUD, Dmean, D95, D2, D98, V-doses\n"
     "    (dose_metrics.csv) and the dose on the label grid (dose.nrrd); --plan-margin makes a conformal plan\n"
     "    (PTV = prostate + margin, Rx with an erfc penumbra) instead of reading a dose\n" },
+  { "rt-export",
+    "  biomechreg rt-export --reference-ct DIR (the DICOM CT series the outputs belong to)\n"
+    "                       [--labels FILE --scene FILE --rtstruct-out FILE.dcm (labels on that CT's grid)]\n"
+    "                       [--dose FILE (RTDOSE or an image in Gy) --rtdose-out FILE.dcm [--plan-uid UID]]\n"
+    "    a label map as a DICOM RTSTRUCT (one ROI per scene label, named as in the scene; closed planar contours\n"
+    "    per slice) and a dose as an RTDOSE [Gy], with the CT's patient, study and frame of reference, e.g. the\n"
+    "    warped labels and the warped dose of a registration back to a planning system\n" },
 };
 
 const char * const footer =

@@ -22,6 +22,7 @@
 
 #include "bmrError.h"
 #include "itkBiomechanicalImageIO.h"
+#include "itkDicomRTCommon.h"
 
 #include "gdcmDataSet.h"
 #include "gdcmImage.h"
@@ -49,6 +50,10 @@
 
 namespace itk {
 namespace {
+using dicomrt::HasPart10Preamble;
+using dicomrt::ParseNumbers;
+using dicomrt::StringValue;
+using dicomrt::Trim;
 
 // ------------------------------------------------------------------------------------------ tags
 
@@ -74,18 +79,6 @@ const gdcm::Tag ContourDataTag(0x3006, 0x0050);
 const gdcm::Tag ReferencedROINumberTag(0x3006, 0x0084);
 
 // ------------------------------------------------------------------------------------------ text
-
-std::string
-Trim(const std::string & text)
-{
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos)
-  {
-    return std::string();
-  }
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
 /** The key under which ROI names are compared: trimmed, lower case. */
 std::string
@@ -128,65 +121,6 @@ FailFile(const char * where, const std::string & kind, const std::string & path,
 }
 
 // ------------------------------------------------------------------------------------------ DICOM values
-
-bool
-HasPart10Preamble(const std::string & path)
-{
-  std::ifstream file(path, std::ios::binary);
-  char          header[132];
-  if (!file.read(header, sizeof(header)))
-  {
-    return false;
-  }
-  return std::memcmp(header + 128, "DICM", 4) == 0;
-}
-
-/** The value of a string attribute (CS, DS, IS, LO, UI, ...) without padding (spaces, NUL); empty when absent. */
-std::string
-StringValue(const gdcm::DataSet & ds, const gdcm::Tag & tag)
-{
-  if (!ds.FindDataElement(tag))
-  {
-    return std::string();
-  }
-  const gdcm::ByteValue * bytes = ds.GetDataElement(tag).GetByteValue();
-  if (!bytes || !bytes->GetPointer())
-  {
-    return std::string();
-  }
-  std::string text(bytes->GetPointer(), bytes->GetLength());
-  text.erase(std::find(text.begin(), text.end(), '\0'), text.end());
-  return Trim(text);
-}
-
-/** The backslash-separated numbers of a DS or IS value; false when one is not a finite number. */
-bool
-ParseNumbers(const std::string & text, std::vector<double> & values)
-{
-  values.clear();
-  if (Trim(text).empty())
-  {
-    return true;
-  }
-  std::size_t begin = 0;
-  while (true)
-  {
-    const std::size_t end = text.find('\\', begin);
-    const std::string item = Trim(text.substr(begin, end == std::string::npos ? std::string::npos : end - begin));
-    char *            parsedEnd = nullptr;
-    const double      value = std::strtod(item.c_str(), &parsedEnd);
-    if (item.empty() || parsedEnd != item.c_str() + item.size() || !std::isfinite(value))
-    {
-      return false;
-    }
-    values.push_back(value);
-    if (end == std::string::npos)
-    {
-      return true;
-    }
-    begin = end + 1;
-  }
-}
 
 /** The sequence at \a tag, or nullptr when it is absent, empty or cannot be decoded. */
 gdcm::SmartPointer<gdcm::SequenceOfItems>

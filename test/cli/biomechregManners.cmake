@@ -4,7 +4,8 @@
 # --field-precision and --compression-level.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregManners.cmake
 file(REMOVE_RECURSE ${OUT})
-set(commands phantom simulate register demons phantom-set compare markers dose)
+set(commands phantom simulate register demons phantom-set compare phantom-cohort cohort cohort-stats markers dose
+  rt-export)
 
 function(expect_rc name rc_expected)
   execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)

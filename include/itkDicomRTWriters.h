@@ -1,0 +1,79 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkDicomRTWriters_h
+#define itkDicomRTWriters_h
+
+#include "itkDicomRT.h"
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace itk {
+
+/** \brief Writes a label map as a DICOM RT Structure Set that references a CT series.
+ *
+ * One ROI per entry of \a roiNames (label value -> ROI name) that holds voxels of \a labels, numbered from 1
+ * in the map's order. Each slice of the label map contributes the closed planar contours of that label's
+ * voxels: the 0.5 level of its indicator, traced by marching squares (itk::ContourExtractor2DImageFilter) on
+ * the slice padded by one voxel of background, so every contour closes and runs half a voxel outside the
+ * outermost voxel centres, holes included as inner contours; collinear vertices are dropped. Rasterizing the
+ * contours again by the even-odd rule at the voxel centres (ReadRTStructAsLabelImage()) gives back every
+ * voxel. Points are in patient coordinates (LPS, mm).
+ *
+ * \a referenceSeries is the directory of the DICOM image series (CT, MR or PT) the labels belong to; its
+ * Patient and Study attributes and its Frame of Reference UID are copied, the structure set references its
+ * study, series and every slice (Contour Image Sequence per contour), and the label map must lie on that
+ * series' grid: same in-plane orientation (to 1e-4), every label slice at a slice of the series (to 0.01 mm
+ * along the normal). The new Series and SOP Instance UIDs are derived from the series UID and the contents
+ * (2.25 root, 128-bit hash), so the same inputs give the same file. Written to a temporary name and renamed
+ * when complete.
+ *
+ * Throws an itk::ExceptionObject naming the input at fault, in one line, when: \a referenceSeries holds no
+ * image series or several; a label slice has no slice of the series; the orientation differs; a name is
+ * empty or longer than 64 characters or used twice; no entry of \a roiNames holds a voxel; the file cannot be
+ * written. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT void
+WriteRTStruct(const DicomRTLabelImageType *               labels,
+              const std::map<std::int32_t, std::string> & roiNames,
+              const std::string &                         referenceSeries,
+              const std::string &                         path);
+
+/** \brief Writes a dose image [Gy] as a DICOM RT Dose (physical dose, Gy) in the frame of reference of a
+ * series.
+ *
+ * The grid is the image's own: origin -> Image Position (Patient), the first two direction columns -> Image
+ * Orientation (Patient), spacing -> Pixel Spacing and the Grid Frame Offset Vector (relative to the first
+ * frame, negative when the third axis points against the row x column normal). Values: 32-bit unsigned
+ * integers, v = round(D / s) with the Dose Grid Scaling s = max D / (2^32 - 1) (as written in the file, so
+ * the round trip error is at most s / 2); Dose Summation Type PLAN, with the referenced plan's SOP Instance
+ * when \a referencedPlanUID is given. Patient, Study and Frame of Reference come from \a referenceSeries
+ * (WriteRTStruct()); the image need not lie on its grid.
+ *
+ * Throws an itk::ExceptionObject naming the input at fault, in one line, when a dose is negative or not
+ * finite, the third axis is oblique to the row x column normal, \a referenceSeries holds no image series or
+ * several, or the file cannot be written. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT void
+WriteRTDose(const DicomRTDoseImageType * dose,
+            const std::string &          referenceSeries,
+            const std::string &          path,
+            const std::string &          referencedPlanUID = std::string());
+
+} // namespace itk
+
+#endif

@@ -1,0 +1,112 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// What the DICOM-RT reader and writers share: reading attributes, the image series an RT object refers to, and
+// building and writing data sets.
+#ifndef itkDicomRTCommon_h
+#define itkDicomRTCommon_h
+
+#include "gdcmDataSet.h"
+#include "gdcmSequenceOfItems.h"
+#include "gdcmTag.h"
+#include "gdcmVR.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace itk {
+namespace dicomrt {
+
+/** \a text without leading and trailing white space. */
+std::string
+Trim(const std::string & text);
+
+/** The value of a string attribute (CS, DS, IS, LO, UI, ...) without padding (spaces, NUL); empty when absent. */
+std::string
+StringValue(const gdcm::DataSet & ds, const gdcm::Tag & tag);
+
+/** True when \a path starts with the DICOM part 10 preamble (128 bytes, then "DICM"). */
+bool
+HasPart10Preamble(const std::string & path);
+
+/** The backslash-separated numbers of a DS or IS value; false when one is not a finite number. */
+bool
+ParseNumbers(const std::string & text, std::vector<double> & values);
+
+/** One image of the referenced series, in slice order. */
+struct ReferencedImage
+{
+  std::string           sopClassUID;
+  std::string           sopInstanceUID;
+  std::array<double, 3> position{ { 0, 0, 0 } }; ///< Image Position (Patient) [LPS mm]
+};
+
+/** The image series an RT object belongs to: what it copies (patient, study) and what it references. */
+struct ReferencedSeries
+{
+  std::string                  directory;
+  std::string                  seriesInstanceUID;
+  std::string                  frameOfReferenceUID;
+  std::array<double, 6>        orientation{ { 1, 0, 0, 0, 1, 0 } }; ///< Image Orientation (Patient)
+  std::vector<ReferencedImage> images;
+  gdcm::DataSet                patientAndStudy; ///< the Patient and General Study attributes of the first image
+};
+
+/** Reads the one image series (not an RT object) of \a directory; \a where names the caller in errors. */
+ReferencedSeries
+ReadReferencedSeries(const std::string & directory, const char * where);
+
+/** A UID under the 2.25 root from a 128-bit hash of \a seed: the same seed, the same UID. */
+std::string
+DerivedUID(const std::string & seed);
+
+/** A DS value of at most 16 characters for \a value (as many significant digits as fit). */
+std::string
+DecimalString(double value);
+
+/** \a values as backslash-separated DS values. */
+std::string
+DecimalStrings(const double * values, std::size_t count);
+
+/** Sets \a tag to \a value with \a vr, padded to even length (NUL for UI, space otherwise). */
+void
+Put(gdcm::DataSet & ds, const gdcm::Tag & tag, const gdcm::VR & vr, const std::string & value);
+
+/** Sets \a tag to the sequence \a items (undefined lengths). */
+void
+PutSequence(gdcm::DataSet & ds, const gdcm::Tag & tag, const std::vector<gdcm::DataSet> & items);
+
+/** The modules every RT object written here shares: SOP Common, Patient and General Study (copied from
+ * \a series), RT Series (\a modality, \a seriesUID), Frame of Reference and General Equipment. */
+void
+PutCommonModules(gdcm::DataSet &          ds,
+                 const ReferencedSeries & series,
+                 const std::string &      sopClassUID,
+                 const std::string &      sopInstanceUID,
+                 const std::string &      modality,
+                 const std::string &      seriesUID);
+
+/** Writes \a ds (explicit VR little endian, with its file meta information) to a temporary name beside
+ * \a path and renames it when complete. */
+void
+WriteDataSetAtomically(const gdcm::DataSet & ds, const std::string & path, const char * where);
+
+} // namespace dicomrt
+} // namespace itk
+
+#endif
