@@ -271,6 +271,31 @@ CompareCommand(const Arguments & args)
   return EXIT_SUCCESS;
 }
 
+namespace {
+/** Option \a key as LOW,HIGH within [\a min, \a max] with LOW <= HIGH, or \a fallback when absent. */
+std::array<double, 2>
+Range(const Arguments & args, const std::string & key, const std::array<double, 2> & fallback, double min, double max)
+{
+  if (!args.Has(key))
+  {
+    return fallback;
+  }
+  const std::string     text = args.Get(key);
+  std::array<double, 2> range{ { 0.0, 0.0 } };
+  char *                end = nullptr;
+  range[0] = std::strtod(text.c_str(), &end);
+  const bool comma = *end == ',';
+  range[1] = comma ? std::strtod(end + 1, &end) : 0.0;
+  if (!comma || *end != '\0' || !(range[0] >= min && range[0] <= range[1] && range[1] <= max))
+  {
+    std::ostringstream os;
+    os << key << " expects LOW,HIGH with " << min << " <= LOW <= HIGH <= " << max << ", got \"" << text << "\"";
+    throw UsageError(os.str());
+  }
+  return range;
+}
+} // namespace
+
 int
 PhantomSetCommand(const Arguments & args)
 {
@@ -281,13 +306,17 @@ PhantomSetCommand(const Arguments & args)
   {
     throw UsageError("--count must be an integer in [1, 100] and --seed a non-negative integer");
   }
+  itk::PhantomSetRanges ranges;
+  ranges.prostateE = Range(args, "--prostate-E-range", ranges.prostateE, 1.0, 10000.0);
+  ranges.bladderMM = Range(args, "--bladder-range", ranges.bladderMM, 0.01, 40.0);
+  ranges.rectumMM = Range(args, "--rectum-range", ranges.rectumMM, 0.01, 40.0);
   args.CheckAllUsed();
   MakeOutputDirectory(out);
   std::ostringstream list, parameters;
   list << "# pelvis phantom pairs with ground-truth seed landmarks (biomechreg phantom-set)\n"
        << "name,moving_ct,moving_labels,fixed_ct,fixed_labels,scene,moving_landmarks,fixed_landmarks\n";
   parameters << "name,true_E_kPa,bladder_mm,rectum_mm,seed\n";
-  const auto set = itk::DrawPhantomSet(static_cast<unsigned int>(count), static_cast<std::uint64_t>(seed));
+  const auto set = itk::DrawPhantomSet(static_cast<unsigned int>(count), static_cast<std::uint64_t>(seed), ranges);
   for (std::size_t k = 0; k < set.size(); ++k)
   {
     const itk::PhantomSettings & o = set[k];

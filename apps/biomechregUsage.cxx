@@ -68,8 +68,10 @@ const std::pair<const char *, const char *> commands[] = {
     "on|off]\n"
     "    the intensity-based baseline (ITK Demons, multi-resolution)\n" },
   { "phantom-set",
-    "  biomechreg phantom-set --out DIR [--count N] [--seed S]\n"
-    "    N reproducible pelvis phantom pairs with seed landmarks and pairs.csv for compare\n" },
+    "  biomechreg phantom-set --out DIR [--count N] [--seed S] [--prostate-E-range LO,HI (kPa; 50,300)]\n"
+    "                         [--bladder-range LO,HI (mm; 3,8)] [--rectum-range LO,HI (mm; 2,5)]\n"
+    "    N reproducible pelvis phantom pairs with seed landmarks and pairs.csv for compare; moduli log-uniform and\n"
+    "    fillings uniform over their ranges\n" },
   { "compare",
     "  biomechreg compare --pairs LIST.csv --out DIR [--methods identity,fem,demons] [--tag T] [--seed-organ NAME]\n"
     "                     [--flatten LABELS] [register's and demons' settings]\n"

@@ -13,6 +13,8 @@
 #   4. benchmarks/summarize_markers.py: tables, paired t-tests and exact Wilcoxon signed-rank tests, PNG.
 # Usage: benchmarks/run_marker_benchmark.sh [PAIRS] [SEED]   (about 1.5 min per pair on 2 cores; WORK_DIR keeps the
 # phantoms, and a WORK_DIR that already holds them reuses them)
+# Another population: PHANTOM_SET_OPTIONS="--prostate-E-range 15,40 --bladder-range 8,15" (phantom-set's options)
+# with STUDY=NAME, which writes into benchmarks/results/markers_NAME/ instead.
 # Writes benchmarks/results/markers_pairs.csv, markers_dose.csv, markers_summary.md, markers.png.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -20,7 +22,7 @@ bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
 pairs="${1:-8}"
 seed="${2:-2031}"
 assumed="${ASSUMED_E:-60}"
-out="$root/benchmarks/results"
+out="$root/benchmarks/results${STUDY:+/markers_$STUDY}"
 mkdir -p "$out"
 work="${WORK_DIR:-$(mktemp -d)}"
 mkdir -p "$work"
@@ -34,7 +36,8 @@ if [ -f "$work/phantoms/pairs.csv" ]; then
   echo "phantom set: reusing $work/phantoms"
 else
   echo "phantom set: $pairs pairs (seed $seed) -> $work/phantoms"
-  "$bin" phantom-set --count "$pairs" --seed "$seed" --out "$work/phantoms" > "$log"
+  # shellcheck disable=SC2086 # the options are words on purpose
+  "$bin" phantom-set --count "$pairs" --seed "$seed" ${PHANTOM_SET_OPTIONS:-} --out "$work/phantoms" > "$log"
 fi
 pairs_csv="$out/markers_pairs.csv"
 dose_csv="$out/markers_dose.csv"

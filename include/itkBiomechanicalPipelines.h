@@ -372,12 +372,21 @@ MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = 
 BiomechanicalRegistration_EXPORT PhantomPair
 MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer, bmr::TetrahedralMesh & truthMesh);
 
+/** The ranges DrawPhantomSet() draws from: [low, high] each. \ingroup BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT PhantomSetRanges
+{
+  std::array<double, 2> prostateE{ { 50.0, 300.0 } }; ///< kPa, log-uniform (whole kPa)
+  std::array<double, 2> bladderMM{ { 3.0, 8.0 } };    ///< mm, uniform (0.01 mm)
+  std::array<double, 2> rectumMM{ { 2.0, 5.0 } };     ///< mm, uniform (0.01 mm)
+};
+
 /** \a count pelvis phantom settings for a comparison (biomechreg phantom-set), drawn reproducibly from \a seed:
- * prostate modulus log-uniform in [50, 300] kPa (whole kPa), bladder filling uniform in [3, 8] mm and rectum in
- * [2, 5] mm (0.01 mm), noise and seed placement seeded by seed * 1000 + k + 1. \ingroup
+ * prostate modulus log-uniform over \a ranges.prostateE (whole kPa), bladder and rectum fillings uniform over their
+ * ranges (0.01 mm), noise and seed placement seeded by seed * 1000 + k + 1. The default ranges give the sets of
+ * earlier versions. Throws when a range is empty, reversed or not positive. \ingroup
  * BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT std::vector<PhantomSettings>
-                                 DrawPhantomSet(unsigned int count, std::uint64_t seed);
+DrawPhantomSet(unsigned int count, std::uint64_t seed, const PhantomSetRanges & ranges = {});
 
 /** Settings of the Demons baseline (itk::DemonsBaselineRegistrationFilter); the defaults are biomechreg's.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */

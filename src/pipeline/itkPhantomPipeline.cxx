@@ -419,8 +419,17 @@ PhantomSettings::Defaults(AnatomyEnum anatomy)
 }
 
 std::vector<PhantomSettings>
-DrawPhantomSet(unsigned int count, std::uint64_t seed)
+DrawPhantomSet(unsigned int count, std::uint64_t seed, const PhantomSetRanges & ranges)
 {
+  for (const auto & [name, range] : { std::make_pair("prostate modulus", ranges.prostateE),
+                                      std::make_pair("bladder filling", ranges.bladderMM),
+                                      std::make_pair("rectum filling", ranges.rectumMM) })
+  {
+    if (!(std::isfinite(range[0]) && std::isfinite(range[1]) && range[0] > 0.0 && range[0] <= range[1]))
+    {
+      bmr::Fail("DrawPhantomSet", std::string("the ") + name + " range must satisfy 0 < low <= high");
+    }
+  }
   // std::mt19937_64's sequence is fixed by the standard (its distributions are not, so the uniform numbers are
   // made from the raw integers): the same set on every platform.
   std::mt19937_64              rng(seed);
@@ -428,9 +437,9 @@ DrawPhantomSet(unsigned int count, std::uint64_t seed)
   std::vector<PhantomSettings> set(count);
   for (unsigned int k = 0; k < count; ++k)
   {
-    set[k].prostateE = std::round(std::exp(uniform(std::log(50.0), std::log(300.0))));
-    set[k].bladderMM = std::round(100.0 * uniform(3.0, 8.0)) / 100.0;
-    set[k].rectumMM = std::round(100.0 * uniform(2.0, 5.0)) / 100.0;
+    set[k].prostateE = std::round(std::exp(uniform(std::log(ranges.prostateE[0]), std::log(ranges.prostateE[1]))));
+    set[k].bladderMM = std::round(100.0 * uniform(ranges.bladderMM[0], ranges.bladderMM[1])) / 100.0;
+    set[k].rectumMM = std::round(100.0 * uniform(ranges.rectumMM[0], ranges.rectumMM[1])) / 100.0;
     set[k].seed = seed * 1000 + k + 1;
   }
   return set;

@@ -152,6 +152,8 @@ expect_error(demons_flatten_without_labels "--flatten needs --moving-labels and 
 expect_error(demons_bad_variant "--demons-variant must be diffeomorphic or symmetric"
   demons --moving-ct ${TEMP}/ok/moving_ct.nrrd --fixed-ct ${TEMP}/ok/fixed_ct.nrrd --demons-variant log --out ${TEMP}/d2)
 expect_error(phantom_set_count "--count must be an integer in \\[1, 100\\]" phantom-set --count 0 --out ${TEMP}/p1)
+expect_error(phantom_set_range "--bladder-range expects LOW,HIGH with 0.01 <= LOW <= HIGH <= 40, got \"15,8\""
+  phantom-set --bladder-range 15,8 --out ${TEMP}/p1)
 file(WRITE ${TEMP}/no_scene_column.csv "name,moving_ct,moving_labels,fixed_ct,fixed_labels\na,x,x,x,x\n")
 expect_error(compare_missing_column "the header lacks the column \"scene\""
   compare --pairs ${TEMP}/no_scene_column.csv --out ${TEMP}/c1)

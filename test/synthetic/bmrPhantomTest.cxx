@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "bmrPhantom.h"
 #include "bmrTestUtilities.h"
+#include "itkBiomechanicalPipelines.h"
 
 #include <algorithm>
 #include <cmath>
@@ -419,6 +420,48 @@ TestErrors(Checker & checker)
   checker.Check(throws(parameters), "an impossible number of seeds is refused");
 }
 
+/** itk::DrawPhantomSet: the default ranges draw the sets of earlier versions (the moduli of the marker
+ * benchmark's SEED 2031 set, benchmarks/results/markers_pairs.csv), other ranges are honoured, bad ones refused. */
+void
+TestPhantomSet(Checker & checker)
+{
+  const std::vector<double> recorded = { 267, 88, 82, 102, 90, 203, 168, 138 };
+  const auto                set = itk::DrawPhantomSet(8, 2031);
+  for (std::size_t k = 0; k < recorded.size(); ++k)
+  {
+    checker.Check(set[k].prostateE == recorded[k],
+                  "default ranges: pair " + std::to_string(k + 1) + " of SEED 2031 has E " +
+                    std::to_string(set[k].prostateE) + " kPa, recorded " + std::to_string(recorded[k]));
+  }
+  itk::PhantomSetRanges ranges;
+  ranges.prostateE = { { 15.0, 40.0 } };
+  ranges.bladderMM = { { 8.0, 15.0 } };
+  ranges.rectumMM = { { 4.0, 8.0 } };
+  double lowest = 1e9, highest = 0.0;
+  for (const itk::PhantomSettings & o : itk::DrawPhantomSet(200, 5, ranges))
+  {
+    checker.Check(o.prostateE >= 15.0 && o.prostateE <= 40.0 && o.bladderMM >= 8.0 && o.bladderMM <= 15.0 &&
+                    o.rectumMM >= 4.0 && o.rectumMM <= 8.0,
+                  "a drawn pair lies within its ranges");
+    lowest = std::min(lowest, o.bladderMM);
+    highest = std::max(highest, o.bladderMM);
+  }
+  // 200 uniform draws over [8, 15]: the extremes lie within 0.35 mm of the ends unless p < 2 x 0.95^200 ~ 7e-5.
+  checker.Check(lowest < 8.35 && highest > 14.65,
+                "200 bladder fillings span [8, 15] mm: " + std::to_string(lowest) + " .. " + std::to_string(highest));
+  ranges.rectumMM = { { 5.0, 4.0 } };
+  bool refused = false;
+  try
+  {
+    itk::DrawPhantomSet(1, 5, ranges);
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    refused = std::string(e.GetDescription()).find("rectum filling range") != std::string::npos;
+  }
+  checker.Check(refused, "a reversed range is refused, naming it");
+}
+
 } // namespace
 
 int
@@ -433,6 +476,7 @@ bmrPhantomTest(int, char *[])
     TestSphere(checker);
     TestNoise(checker);
     TestErrors(checker);
+    TestPhantomSet(checker);
   }
   catch (const std::exception & error)
   {
