@@ -13,7 +13,7 @@ jobs="${JOBS:-$(nproc)}"
 
 packages=(build-essential cmake ninja-build libinsighttoolkit5-dev libvtk9-dev libeigen3-dev libcgal-dev
   libgdcm-dev libfftw3-dev libsuitesparse-dev libopenblas-dev libmetis-dev nlohmann-json3-dev time python3-matplotlib python3-numpy
-  snakemake plastimatch)
+  snakemake plastimatch dicom3tools)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

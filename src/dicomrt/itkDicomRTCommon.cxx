@@ -343,6 +343,7 @@ PutCommonModules(gdcm::DataSet &          ds,
   Put(ds, gdcm::Tag(0x0008, 0x0018), gdcm::VR::UI, sopInstanceUID);
   Put(ds, gdcm::Tag(0x0008, 0x0060), gdcm::VR::CS, modality);
   Put(ds, gdcm::Tag(0x0008, 0x0070), gdcm::VR::LO, "ITKBiomechanicalRegistration");
+  Put(ds, gdcm::Tag(0x0008, 0x1070), gdcm::VR::PN, ""); // Operators' Name: type 2 in the RT Series module
   Put(ds, gdcm::Tag(0x0008, 0x1090), gdcm::VR::LO, "biomechreg");
   Put(ds, gdcm::Tag(0x0020, 0x000e), gdcm::VR::UI, seriesUID);
   Put(ds, gdcm::Tag(0x0020, 0x0011), gdcm::VR::IS, "1");

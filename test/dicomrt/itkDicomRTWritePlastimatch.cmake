@@ -26,6 +26,16 @@ execute_process(COMMAND ${CLI} rt-export --reference-ct ${OUT}/series --labels $
 if(NOT rc EQUAL 2 OR NOT err MATCHES "needs --labels FILE, --scene FILE")
   message(FATAL_ERROR "rt-export without --scene: exit ${rc} (2 expected), \"${err}\"")
 endif()
+# dicom3tools' IOD checker on the RTSTRUCT: no "Error" line (its warnings concern the CT's copied values). It asserts
+# on 32-bit pixel data, plastimatch's RTDOSE included, so the RTDOSE is checked by reading only.
+find_program(DCIODVFY dciodvfy)
+if(NOT DCIODVFY)
+  message(FATAL_ERROR "dciodvfy is not installed (scripts/setup.sh installs Debian's dicom3tools)")
+endif()
+execute_process(COMMAND ${DCIODVFY} ${OUT}/cli/rtss.dcm OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT "${out}${err}" MATCHES "RTStructureSet" OR "${out}${err}" MATCHES "Error")
+  message(FATAL_ERROR "dciodvfy does not accept our RTSTRUCT:\n${out}${err}")
+endif()
 run(${PLASTIMATCH} convert --input ${OUT}/cli/rtss.dcm --referenced-ct ${OUT}/series --output-prefix ${OUT}/back)
 run(${PLASTIMATCH} convert --input ${OUT}/cli/rtdose.dcm --output-dose-img ${OUT}/back_dose.nrrd)
 run(${DRIVER} itkDicomRTWriteTest check ${OUT})
