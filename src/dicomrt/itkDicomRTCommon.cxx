@@ -330,22 +330,22 @@ void
 PutCommonModules(gdcm::DataSet &          ds,
                  const ReferencedSeries & series,
                  const std::string &      sopClassUID,
-                 const std::string &      sopInstanceUID,
                  const std::string &      modality,
-                 const std::string &      seriesUID)
+                 const std::string &      contents)
 {
+  const std::string seed = series.seriesInstanceUID + " " + contents;
   for (const gdcm::DataElement & element : series.patientAndStudy.GetDES())
   {
     ds.Replace(element);
   }
   Put(ds, gdcm::Tag(0x0008, 0x0005), gdcm::VR::CS, "ISO_IR 100");
   Put(ds, gdcm::Tag(0x0008, 0x0016), gdcm::VR::UI, sopClassUID);
-  Put(ds, gdcm::Tag(0x0008, 0x0018), gdcm::VR::UI, sopInstanceUID);
+  Put(ds, gdcm::Tag(0x0008, 0x0018), gdcm::VR::UI, DerivedUID(modality + " instance " + seed));
   Put(ds, gdcm::Tag(0x0008, 0x0060), gdcm::VR::CS, modality);
   Put(ds, gdcm::Tag(0x0008, 0x0070), gdcm::VR::LO, "ITKBiomechanicalRegistration");
   Put(ds, gdcm::Tag(0x0008, 0x1070), gdcm::VR::PN, ""); // Operators' Name: type 2 in the RT Series module
   Put(ds, gdcm::Tag(0x0008, 0x1090), gdcm::VR::LO, "biomechreg");
-  Put(ds, gdcm::Tag(0x0020, 0x000e), gdcm::VR::UI, seriesUID);
+  Put(ds, gdcm::Tag(0x0020, 0x000e), gdcm::VR::UI, DerivedUID(modality + " series " + seed));
   Put(ds, gdcm::Tag(0x0020, 0x0011), gdcm::VR::IS, "1");
   Put(ds, gdcm::Tag(0x0020, 0x0052), gdcm::VR::UI, series.frameOfReferenceUID);
   Put(ds, gdcm::Tag(0x0020, 0x1040), gdcm::VR::LO, "");

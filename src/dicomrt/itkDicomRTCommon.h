@@ -92,14 +92,14 @@ void
 PutSequence(gdcm::DataSet & ds, const gdcm::Tag & tag, const std::vector<gdcm::DataSet> & items);
 
 /** The modules every RT object written here shares: SOP Common, Patient and General Study (copied from
- * \a series), RT Series (\a modality, \a seriesUID), Frame of Reference and General Equipment. */
+ * \a series), RT Series (\a modality), Frame of Reference and General Equipment. The new SOP Instance and Series
+ * UIDs are derived (DerivedUID()) from \a modality and \a contents, a text that determines the object. */
 void
 PutCommonModules(gdcm::DataSet &          ds,
                  const ReferencedSeries & series,
                  const std::string &      sopClassUID,
-                 const std::string &      sopInstanceUID,
                  const std::string &      modality,
-                 const std::string &      seriesUID);
+                 const std::string &      contents);
 
 /** Writes \a ds (explicit VR little endian, with its file meta information) to a temporary name beside
  * \a path and renames it when complete. */

@@ -154,14 +154,12 @@ WriteRTDose(const DicomRTDoseImageType * dose,
   {
     checksum = (checksum ^ v) * 1099511628211ULL;
   }
-  const std::string seed = series.seriesInstanceUID + " " + std::to_string(checksum) + " " +
-                           dicomrt::StringValue(ds, gdcm::Tag(0x0020, 0x0032)) + " " + scalingText;
   dicomrt::PutCommonModules(ds,
                             series,
                             RTDoseStorage,
-                            dicomrt::DerivedUID("rtdose instance " + seed),
                             "RTDOSE",
-                            dicomrt::DerivedUID("rtdose series " + seed));
+                            std::to_string(checksum) + " " + dicomrt::StringValue(ds, gdcm::Tag(0x0020, 0x0032)) + " " +
+                              scalingText);
   dicomrt::Put(ds, gdcm::Tag(0x0020, 0x0013), gdcm::VR::IS, "1");
   dicomrt::Put(ds, gdcm::Tag(0x3004, 0x0002), gdcm::VR::CS, "GY");
   dicomrt::Put(ds, gdcm::Tag(0x3004, 0x0004), gdcm::VR::CS, "PHYSICAL");

@@ -296,7 +296,7 @@ WriteRTStruct(const DicomRTLabelImageType *               labels,
   const IndexValueType            k0 = labels->GetLargestPossibleRegion().GetIndex(2);
 
   std::vector<gdcm::DataSet> rois, contourItems, observations;
-  std::string                text = series.seriesInstanceUID;
+  std::string                text; // names and contour data: what the derived UIDs are derived from
   for (const auto & entry : roiNames)
   {
     std::vector<Contour> contours;
@@ -334,12 +334,7 @@ WriteRTStruct(const DicomRTLabelImageType *               labels,
   }
 
   gdcm::DataSet ds;
-  dicomrt::PutCommonModules(ds,
-                            series,
-                            RTStructStorage,
-                            dicomrt::DerivedUID("rtstruct instance " + text),
-                            "RTSTRUCT",
-                            dicomrt::DerivedUID("rtstruct series " + text));
+  dicomrt::PutCommonModules(ds, series, RTStructStorage, "RTSTRUCT", text);
   dicomrt::Put(ds, gdcm::Tag(0x3006, 0x0002), gdcm::VR::SH, "biomechreg");
   dicomrt::Put(ds, gdcm::Tag(0x3006, 0x0008), gdcm::VR::DA, "");
   dicomrt::Put(ds, gdcm::Tag(0x3006, 0x0009), gdcm::VR::TM, "");
