@@ -46,8 +46,9 @@ namespace itk {
  *
  * Throws an itk::ExceptionObject naming the input at fault, in one line, when: \a referenceSeries holds no
  * image series or several; a label slice has no slice of the series; the orientation differs; a name is
- * empty or longer than 64 characters or used twice; no entry of \a roiNames holds a voxel; the file cannot be
- * written. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+ * empty, longer than 64 characters or holds a backslash, or two names differ only in case or surrounding spaces (the
+ * reader matches them so); no entry of \a roiNames holds a voxel; the file cannot be written. \ingroup
+ * BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT void
 WriteRTStruct(const DicomRTLabelImageType *               labels,
               const std::map<std::int32_t, std::string> & roiNames,
@@ -66,8 +67,9 @@ WriteRTStruct(const DicomRTLabelImageType *               labels,
  * (WriteRTStruct()); the image need not lie on its grid.
  *
  * Throws an itk::ExceptionObject naming the input at fault, in one line, when a dose is negative or not
- * finite, the third axis is oblique to the row x column normal, \a referenceSeries holds no image series or
- * several, or the file cannot be written. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+ * finite, the grid has more than 65535 rows or columns, the third axis is oblique to the row x column normal, \a
+ * referenceSeries holds no image series or several, or the file cannot be written. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT void
 WriteRTDose(const DicomRTDoseImageType * dose,
             const std::string &          referenceSeries,

@@ -51,6 +51,7 @@
 namespace itk {
 namespace {
 using dicomrt::HasPart10Preamble;
+using dicomrt::NameKey;
 using dicomrt::ParseNumbers;
 using dicomrt::StringValue;
 using dicomrt::Trim;
@@ -79,15 +80,6 @@ const gdcm::Tag ContourDataTag(0x3006, 0x0050);
 const gdcm::Tag ReferencedROINumberTag(0x3006, 0x0084);
 
 // ------------------------------------------------------------------------------------------ text
-
-/** The key under which ROI names are compared: trimmed, lower case. */
-std::string
-NameKey(const std::string & name)
-{
-  std::string key = Trim(name);
-  std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
-  return key;
-}
 
 std::string
 Upper(std::string text)

@@ -36,6 +36,10 @@ namespace dicomrt {
 std::string
 Trim(const std::string & text);
 
+/** The key under which ROI names are compared: trimmed, lower case. */
+std::string
+NameKey(const std::string & name);
+
 /** The value of a string attribute (CS, DS, IS, LO, UI, ...) without padding (spaces, NUL); empty when absent. */
 std::string
 StringValue(const gdcm::DataSet & ds, const gdcm::Tag & tag);

@@ -23,8 +23,6 @@
 #include "itkDicomRTCommon.h"
 #include "itkImageRegionConstIteratorWithIndex.h"
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -203,9 +201,8 @@ CheckNames(const std::map<std::int32_t, std::string> & roiNames)
                 "the ROI name of label " + std::to_string(entry.first) + " (\"" + entry.second +
                   "\") must have 1 to 64 characters and no backslash");
     }
-    std::string key = name; // names are matched without regard to case when read (ReadRTStructAsLabelImage)
-    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (!seen.insert(key).second)
+    // Names are matched without regard to case when read (ReadRTStructAsLabelImage).
+    if (!seen.insert(dicomrt::NameKey(name)).second)
     {
       bmr::Fail(Where, "the ROI name \"" + name + "\" is given to two labels");
     }
