@@ -529,6 +529,7 @@ RevoxelizedMaps(const bmr::TetrahedralMesh *     deformed,
  * (bootstrap), or of the fixed anatomy itself when \a sim is null (rescan). */
 std::vector<double>
 Resample(unsigned int                        k,
+         bmr::TetrahedralMesh *              prefetched,
          const EstimationSetup &             setup,
          Resimulation *                      sim,
          const SmoothAnatomy &               anatomy,
@@ -537,17 +538,18 @@ Resample(unsigned int                        k,
          const BiomechanicalLabelImageType * movingLabels)
 {
   const UncertaintySettings & u = setup.settings->uncertainty;
-  Random                      rng(u.seed * 1000003 + k);
+  Random                      rng = ResampleRandom(u, k);
   // The estimation's own meshes at randomly scaled sizes (the coarse one as the registration makes it).
-  const double               jitter = Uniform(rng, 1.0 - u.meshJitter, 1.0 + u.meshJitter);
   std::vector<PipelineStage> untimed;
   StageClock                 quiet(nullptr, untimed);
-  const bmr::Scene           scene = ScaledMeshSizes(*setup.scene, jitter);
-  const bmr::TetrahedralMesh fine = MeshLabelImage(movingLabels, scene, quiet, "resample mesh");
-  RegistrationSettings       settings = *setup.settings;
+  const bmr::Scene           scene = ResampleMeshScene(*setup.scene, u, rng);
+  const bmr::TetrahedralMesh fine =
+    prefetched ? std::move(*prefetched) : MeshLabelImage(movingLabels, scene, quiet, "resample mesh");
+  RegistrationSettings settings = *setup.settings;
   settings.estimator.outerStepTolerance = u.stepTolerance;
   EstimationSetup resample = setup;
   resample.settings = &settings;
+  resample.prefetch = nullptr;
   resample.fine = &fine;
   bmr::TetrahedralMesh coarse;
   if (u.warmStart)
@@ -583,6 +585,55 @@ Resample(unsigned int                        k,
 }
 } // namespace
 
+bmr::Scene
+ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, std::mt19937_64 & rng)
+{
+  return ScaledMeshSizes(scene, Uniform(rng, 1.0 - u.meshJitter, 1.0 + u.meshJitter));
+}
+
+ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * movingLabels,
+                                           const bmr::Scene &                  scene,
+                                           const UncertaintySettings &         u)
+  : m_Meshes(u.resamples)
+{
+  m_Thread = std::thread([this, movingLabels, scene, u]() {
+    for (unsigned int k = 0; k < u.resamples && !m_Stop; ++k)
+    {
+      try
+      {
+        std::vector<PipelineStage> untimed;
+        StageClock                 quiet(nullptr, untimed);
+        Random                     rng = ResampleRandom(u, k);
+        m_Meshes[k] = MeshLabelImage(movingLabels, ResampleMeshScene(scene, u, rng), quiet, "resample mesh");
+      }
+      catch (const std::exception &)
+      {
+        // Left empty: the resample meshes again and reports the failure where it belongs.
+      }
+    }
+  });
+}
+
+ResampleMeshPrefetch::~ResampleMeshPrefetch()
+{
+  m_Stop = true;
+  if (m_Thread.joinable())
+  {
+    m_Thread.join();
+  }
+}
+
+std::vector<bmr::TetrahedralMesh>
+ResampleMeshPrefetch::Finish()
+{
+  m_Stop = true;
+  if (m_Thread.joinable())
+  {
+    m_Thread.join();
+  }
+  return std::move(m_Meshes);
+}
+
 std::map<std::string, ModulusInterval>
 BootstrapModuli(const EstimationSetup &             setup,
                 RegistrationResult &                r,
@@ -607,6 +658,8 @@ BootstrapModuli(const EstimationSetup &             setup,
     crop.origin[a] = corner[a];
     crop.size[a] = box.GetSize(a);
   }
+  std::vector<bmr::TetrahedralMesh> prefetched =
+    setup.prefetch ? setup.prefetch->Finish() : std::vector<bmr::TetrahedralMesh>();
   std::vector<std::vector<double>> moduli(u.resamples);
   std::vector<std::string>         failures(u.resamples);
   std::atomic<unsigned int>        next{ 0 };
@@ -617,7 +670,14 @@ BootstrapModuli(const EstimationSetup &             setup,
     {
       try
       {
-        moduli[k] = Resample(k, setup, sim.get(), anatomy, crop, r, movingLabels);
+        moduli[k] = Resample(k,
+                             k < prefetched.size() && !prefetched[k].points.empty() ? &prefetched[k] : nullptr,
+                             setup,
+                             sim.get(),
+                             anatomy,
+                             crop,
+                             r,
+                             movingLabels);
       }
       catch (const std::exception & e)
       {

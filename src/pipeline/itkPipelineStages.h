@@ -25,7 +25,10 @@
 
 #include "bmrStopwatch.h"
 
+#include <atomic>
+#include <mutex>
 #include <random>
+#include <thread>
 
 namespace itk {
 namespace pipeline {
@@ -86,6 +89,45 @@ ComputeFields(SimulationResult &   result,
               bool                 pushField,
               StageClock &         clock);
 
+/** The random numbers of resample \a k of the stated interval: the same seed and k, the same resample. */
+inline std::mt19937_64
+ResampleRandom(const UncertaintySettings & u, unsigned int k)
+{
+  return std::mt19937_64(u.seed * 1000003 + k);
+}
+
+/** The scene of resample \a k's fine mesh: the scene's mesh sizes scaled by U(1 - jitter, 1 + jitter), the
+ * first number \a rng (ResampleRandom()) gives. */
+bmr::Scene
+ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, std::mt19937_64 & rng);
+
+/** \brief The resamples' fine meshes, made on a second thread while the fit runs.
+ *
+ * The fit factorizes and solves on one core (the BLAS is pinned to one thread for determinism), so a second
+ * core idles for its ~10 s. The resamples' meshes depend only on the moving labels, the scene and the resample's
+ * random numbers (ResampleMeshScene()), not on the fit: meshed here first, they are the same meshes the
+ * resamples would make, and the results do not change. */
+class ResampleMeshPrefetch
+{
+public:
+  ResampleMeshPrefetch(const BiomechanicalLabelImageType * movingLabels,
+                       const bmr::Scene &                  scene,
+                       const UncertaintySettings &         u);
+  ~ResampleMeshPrefetch();
+  ResampleMeshPrefetch(const ResampleMeshPrefetch &) = delete;
+  ResampleMeshPrefetch &
+  operator=(const ResampleMeshPrefetch &) = delete;
+
+  /** Stops after the mesh under way and hands over the meshes made, by resample (empty where none was). */
+  std::vector<bmr::TetrahedralMesh>
+  Finish();
+
+private:
+  std::vector<bmr::TetrahedralMesh> m_Meshes;
+  std::atomic<bool>                 m_Stop{ false };
+  std::thread                       m_Thread;
+};
+
 /** What an estimation runs on: the fine mesh (and a coarse one for the sweep, or null), the scene and the settings. */
 struct EstimationSetup
 {
@@ -99,6 +141,8 @@ struct EstimationSetup
    * name and the relative curvature of the estimate (FEMElasticityOptimizer::SetWarmStart). */
   std::map<std::string, double> warmStartModuli;
   double                        warmStartRelativeCurvature{ 0.0 };
+  /** The resamples' meshes, made while the fit ran (may be null: each resample meshes its own). */
+  ResampleMeshPrefetch * prefetch{ nullptr };
 };
 
 /** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels. */

@@ -17,6 +17,7 @@
  *=========================================================================*/
 // The registration pipeline: distance maps -> meshes -> FEMElasticityOptimizer -> fields -> warped images.
 #include "itkPipelineStages.h"
+#include "itkMultiThreaderBase.h"
 
 #include "bmrError.h"
 #include "itkBiomechanicalReports.h"
@@ -210,6 +211,24 @@ Estimate(RegistrationResult &                                    r,
   r.unknowns = bmr::SceneUnknownModuli(*setup.scene);
 }
 
+/** The resamples' meshes on a second thread while the fit runs (pipeline::ResampleMeshPrefetch), when the interval
+ * resamples, there is a modulus to estimate and more than one thread may run; null otherwise. */
+std::unique_ptr<pipeline::ResampleMeshPrefetch>
+StartResampleMeshes(const BiomechanicalLabelImageType * movingLabels,
+                    const bmr::Scene &                  scene,
+                    const RegistrationSettings &        settings)
+{
+  const UncertaintySettings & u = settings.uncertainty;
+  const unsigned int threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  const bool         resamples =
+    (u.method == UncertaintyMethodEnum::Rescan || u.method == UncertaintyMethodEnum::Bootstrap) && u.resamples > 0;
+  if (!resamples || scene.UnknownLabels().empty() || threads < 2)
+  {
+    return nullptr;
+  }
+  return std::make_unique<pipeline::ResampleMeshPrefetch>(movingLabels, scene, u);
+}
+
 /** The stated interval of every unknown modulus, by the chosen method, and what it leaves undetermined in the
  * identifiability verdict. */
 void
@@ -400,6 +419,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, scene.Warnings());
   clock.Warn(r.state.warnings, VoxelWarnings(scene, movingLabels, fixedLabels));
 
+  const std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch = StartResampleMeshes(movingLabels, scene, settings);
   clock.Begin("distance maps (fixed labels)");
   const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
   clock.End(std::to_string(maps.size()) + " organs");
@@ -412,11 +432,12 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     coarse = pipeline::MeshLabelImage(
       movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
   }
-  const bmr::TetrahedralMesh      estimationMesh = r.state.mesh;
-  const pipeline::EstimationSetup setup{
+  const bmr::TetrahedralMesh estimationMesh = r.state.mesh;
+  pipeline::EstimationSetup  setup{
     &estimationMesh,    coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans,
     &fixedProbabilities
   };
+  setup.prefetch = prefetch.get();
   Estimate(r, setup, maps, clock);
   StateIntervals(r, setup, movingLabels, fixedLabels, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);

@@ -23,7 +23,7 @@
 //   the rule by which the interval would correct it). The resimulating bootstrap is off by 0.1-0.5 in log E on
 //   the pelvis (docs/estimation.md);
 // - the spread comes from the data: it is larger on 2 mm voxels than on 1 mm ones;
-// - deterministic: the same seed gives bit-identical rescans;
+// - deterministic: the same seed gives bit-identical rescans, also on one thread (no meshes made ahead);
 // - resampling scales the rescans cannot honour are refused with an itk::ExceptionObject naming the setting.
 #include "itkBiomechanicalPipelines.h"
 #include "itkBiomechanicalReports.h"
@@ -41,9 +41,11 @@ itk::ModulusInterval
 Rescan(const itk::PhantomPair &                 pair,
        const itk::BiomechanicalLabelImageType * fixed,
        double                                   meshJitter,
-       double                                   stepTolerance = itk::UncertaintySettings().stepTolerance)
+       double                                   stepTolerance = itk::UncertaintySettings().stepTolerance,
+       unsigned int                             threads = 0)
 {
   itk::RegistrationSettings settings;
+  settings.uncertainty.threads = threads;
   settings.uncertainty.method = itk::UncertaintyMethodEnum::Rescan;
   settings.uncertainty.resamples = 4;
   settings.uncertainty.meshJitter = meshJitter;
@@ -85,6 +87,12 @@ itkModulusRescanTest(int, char *[])
   const itk::ModulusInterval again = Rescan(pair, pair.fixedLabels, jitter);
   Check(again.resampleModuli == one.resampleModuli && again.interval95 == one.interval95,
         "the same seed gives bit-identical rescans");
+  // One resampling thread: no mesh is made ahead while the fit runs (ResampleMeshPrefetch), each rescan meshes its
+  // own, and the rescans are the same.
+  const itk::ModulusInterval single =
+    Rescan(pair, pair.fixedLabels, jitter, itk::UncertaintySettings().stepTolerance, 1);
+  Check(single.resampleModuli == one.resampleModuli,
+        "one resampling thread without the meshes made ahead gives bit-identical rescans");
 
   // The resamples' looser outer search: it stops once the next secant step in log E would be shorter than the
   // tolerance, and the secant's steps shrink superlinearly, so each rescan lies within that tolerance (plus the
