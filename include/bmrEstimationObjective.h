@@ -150,6 +150,29 @@ private:
   std::size_t                         m_Infeasible{ 0 };
   double                              m_LastFeasibleValue{ 0.0 };
   std::unique_ptr<CompressionBarrier> m_Barrier;
+
+  /** The last feasible evaluation. An inner solve ends by evaluating, now with the modulus gradient, the point
+   * its optimizer evaluated last: that evaluation is then reused (the same state and adjoint, so the same
+   * numbers), which saves a forward and an adjoint solve per inner solve. It is keyed on the parameters and the
+   * unknown moduli: the model's other settings must not change while the objective is in use. */
+  struct Evaluation
+  {
+    bool                valid{ false };
+    bool                withAdjoint{ false };
+    std::vector<double> parameters, moduli; ///< where it was made
+    std::vector<double> u, lambda, gradientP;
+    double              value{ 0.0 };
+    std::size_t         inverted{ 0 };
+  };
+  Evaluation m_Last;
+
+  std::vector<double>
+  CurrentModuli() const;
+  /** Solves at \a p (and the adjoint when \a adjoint) into m_Last; false when the model cannot reach p. */
+  bool
+  EvaluateAt(const std::vector<double> & p, bool adjoint);
+  std::vector<double>
+  ModulusGradient(const std::vector<double> & u, const std::vector<double> & lambda) const;
 };
 
 } // namespace bmr

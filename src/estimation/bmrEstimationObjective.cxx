@@ -106,55 +106,93 @@ EstimationObjective::SetYoungsModuli(const std::vector<double> & moduli)
   }
 }
 
+std::vector<double>
+EstimationObjective::CurrentModuli() const
+{
+  std::vector<double> moduli;
+  for (std::int32_t label : m_UnknownLabels)
+  {
+    moduli.push_back(m_Model.GetYoungsModulus(label));
+  }
+  return moduli;
+}
+
+bool
+EstimationObjective::EvaluateAt(const std::vector<double> & p, bool adjoint)
+{
+  m_Last.valid = false;
+  const BoundaryLoad load = m_Loads.Apply(p);
+  if (!m_Model.TrySolveState(load.forces, load.prescribed, m_Last.u))
+  {
+    return false;
+  }
+  const std::vector<double> & u = m_Last.u;
+  m_Last.inverted = CountInvertedElements(m_Model.GetMesh(), u);
+  std::vector<double> g(adjoint ? u.size() : 0, 0.0);
+  double              value = 0.0;
+  for (const DataTerm * term : m_Terms)
+  {
+    value += term->Evaluate(u, adjoint ? &g : nullptr);
+  }
+  if (m_Barrier)
+  {
+    value += m_Barrier->Evaluate(u, adjoint ? &g : nullptr);
+  }
+  m_Last.value = value + m_Loads.EvaluatePrior(p);
+  m_Last.lambda.clear();
+  m_Last.gradientP.clear();
+  if (adjoint)
+  {
+    m_Last.lambda = m_Model.SolveAdjoint(g);
+    m_Last.gradientP = PullBackThroughLoads(m_Model, m_Loads, p, g, m_Last.lambda);
+  }
+  m_Last.parameters = p;
+  m_Last.moduli = CurrentModuli();
+  m_Last.withAdjoint = adjoint;
+  m_Last.valid = true;
+  return true;
+}
+
+std::vector<double>
+EstimationObjective::ModulusGradient(const std::vector<double> & u, const std::vector<double> & lambda) const
+{
+  std::vector<double> gradient(m_UnknownLabels.size(), 0.0);
+  for (std::size_t m = 0; m < m_UnknownLabels.size(); ++m)
+  {
+    const std::vector<double> dfdE = m_Model.ModulusDerivative(m_UnknownLabels[m], u);
+    double                    dot = 0.0;
+    for (std::size_t i = 0; i < u.size(); ++i)
+    {
+      dot += lambda[i] * dfdE[i];
+    }
+    gradient[m] = -m_Model.GetYoungsModulus(m_UnknownLabels[m]) * dot;
+  }
+  return gradient;
+}
+
 double
 EstimationObjective::Evaluate(const std::vector<double> & p,
                               std::vector<double> *       gradientP,
                               std::vector<double> *       gradientLogE)
 {
-  const BoundaryLoad  load = m_Loads.Apply(p);
-  std::vector<double> u;
-  if (!m_Model.TrySolveState(load.forces, load.prescribed, u))
+  const bool wantGradient = gradientP != nullptr || gradientLogE != nullptr;
+  const bool reuse =
+    m_Last.valid && (m_Last.withAdjoint || !wantGradient) && m_Last.parameters == p && m_Last.moduli == CurrentModuli();
+  if (!reuse && !EvaluateAt(p, wantGradient))
   {
     return InfeasibleValue(gradientP, gradientLogE);
   }
-  m_Inverted = CountInvertedElements(m_Model.GetMesh(), u);
-  const bool          wantGradient = gradientP != nullptr || gradientLogE != nullptr;
-  std::vector<double> g(wantGradient ? u.size() : 0, 0.0);
-  double              value = 0.0;
-  for (const DataTerm * term : m_Terms)
-  {
-    value += term->Evaluate(u, wantGradient ? &g : nullptr);
-  }
-  if (m_Barrier)
-  {
-    value += m_Barrier->Evaluate(u, wantGradient ? &g : nullptr);
-  }
-  value += m_Loads.EvaluatePrior(p);
-  m_LastFeasibleValue = value;
-  if (!wantGradient)
-  {
-    return value;
-  }
-  const std::vector<double> lambda = m_Model.SolveAdjoint(g);
+  m_Inverted = m_Last.inverted;
+  m_LastFeasibleValue = m_Last.value;
   if (gradientP != nullptr)
   {
-    *gradientP = PullBackThroughLoads(m_Model, m_Loads, p, g, lambda);
+    *gradientP = m_Last.gradientP;
   }
   if (gradientLogE != nullptr)
   {
-    gradientLogE->assign(m_UnknownLabels.size(), 0.0);
-    for (std::size_t m = 0; m < m_UnknownLabels.size(); ++m)
-    {
-      const std::vector<double> dfdE = m_Model.ModulusDerivative(m_UnknownLabels[m], u);
-      double                    dot = 0.0;
-      for (std::size_t i = 0; i < u.size(); ++i)
-      {
-        dot += lambda[i] * dfdE[i];
-      }
-      (*gradientLogE)[m] = -m_Model.GetYoungsModulus(m_UnknownLabels[m]) * dot;
-    }
+    *gradientLogE = ModulusGradient(m_Last.u, m_Last.lambda);
   }
-  return value;
+  return m_Last.value;
 }
 
 // A nonlinear model could not reach the loads of p: a value above the last feasible one (which fails any line
