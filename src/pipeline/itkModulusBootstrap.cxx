@@ -616,6 +616,12 @@ ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * m
 
 ResampleMeshPrefetch::~ResampleMeshPrefetch()
 {
+  Stop();
+}
+
+void
+ResampleMeshPrefetch::Stop()
+{
   m_Stop = true;
   if (m_Thread.joinable())
   {
@@ -626,11 +632,7 @@ ResampleMeshPrefetch::~ResampleMeshPrefetch()
 std::vector<bmr::TetrahedralMesh>
 ResampleMeshPrefetch::Finish()
 {
-  m_Stop = true;
-  if (m_Thread.joinable())
-  {
-    m_Thread.join();
-  }
+  Stop();
   return std::move(m_Meshes);
 }
 

@@ -123,6 +123,10 @@ public:
   Finish();
 
 private:
+  /** Asks the thread to stop after the mesh under way and waits for it. */
+  void
+  Stop();
+
   std::vector<bmr::TetrahedralMesh> m_Meshes;
   std::atomic<bool>                 m_Stop{ false };
   std::thread                       m_Thread;
