@@ -19,6 +19,7 @@
 #include "itkBiomechanicalReports.h"
 #include "itkDicomRT.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace bmrcli {
@@ -238,20 +239,18 @@ ReadLabelsOrRTStruct(const std::string &       path,
     return ReadImage<LabelImageType>(path, what);
   }
   std::map<std::string, std::int32_t> roiNameToLabel;
-  itk::RTStructRasterizationOptions   options;
-  options.ignoreUnmappedROIs = ignoreUnmappedROIs;
-  bool backgroundSet = false;
-  for (const auto & label : scene.labels)
+  for (const auto & [value, name] : itk::SceneROINames(scene))
   {
-    if (label.role != bmr::LabelRoleEnum::Outside)
-    {
-      roiNameToLabel[label.name] = label.value;
-    }
-    else if (!backgroundSet)
-    {
-      options.backgroundLabel = label.value;
-      backgroundSet = true;
-    }
+    roiNameToLabel[name] = value;
+  }
+  itk::RTStructRasterizationOptions options;
+  options.ignoreUnmappedROIs = ignoreUnmappedROIs;
+  const auto outside = std::find_if(scene.labels.begin(), scene.labels.end(), [](const bmr::SceneLabel & label) {
+    return label.role == bmr::LabelRoleEnum::Outside;
+  });
+  if (outside != scene.labels.end())
+  {
+    options.backgroundLabel = outside->value; // the first outside label, as before
   }
   try
   {

@@ -60,14 +60,7 @@ RTExportCommand(const Arguments & args)
   LabelImageType::Pointer             labels;
   if (structures)
   {
-    const bmr::Scene scene = bmr::ReadScene(scenePath);
-    for (const bmr::SceneLabel & label : scene.labels)
-    {
-      if (label.role != bmr::LabelRoleEnum::Outside)
-      {
-        names[label.value] = label.name;
-      }
-    }
+    names = itk::SceneROINames(bmr::ReadScene(scenePath));
     labels = ReadImage<LabelImageType>(labelsPath, "label image");
   }
   const itk::DicomRTDoseImageType::Pointer doseImage = dose ? itk::ReadDoseImage(dosePath) : nullptr;

@@ -19,6 +19,7 @@
 #define itkDicomRT_h
 
 #include "BiomechanicalRegistrationExport.h"
+#include "bmrScene.h"
 #include "itkImage.h"
 
 #include <cstdint>
@@ -125,6 +126,13 @@ BiomechanicalRegistration_EXPORT DicomRTDoseImageType::Pointer
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT DicomRTDoseImageType::Pointer
                                  ReadDoseImage(const std::string & path);
+
+/** \brief The ROI name of every structure of \a scene by label value: each label's name, the labels with the role
+ * outside (air, background) left out. The map ReadRTStructAsLabelImage() (inverted) and WriteRTStruct() take when
+ * the ROIs are named as the scene's labels, as on the command line.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT std::map<std::int32_t, std::string>
+                                 SceneROINames(const bmr::Scene & scene);
 
 } // namespace itk
 

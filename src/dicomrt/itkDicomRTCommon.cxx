@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "itkDicomRTCommon.h"
 
+#include "itkDicomRT.h"
+
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
 #include "itkGDCMSeriesFileNames.h"
@@ -35,6 +37,21 @@
 #include <set>
 
 namespace itk {
+
+std::map<std::int32_t, std::string>
+SceneROINames(const bmr::Scene & scene)
+{
+  std::map<std::int32_t, std::string> names;
+  for (const bmr::SceneLabel & label : scene.labels)
+  {
+    if (label.role != bmr::LabelRoleEnum::Outside)
+    {
+      names[label.value] = label.name;
+    }
+  }
+  return names;
+}
+
 namespace dicomrt {
 namespace {
 const gdcm::Tag PixelDataTag(0x7fe0, 0x0010);
