@@ -90,6 +90,14 @@ public:
   /** K_T v at every dof (3N): the tangent applied to a nodal vector. */
   virtual std::vector<double>
   ApplyTangent(const std::vector<double> & v) const = 0;
+  /** K_T v at the constrained dofs for a \a v that vanishes there (an adjoint state, 3N); the values at the free
+   * dofs are unspecified. The adjoint's pull-back to the prescribed displacements needs only these, which a
+   * model may compute from its free-constrained block alone; the default applies the whole tangent. */
+  virtual std::vector<double>
+  ApplyTangentAtConstrained(const std::vector<double> & v) const
+  {
+    return ApplyTangent(v);
+  }
   /** f_int(u) at every dof [mN] (3N). */
   virtual std::vector<double>
   InternalForces(const std::vector<double> & u) const = 0;
@@ -144,6 +152,9 @@ public:
   SolveAdjoint(const std::vector<double> & g) override;
   std::vector<double>
   ApplyTangent(const std::vector<double> & v) const override;
+  /** LinearElasticModel::ComputeCouplingForces(): K_cf v_f, bit for bit K v at the constrained dofs. */
+  std::vector<double>
+  ApplyTangentAtConstrained(const std::vector<double> & v) const override;
   std::vector<double>
   InternalForces(const std::vector<double> & u) const override;
   std::vector<double>

@@ -139,6 +139,12 @@ public:
   std::vector<double>
   ComputeInternalForces(const std::vector<double> & u) const;
 
+  /** K_cf v_f [mN]: the forces on the constrained dofs from the free dofs' displacement \a v [mm] (3N; its
+   * constrained values are not read), zero on the free dofs. For a v that vanishes on the constrained dofs (an
+   * adjoint state) this is K v there, from the small free-constrained block instead of the whole matrix. */
+  std::vector<double>
+  ComputeCouplingForces(const std::vector<double> & v) const;
+
   /** Reaction forces [mN] (3N, zero on free dofs): K u - f on constrained dofs. */
   std::vector<double>
   ComputeReactionForces(const std::vector<double> & u, const std::vector<double> & forces) const;

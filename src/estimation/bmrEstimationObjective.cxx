@@ -38,7 +38,7 @@ PullBackThroughLoads(ForwardModel &               model,
                      const std::vector<double> &  g,
                      const std::vector<double> &  lambda)
 {
-  const std::vector<double> Klambda = model.ApplyTangent(lambda);
+  const std::vector<double> Klambda = model.ApplyTangentAtConstrained(lambda); // read on the constrained dofs
   std::vector<double>       prescribedSensitivity(g.size(), 0.0);
   for (std::int32_t n : loads.GetConstrainedNodes())
   {

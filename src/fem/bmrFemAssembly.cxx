@@ -347,6 +347,67 @@ SymmetricProduct(const LowerPattern &        pattern,
   }
 }
 
+// Scans the lower triangle by column and row, both ascending: every row's list then comes out ascending (its
+// entries left of the diagonal first, while their columns are scanned, then those below it in its own column).
+CouplingRows
+BuildCouplingRows(const LowerPattern & pattern, const std::vector<char> & constrained)
+{
+  const std::size_t n = pattern.colStart.size() - 1;
+  CouplingRows      coupling;
+  coupling.rowStart.assign(n + 1, 0);
+  const auto forEachCoupling = [&](const auto & visit) {
+    for (std::size_t col = 0; col < n; ++col)
+    {
+      for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
+      {
+        const auto row = static_cast<std::size_t>(pattern.rowIndex[k]);
+        if (constrained[row] != constrained[col])
+        {
+          visit(row, col, k);
+          visit(col, row, k);
+        }
+      }
+    }
+  };
+  forEachCoupling([&](std::size_t i, std::size_t, std::int64_t) { ++coupling.rowStart[i + 1]; });
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    coupling.rowStart[i + 1] += coupling.rowStart[i];
+  }
+  coupling.column.resize(static_cast<std::size_t>(coupling.rowStart[n]));
+  coupling.entry.resize(coupling.column.size());
+  std::vector<std::int64_t> next(coupling.rowStart.begin(), coupling.rowStart.end() - 1);
+  forEachCoupling([&](std::size_t i, std::size_t j, std::int64_t k) {
+    const auto at = static_cast<std::size_t>(next[i]++);
+    coupling.column[at] = static_cast<std::int32_t>(j);
+    coupling.entry[at] = k;
+  });
+  return coupling;
+}
+
+void
+CouplingProduct(const CouplingRows &        coupling,
+                const std::vector<double> & values,
+                const std::vector<char> &   constrained,
+                bool                        constrainedRows,
+                const std::vector<double> & x,
+                std::vector<double> &       y)
+{
+  const std::size_t n = coupling.rowStart.size() - 1;
+  y.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if ((constrained[i] != 0) != constrainedRows)
+    {
+      continue;
+    }
+    for (std::int64_t a = coupling.rowStart[i]; a < coupling.rowStart[i + 1]; ++a)
+    {
+      y[i] += values[static_cast<std::size_t>(coupling.entry[a])] * x[static_cast<std::size_t>(coupling.column[a])];
+    }
+  }
+}
+
 void
 CheckRigidBodyModes(const TetrahedralMesh & mesh, const std::vector<char> & constrained, const std::string & who)
 {

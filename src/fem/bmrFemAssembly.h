@@ -85,6 +85,19 @@ struct LowerPattern
   /** Position of the entry (row >= col) in rowIndex and in every value array on this pattern. */
   std::size_t
   EntryIndex(std::size_t row, std::size_t col) const;
+  /** The entries of the node block (m, n), m >= n, with one search: (3m + i, 3n + j) sits at
+   * colStart[3n + j] + NodeBlockOffset(m, n) + i - j (i >= j when m == n), since every column of node n lists
+   * node n's remaining rows and then three rows per neighbour, in the same order. */
+  std::size_t
+  NodeBlockOffset(std::size_t m, std::size_t n) const
+  {
+    return EntryIndex(3 * m, 3 * n) - static_cast<std::size_t>(colStart[3 * n]);
+  }
+  std::size_t
+  NodeBlockEntry(std::size_t offset, std::size_t n, int i, int j) const
+  {
+    return static_cast<std::size_t>(colStart[3 * n + j]) + offset + i - j;
+  }
   std::size_t
   Size() const
   {
@@ -101,6 +114,31 @@ SymmetricProduct(const LowerPattern &        pattern,
                  const std::vector<double> & values,
                  const std::vector<double> & x,
                  std::vector<double> &       y);
+
+/** The entries of a symmetric matrix (lower triangle on a LowerPattern) that couple a free dof with a constrained
+ * one, by row: for every dof, the dofs of the other kind it couples to (ascending) and the entries' positions
+ * on the pattern. The constrained-free block is what a solve with prescribed values (K_fc g_c) and an adjoint's
+ * pull-back to the constrained dofs (K_cf lambda_f) need, a small part of the whole matrix. */
+struct CouplingRows
+{
+  std::vector<std::int64_t> rowStart; ///< 3N + 1
+  std::vector<std::int32_t> column;
+  std::vector<std::int64_t> entry;
+};
+
+CouplingRows
+BuildCouplingRows(const LowerPattern & pattern, const std::vector<char> & constrained);
+
+/** y_i = sum_j A_ij x_j over the coupling entries of every row i that is constrained (\a constrainedRows) or
+ * free (otherwise), j ascending; y = 0 at the other rows. For x that vanishes on the dofs of row i's kind this is
+ * SymmetricProduct's y_i bit for bit: both sum A_ij x_j in ascending j, and the skipped terms are exact zeros. */
+void
+CouplingProduct(const CouplingRows &        coupling,
+                const std::vector<double> & values,
+                const std::vector<char> &   constrained,
+                bool                        constrainedRows,
+                const std::vector<double> & x,
+                std::vector<double> &       y);
 
 /** Dof -> free index (or -1) for the dofs not \a constrained; the numbering is monotone, so the free block
  * of a lower triangle stays lower triangular. Returns the number of free dofs. */

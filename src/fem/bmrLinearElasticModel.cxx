@@ -51,6 +51,8 @@ struct LinearElasticModel::Impl
   std::vector<char>                           constrained;
   std::vector<double>                         prescribed; // 3N
   std::vector<std::int32_t>                   freeIndex;  // dof -> free index or -1
+  fem::CouplingRows                           coupling;   // the free-constrained block, by row
+  bool                                        couplingCurrent{ false };
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
@@ -90,6 +92,18 @@ struct LinearElasticModel::Impl
   SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
   {
     fem::SymmetricProduct(pattern, values, x, y);
+  }
+  /** K_fc x_c at the free dofs (\a constrainedRows false) or K_cf x_f at the constrained ones (true). */
+  void
+  CouplingProduct(const std::vector<double> & x, bool constrainedRows, std::vector<double> & y)
+  {
+    if (!couplingCurrent)
+    {
+      coupling = fem::BuildCouplingRows(pattern, constrained);
+      couplingCurrent = true;
+    }
+    UpdateValues();
+    fem::CouplingProduct(coupling, values, constrained, constrainedRows, x, y);
   }
 };
 
@@ -202,19 +216,24 @@ LinearElasticModel::Impl::AccumulateUnitElementStiffnesses()
     {
       for (int b = 0; b < 4; ++b)
       {
-        const double gab = g[a][0] * g[b][0] + g[a][1] * g[b][1] + g[a][2] * g[b][2];
+        // Only the lower triangle is stored: node blocks with t[a] >= t[b], and i >= j on the diagonal block.
+        const auto m = static_cast<std::size_t>(t[a]), n = static_cast<std::size_t>(t[b]);
+        if (m < n)
+        {
+          continue;
+        }
+        const std::size_t offset = pattern.NodeBlockOffset(m, n);
+        const double      gab = g[a][0] * g[b][0] + g[a][1] * g[b][1] + g[a][2] * g[b][2];
         for (int i = 0; i < 3; ++i)
         {
           for (int j = 0; j < 3; ++j)
           {
-            const std::size_t row = 3 * static_cast<std::size_t>(t[a]) + i;
-            const std::size_t col = 3 * static_cast<std::size_t>(t[b]) + j;
-            if (row < col)
+            if (m == n && i < j)
             {
               continue;
             }
             const double kij = V * (lambda * g[a][i] * g[b][j] + mu * g[a][j] * g[b][i] + (i == j ? mu * gab : 0.0));
-            vals[pattern.EntryIndex(row, col)] += kij;
+            vals[pattern.NodeBlockEntry(offset, n, i, j)] += kij;
           }
         }
       }
@@ -369,6 +388,7 @@ LinearElasticModel::SetDirichletConditions(const std::vector<std::int32_t> & nod
   }
   d.analyzed = false;
   d.factorized = false;
+  d.couplingCurrent = false;
 }
 
 void
@@ -487,9 +507,14 @@ LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<
     }
   }
   Factorize();
-  const auto          t0 = Clock::now();
-  std::vector<double> Kg;
-  d.SymmetricProduct(prescribed, Kg);
+  const auto t0 = Clock::now();
+  // Only the free rows of K g are read and g vanishes on the free dofs: the coupling block K_fc g_c gives them
+  // bit for bit (fem::CouplingProduct), and nothing when g = 0 (an adjoint).
+  std::vector<double> Kg(d.ndof, 0.0);
+  if (std::any_of(prescribed.begin(), prescribed.end(), [](double v) { return v != 0.0; }))
+  {
+    d.CouplingProduct(prescribed, false, Kg);
+  }
   Eigen::VectorXd b(static_cast<Eigen::Index>(d.nfree));
   for (std::size_t i = 0; i < d.ndof; ++i)
   {
@@ -534,6 +559,18 @@ LinearElasticModel::ComputeInternalForces(const std::vector<double> & u) const
   m_Impl->UpdateValues();
   std::vector<double> y;
   m_Impl->SymmetricProduct(u, y);
+  return y;
+}
+
+std::vector<double>
+LinearElasticModel::ComputeCouplingForces(const std::vector<double> & v) const
+{
+  if (v.size() != m_Impl->ndof)
+  {
+    Fail("LinearElasticModel::ComputeCouplingForces", "the displacement vector must hold 3 values per node");
+  }
+  std::vector<double> y;
+  m_Impl->CouplingProduct(v, true, y);
   return y;
 }
 

@@ -80,6 +80,12 @@ LinearForwardModel::ApplyTangent(const std::vector<double> & v) const
 }
 
 std::vector<double>
+LinearForwardModel::ApplyTangentAtConstrained(const std::vector<double> & v) const
+{
+  return m_Model->ComputeCouplingForces(v);
+}
+
+std::vector<double>
 LinearForwardModel::InternalForces(const std::vector<double> & u) const
 {
   return m_Model->ComputeInternalForces(u);
