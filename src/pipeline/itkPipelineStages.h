@@ -26,6 +26,7 @@
 #include "bmrStopwatch.h"
 
 #include <atomic>
+#include <future>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -82,6 +83,36 @@ MeshLabelImage(const BiomechanicalLabelImageType * labels,
 
 /** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
  * field on \a movingReference's grid. */
+/** A mesh made on a second thread (CGAL meshes on one core) while the caller does other work, when \a background
+ * and more than one thread may run; otherwise made in Take(). The mesh is the same either way. */
+class BackgroundMesh
+{
+public:
+  BackgroundMesh(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene, bool background);
+  ~BackgroundMesh();
+  BackgroundMesh(const BackgroundMesh &) = delete;
+  BackgroundMesh &
+  operator=(const BackgroundMesh &) = delete;
+  /** The mesh, as stage \a stage of \a clock; the stage's time is the wait for it, so that the stages still add up
+   * to the wall time, and its detail says how long the meshing took in all. Rethrows the mesher's exception. */
+  bmr::TetrahedralMesh
+  Take(StageClock & clock, const std::string & stage);
+
+private:
+  struct Made
+  {
+    bmr::TetrahedralMesh mesh;
+    std::string          detail;
+    double               seconds{ 0.0 };
+  };
+  static Made
+  Make(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene);
+
+  const BiomechanicalLabelImageType * m_Labels;
+  bmr::Scene                          m_Scene;
+  std::future<Made>                   m_Made;
+};
+
 void
 ComputeFields(SimulationResult &   result,
               const ImageBase<3> * fixedReference,

@@ -419,12 +419,11 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, scene.Warnings());
   clock.Warn(r.state.warnings, VoxelWarnings(scene, movingLabels, fixedLabels));
 
-  const std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch = StartResampleMeshes(movingLabels, scene, settings);
+  // The fine mesh (CGAL, one core) is made alongside the distance maps and the coarse mesh.
+  pipeline::BackgroundMesh fineMesh(movingLabels, scene, true);
   clock.Begin("distance maps (fixed labels)");
   const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
   clock.End(std::to_string(maps.size()) + " organs");
-  r.state.mesh = pipeline::MeshLabelImage(movingLabels, scene, clock, "mesh (CGAL Mesh_3)");
-  clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
   // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
   bmr::TetrahedralMesh coarse;
   if (!scene.UnknownLabels().empty() && settings.coarseFactor > 1.0)
@@ -432,8 +431,12 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     coarse = pipeline::MeshLabelImage(
       movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
   }
-  const bmr::TetrahedralMesh estimationMesh = r.state.mesh;
-  pipeline::EstimationSetup  setup{
+  r.state.mesh = fineMesh.Take(clock, "mesh (CGAL Mesh_3)");
+  clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
+  // The resamples' meshes from here on: the fit's mesh came first.
+  const std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch = StartResampleMeshes(movingLabels, scene, settings);
+  const bmr::TetrahedralMesh                            estimationMesh = r.state.mesh;
+  pipeline::EstimationSetup                             setup{
     &estimationMesh,    coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans,
     &fixedProbabilities
   };

@@ -20,6 +20,7 @@
 
 #include "itkLabelImageToTetrahedralMeshFilter.h"
 #include "itkPhysicsDeformationFieldSource.h"
+#include "itkMultiThreaderBase.h"
 
 #include <cmath>
 #include <iomanip>
@@ -81,6 +82,66 @@ MeshLabelImage(const BiomechanicalLabelImageType * labels,
          << std::setprecision(1) << q.minimumDihedralAngleDegrees << " deg";
   clock.End(detail.str());
   return mesh;
+}
+
+namespace {
+/** Keeps the detail of the stage that ended last: a background stage tells it later, on the caller's thread. */
+struct RecordingObserver : PipelineObserver
+{
+  std::string detail;
+  void
+  StageEnd(const std::string &, double, const std::string & stageDetail) override
+  {
+    detail = stageDetail;
+  }
+};
+} // namespace
+
+BackgroundMesh::BackgroundMesh(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene, bool background)
+  : m_Labels(labels)
+  , m_Scene(scene)
+{
+  if (background && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  {
+    m_Made = std::async(std::launch::async, [this]() { return Make(m_Labels, m_Scene); });
+  }
+}
+
+BackgroundMesh::~BackgroundMesh()
+{
+  if (m_Made.valid())
+  {
+    m_Made.wait(); // its exception, if any, dies with the future
+  }
+}
+
+auto
+BackgroundMesh::Make(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene) -> Made
+{
+  std::vector<PipelineStage> stages;
+  RecordingObserver          recorder;
+  StageClock                 quiet(&recorder, stages);
+  Made                       made;
+  made.mesh = MeshLabelImage(labels, scene, quiet, "mesh");
+  made.detail = recorder.detail;
+  made.seconds = stages.back().seconds;
+  return made;
+}
+
+bmr::TetrahedralMesh
+BackgroundMesh::Take(StageClock & clock, const std::string & stage)
+{
+  if (!m_Made.valid())
+  {
+    return MeshLabelImage(m_Labels, m_Scene, clock, stage);
+  }
+  clock.Begin(stage);
+  Made               made = m_Made.get();
+  std::ostringstream detail;
+  detail << made.detail << " (meshed alongside: " << std::fixed << std::setprecision(2) << made.seconds
+         << " s, this stage the wait)";
+  clock.End(detail.str());
+  return std::move(made.mesh);
 }
 
 void
