@@ -19,18 +19,21 @@
 # Usage: benchmarks/run_side_by_side_benchmark.sh [PAIRS] [RUNS]   (about 30 minutes for 2 pairs x 3 runs on 2 cores)
 # Resumable: run again with the same WORK_DIR and finished runs are kept.
 # A quick smoke run: MAIN_GRID="64,48,48 3" SIZES="32 6" MESH_SCALES=1.5 INTERVAL=off ... 1 1
-# Writes benchmarks/results/side_by_side_runs.csv, side_by_side_summary.md, side_by_side.png.
+# METHODS (default "fem plastimatch itk-demons") chooses the methods timed on the main pairs, e.g. METHODS="fem
+# plastimatch" to re-time FEM against plastimatch alone (ITK's Demons takes over two minutes per run).
+# Writes side_by_side_runs.csv, side_by_side_summary.md, side_by_side.png to OUT_DIR (default benchmarks/results).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 pairs="${1:-2}"
 runs="${2:-3}"
 read -r main_size main_spacing <<< "${MAIN_GRID:-200,160,160 1}"
-sizes="${SIZES:-128 1.5,160 1.2,256 0.75}"
-mesh_scales="${MESH_SCALES:-1.5 1 0.75 0.5}"
+sizes="${SIZES-128 1.5,160 1.2,256 0.75}" # set and empty: no image-size study
+mesh_scales="${MESH_SCALES-1.5 1 0.75 0.5}" # set and empty: no mesh-size study
 interval="${INTERVAL:-on}"
 IFS=, read -r nx ny nz <<< "$main_size"
 main_voxels=$((nx * ny * nz))
-out="$root/benchmarks/results"
+read -r -a main_methods <<< "${METHODS:-fem plastimatch itk-demons}"
+out="${OUT_DIR:-$root/benchmarks/results}"
 mkdir -p "$out"
 work="${WORK_DIR:-$(mktemp -d)}"
 mkdir -p "$work"
@@ -112,9 +115,9 @@ for k in $(seq 1 "$pairs"); do
   [ -f "$p/truth.json" ] || "$bin" phantom --size "$main_size" --spacing "$main_spacing,$main_spacing,$main_spacing" \
     --bladder-mm 8 --rectum-mm 4 \
     --true-E-kPa 100 --seed "$k" --out "$p" >> "$log" 2>&1
-  echo "pair $k: $runs runs of fem, plastimatch, itk-demons; one fem+interval"
+  echo "pair $k: $runs runs of ${main_methods[*]}; one fem+interval"
   for r in $(seq 1 "$runs"); do
-    run_methods main "pair$k" "$r" "$main_voxels" "$p" fem plastimatch itk-demons
+    run_methods main "pair$k" "$r" "$main_voxels" "$p" "${main_methods[@]}"
   done
   [ "$interval" != on ] || run_methods main "pair$k" 1 "$main_voxels" "$p" fem+interval
   score main "pair$k" "$p"

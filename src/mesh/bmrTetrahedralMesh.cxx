@@ -56,8 +56,10 @@ Norm(const Vec & a)
   return std::sqrt(Dot(a, a));
 }
 
-/** For every element face (4e + f), the neighboring element across it, or -1.
- * Faces are matched by sorting their node triples, which is deterministic. */
+/** For every element face (4e + f), the neighboring element across it, or -1. Faces are grouped by their
+ * smallest node (a counting sort) and matched within each group by sorting their node triples, then their face
+ * numbers: the order of one global sort of the triples, without its cost, so deterministic. Equal triples are
+ * paired in that order (a valid mesh has at most two). */
 std::vector<std::int64_t>
 FaceNeighbors(const TetrahedralMesh & mesh)
 {
@@ -81,17 +83,48 @@ FaceNeighbors(const TetrahedralMesh & mesh)
       k.face = static_cast<std::int64_t>(4 * e + f);
     }
   }
-  std::sort(keys.begin(), keys.end(), [](const Key & a, const Key & b) {
-    return a.nodes < b.nodes || (a.nodes == b.nodes && a.face < b.face);
-  });
-  std::vector<std::int64_t> neighbor(4 * M, -1);
-  for (std::size_t k = 0; k + 1 < keys.size(); ++k)
+  // Counting sort by the smallest node, stable (faces ascending within a group); sized by the largest node named,
+  // so that a mesh that names nodes it does not have is still answered (ValidateMesh reports it).
+  std::int32_t largest = -1;
+  for (const Key & k : keys)
   {
-    if (keys[k].nodes == keys[k + 1].nodes)
+    if (k.nodes[0] < 0)
     {
-      neighbor[keys[k].face] = keys[k + 1].face / 4;
-      neighbor[keys[k + 1].face] = keys[k].face / 4;
-      ++k;
+      Fail("FaceNeighbors", "element " + std::to_string(k.face / 4) + " has a negative node index");
+    }
+    largest = std::max(largest, k.nodes[2]);
+  }
+  std::vector<std::size_t> start(static_cast<std::size_t>(largest) + 2, 0);
+  for (const Key & k : keys)
+  {
+    ++start[static_cast<std::size_t>(k.nodes[0]) + 1];
+  }
+  for (std::size_t n = 0; n + 1 < start.size(); ++n)
+  {
+    start[n + 1] += start[n];
+  }
+  std::vector<Key>         grouped(keys.size());
+  std::vector<std::size_t> next(start.begin(), start.end() - 1);
+  for (const Key & k : keys)
+  {
+    grouped[next[static_cast<std::size_t>(k.nodes[0])]++] = k;
+  }
+  std::vector<std::int64_t> neighbor(4 * M, -1);
+  for (std::size_t n = 0; n + 1 < start.size(); ++n)
+  {
+    const auto first = grouped.begin() + static_cast<std::ptrdiff_t>(start[n]);
+    const auto last = grouped.begin() + static_cast<std::ptrdiff_t>(start[n + 1]);
+    std::sort(first, last, [](const Key & a, const Key & b) {
+      return a.nodes < b.nodes || (a.nodes == b.nodes && a.face < b.face);
+    });
+    for (auto k = first; k != last && k + 1 != last; ++k)
+    {
+      if (k->nodes == (k + 1)->nodes)
+      {
+        neighbor[k->face] = (k + 1)->face / 4;
+        neighbor[(k + 1)->face] = k->face / 4;
+        ++k;
+      }
     }
   }
   return neighbor;
