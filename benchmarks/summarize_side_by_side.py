@@ -72,15 +72,18 @@ for m in ["fem", "plastimatch", "itk-demons"]:
     rows = [r for r in size_rows if r["method"] == m]
     if rows:
         axes[1].plot([int(r["voxels"]) for r in rows], [float(r["wall_s"]) for r in rows], "o-", label=m)
-axes[1].set_xscale("log")
-axes[1].set_yscale("log")
+# An empty study (SIZES or MESH_SCALES set empty) leaves its panel linear and blank: log axes need data.
+if size_rows:
+    axes[1].set_xscale("log")
+    axes[1].set_yscale("log")
+    axes[1].legend(fontsize=7)
 axes[1].set_xlabel("voxels")
 axes[1].set_ylabel("wall time [s]")
 axes[1].set_title("image size")
-axes[1].legend(fontsize=7)
 axes[2].plot([int(r["tetrahedra"]) for r in mesh_rows], [float(r["wall_s"]) for r in mesh_rows], "o-")
-axes[2].set_xscale("log")
-axes[2].set_yscale("log")
+if mesh_rows:
+    axes[2].set_xscale("log")
+    axes[2].set_yscale("log")
 axes[2].set_xlabel("tetrahedra")
 axes[2].set_ylabel("FEM register wall time [s]")
 axes[2].set_title("FEM mesh size")

@@ -139,6 +139,13 @@ public:
                       EstimationObjective *       coarse,
                       std::vector<UnknownModulus> unknowns,
                       EstimatorSettings           settings);
+  /** As above, with the fine objective asked of \a fine when it is first needed: after the sweep, when there is a
+   * coarse objective, so that the fine one can still be in the making (e.g. on another thread) while the sweep
+   * runs. \a fine is called once; what it returns must outlive the estimator. Its unknowns are checked then. */
+  ElasticityEstimator(std::function<EstimationObjective &()> fine,
+                      EstimationObjective *                  coarse,
+                      std::vector<UnknownModulus>            unknowns,
+                      EstimatorSettings                      settings);
 
   void
   SetObserver(Observer observer)
@@ -150,11 +157,15 @@ public:
 
 private:
   struct Stages;
-  EstimationObjective &       m_Fine;
-  EstimationObjective *       m_Coarse;
-  std::vector<UnknownModulus> m_Unknowns;
-  EstimatorSettings           m_Settings;
-  Observer                    m_Observer;
+  /** The fine objective, asked of m_FineSource on first use. */
+  EstimationObjective &
+                                         Fine();
+  std::function<EstimationObjective &()> m_FineSource;
+  EstimationObjective *                  m_Fine{ nullptr };
+  EstimationObjective *                  m_Coarse;
+  std::vector<UnknownModulus>            m_Unknowns;
+  EstimatorSettings                      m_Settings;
+  Observer                               m_Observer;
 };
 
 } // namespace bmr

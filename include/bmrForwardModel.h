@@ -63,6 +63,11 @@ public:
   /** The nodes whose displacement is prescribed in every SolveState(); changing them refactorizes. */
   virtual void
   SetConstrainedNodes(const std::vector<std::int32_t> & nodes) = 0;
+  /** Does ahead what depends only on the mesh and the constrained nodes (a sparse symbolic analysis), e.g. on
+   * another thread while other work runs; results are the same with or without it. The default does nothing. */
+  virtual void
+  Prepare()
+  {}
   /** Modulus [kPa] of every element of \a label. */
   virtual void
   SetYoungsModulus(std::int32_t label, double youngsModulus) = 0;
@@ -142,6 +147,9 @@ public:
   }
   void
   SetConstrainedNodes(const std::vector<std::int32_t> & nodes) override;
+  /** LinearElasticModel::Analyze(). */
+  void
+  Prepare() override;
   void
   SetYoungsModulus(std::int32_t label, double youngsModulus) override;
   double

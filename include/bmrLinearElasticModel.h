@@ -111,6 +111,12 @@ public:
   double
   GetYoungsModulus(std::int32_t label) const;
 
+  /** Checks the model and computes the symbolic analysis of K_ff (its fill-reducing ordering), which depends only
+   * on the mesh and the constrained dofs; Factorize() does it when it has not been done. Done ahead, e.g. on
+   * another thread, it leaves the factorizations and every result as they are. */
+  void
+  Analyze();
+
   /** Assembles K_ff and factorizes it; checks the model first. */
   void
   Factorize();

@@ -293,7 +293,7 @@ struct ElasticityEstimator::Stages
 void
 ElasticityEstimator::Stages::Sweep()
 {
-  EstimationObjective & objective = estimator.m_Coarse ? *estimator.m_Coarse : estimator.m_Fine;
+  EstimationObjective & objective = estimator.m_Coarse ? *estimator.m_Coarse : estimator.Fine();
   std::vector<double>   start = objective.EstimateInitialParameters();
   const unsigned int    n = settings.numberOfSweepSamples;
   const double          total = double(n) * double(moduli.size());
@@ -337,7 +337,7 @@ struct ElasticityEstimator::Stages::FineEvaluations
       return last; // an outer search starts by evaluating the point it was given
     }
     const auto ts = Clock::now();
-    last = stages.Solve(stages.estimator.m_Fine, E, stages.loads);
+    last = stages.Solve(stages.estimator.Fine(), E, stages.loads);
     stages.loads = last.parameters;
     stages.Record(MakeRecord("fine", evaluation, E, last, SecondsSince(ts)),
                   stages.result.history,
@@ -490,7 +490,7 @@ ElasticityEstimator::Stages::JudgeIdentifiability(const std::vector<double> & es
 void
 ElasticityEstimator::Stages::Outputs(const std::vector<double> & estimate, const std::vector<double> & estimateLoads)
 {
-  EstimationObjective & fine = estimator.m_Fine;
+  EstimationObjective & fine = estimator.Fine();
   result.youngsModuli = estimate;
   result.loadParameters = estimateLoads;
   fine.SetYoungsModuli(estimate);
@@ -518,7 +518,7 @@ ElasticityEstimator::Stages::Uncertainty(const std::vector<double> & estimate,
       const auto          ts = Clock::now();
       std::vector<double> E = estimate;
       E[k] *= std::exp(side == 0 ? delta : -delta);
-      const LoadSolution s = Solve(estimator.m_Fine, E, estimateLoads);
+      const LoadSolution s = Solve(estimator.Fine(), E, estimateLoads);
       gradient[side] = s.logModulusGradient;
       Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, SecondsSince(ts)), result.history, progress);
     }
@@ -536,13 +536,21 @@ ElasticityEstimator::ElasticityEstimator(EstimationObjective &       fine,
                                          EstimationObjective *       coarse,
                                          std::vector<UnknownModulus> unknowns,
                                          EstimatorSettings           settings)
-  : m_Fine(fine)
+  : ElasticityEstimator([&fine]() -> EstimationObjective & { return fine; }, coarse, std::move(unknowns), settings)
+{
+  Fine(); // checked now: it exists already
+}
+
+ElasticityEstimator::ElasticityEstimator(std::function<EstimationObjective &()> fine,
+                                         EstimationObjective *                  coarse,
+                                         std::vector<UnknownModulus>            unknowns,
+                                         EstimatorSettings                      settings)
+  : m_FineSource(std::move(fine))
   , m_Coarse(coarse)
   , m_Unknowns(std::move(unknowns))
   , m_Settings(settings)
 {
-  if (m_Unknowns.size() != fine.GetUnknownLabels().size() ||
-      (coarse && m_Unknowns.size() != coarse->GetUnknownLabels().size()))
+  if (coarse && m_Unknowns.size() != coarse->GetUnknownLabels().size())
   {
     Fail("ElasticityEstimator", "the unknown moduli differ from the objective's unknown labels");
   }
@@ -576,6 +584,21 @@ ElasticityEstimator::ElasticityEstimator(EstimationObjective &       fine,
   }
 }
 
+EstimationObjective &
+ElasticityEstimator::Fine()
+{
+  if (m_Fine == nullptr)
+  {
+    EstimationObjective & fine = m_FineSource();
+    if (m_Unknowns.size() != fine.GetUnknownLabels().size())
+    {
+      Fail("ElasticityEstimator", "the unknown moduli differ from the objective's unknown labels");
+    }
+    m_Fine = &fine;
+  }
+  return *m_Fine;
+}
+
 EstimationResult
 ElasticityEstimator::Run()
 {
@@ -593,7 +616,7 @@ ElasticityEstimator::Run()
   run.result.timings["sweep"] = SecondsSince(t0);
 
   t0 = Clock::now();
-  run.loads = m_Fine.EstimateInitialParameters();
+  run.loads = Fine().EstimateInitialParameters();
   run.result.timings["initial loads"] = SecondsSince(t0);
 
   t0 = Clock::now();

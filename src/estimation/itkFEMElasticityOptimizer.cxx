@@ -1,9 +1,11 @@
 #include "itkFEMElasticityOptimizer.h"
 
 #include "itkGridGeometryConversion.h"
+#include "itkMultiThreaderBase.h"
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 
 namespace itk {
 namespace {
@@ -212,14 +214,41 @@ FEMElasticityOptimizer::GenerateData()
   const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
 
   const bmr::TetrahedralMesh & fine = this->GetMesh()->Get();
-  const auto                   fineObjective = this->MakeObjective(fine, samplers);
   // The coarse mesh serves the sweep only: not built when there is no modulus to sweep.
+  const bool sweeps = this->GetCoarseMesh() && !unknowns.empty() && m_WarmStartModuli.empty();
+  // While the sweep runs on the coarse objective (one core), a second thread builds the fine one and its sparse
+  // analysis: the same objective, sooner.
+  const auto makeFine = [this, &fine, &samplers]() {
+    std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(fine, samplers);
+    objective->GetForwardModel().Prepare();
+    return objective;
+  };
+  std::future<std::unique_ptr<bmr::SurfaceMatchingObjective>> fineInMaking;
+  std::unique_ptr<bmr::SurfaceMatchingObjective>              fineObjective;
+  if (sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  {
+    fineInMaking = std::async(std::launch::async, makeFine);
+  }
+  else
+  {
+    fineObjective = makeFine();
+  }
   std::unique_ptr<bmr::SurfaceMatchingObjective> coarseObjective;
-  if (this->GetCoarseMesh() && !unknowns.empty())
+  if (sweeps)
   {
     coarseObjective = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
   }
-  bmr::ElasticityEstimator estimator(*fineObjective, coarseObjective.get(), unknowns, this->Settings());
+  bmr::ElasticityEstimator estimator(
+    [&]() -> bmr::EstimationObjective & {
+      if (!fineObjective)
+      {
+        fineObjective = fineInMaking.get();
+      }
+      return *fineObjective;
+    },
+    coarseObjective.get(),
+    unknowns,
+    this->Settings());
   estimator.SetObserver([this](const IterationRecord & record, double progress) {
     m_CurrentRecord = record;
     this->InvokeEvent(IterationEvent());

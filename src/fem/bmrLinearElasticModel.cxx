@@ -53,6 +53,7 @@ struct LinearElasticModel::Impl
   std::vector<std::int32_t>                   freeIndex;  // dof -> free index or -1
   fem::CouplingRows                           coupling;   // the free-constrained block, by row
   bool                                        couplingCurrent{ false };
+  bool                                        freeBlockCurrent{ false }; // Kff holds the current values
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
@@ -92,6 +93,17 @@ struct LinearElasticModel::Impl
   SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
   {
     fem::SymmetricProduct(pattern, values, x, y);
+  }
+  /** K_ff with the current moduli, rebuilt only when they or the constrained set changed. */
+  void
+  UpdateFreeBlock()
+  {
+    UpdateValues();
+    if (!freeBlockCurrent)
+    {
+      Kff = fem::FreeBlock(pattern, values, freeIndex, nfree);
+      freeBlockCurrent = true;
+    }
   }
   /** K_fc x_c at the free dofs (\a constrainedRows false) or K_cf x_f at the constrained ones (true). */
   void
@@ -389,6 +401,7 @@ LinearElasticModel::SetDirichletConditions(const std::vector<std::int32_t> & nod
   d.analyzed = false;
   d.factorized = false;
   d.couplingCurrent = false;
+  d.freeBlockCurrent = false;
 }
 
 void
@@ -409,6 +422,7 @@ LinearElasticModel::SetYoungsModulus(std::int32_t label, double youngsModulus)
   {
     it->second.youngsModulus = youngsModulus;
     m_Impl->valuesCurrent = false;
+    m_Impl->freeBlockCurrent = false;
     m_Impl->factorized = false;
   }
 }
@@ -425,6 +439,35 @@ LinearElasticModel::GetYoungsModulus(std::int32_t label) const
 }
 
 void
+LinearElasticModel::Analyze()
+{
+  Impl & d = *m_Impl;
+  if (d.analyzed)
+  {
+    return;
+  }
+  fem::PinBlasToOneThread();
+  auto t0 = Clock::now();
+  fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
+  d.nfree = fem::NumberFreeDofs(d.constrained, d.freeIndex);
+  d.timings.assemble += SecondsSince(t0);
+  if (d.nfree == 0)
+  {
+    d.analyzed = true;
+    return;
+  }
+  t0 = Clock::now();
+  d.UpdateFreeBlock();
+  d.timings.assemble += SecondsSince(t0);
+  t0 = Clock::now();
+  fem::OrderByNestedDissection(d.solver.cholmod());
+  const auto serialized = fem::LockOrdering();
+  d.solver.analyzePattern(d.Kff);
+  d.analyzed = true;
+  d.timings.analyze = SecondsSince(t0);
+}
+
+void
 LinearElasticModel::Factorize()
 {
   Impl & d = *m_Impl;
@@ -432,31 +475,16 @@ LinearElasticModel::Factorize()
   {
     return;
   }
-  fem::PinBlasToOneThread();
-  auto t0 = Clock::now();
-  if (!d.analyzed)
-  {
-    fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
-  }
-  d.UpdateValues();
-  d.nfree = fem::NumberFreeDofs(d.constrained, d.freeIndex);
+  Analyze();
   if (d.nfree == 0)
   {
     d.factorized = true;
-    d.timings.assemble += SecondsSince(t0);
     return;
   }
-  d.Kff = fem::FreeBlock(d.pattern, d.values, d.freeIndex, d.nfree);
+  fem::PinBlasToOneThread();
+  auto t0 = Clock::now();
+  d.UpdateFreeBlock();
   d.timings.assemble += SecondsSince(t0);
-  if (!d.analyzed)
-  {
-    t0 = Clock::now();
-    fem::OrderByNestedDissection(d.solver.cholmod());
-    const auto serialized = fem::LockOrdering();
-    d.solver.analyzePattern(d.Kff);
-    d.analyzed = true;
-    d.timings.analyze = SecondsSince(t0);
-  }
   t0 = Clock::now();
   d.solver.factorize(d.Kff);
   d.timings.factorize = SecondsSince(t0);

@@ -54,6 +54,12 @@ LinearForwardModel::SetYoungsModulus(std::int32_t label, double youngsModulus)
   m_Model->SetYoungsModulus(label, youngsModulus);
 }
 
+void
+LinearForwardModel::Prepare()
+{
+  m_Model->Analyze();
+}
+
 double
 LinearForwardModel::GetYoungsModulus(std::int32_t label) const
 {
