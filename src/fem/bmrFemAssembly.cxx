@@ -19,6 +19,8 @@
 // may be included here.
 #include "bmrFemAssembly.h"
 
+#include <metis.h>
+
 #include "bmrError.h"
 
 #include <dlfcn.h>
@@ -219,6 +221,78 @@ NumberFreeDofs(const std::vector<char> & constrained, std::vector<std::int32_t> 
   return nfree;
 }
 
+std::size_t
+NumberFreeDofsByNestedDissection(const LowerPattern &        pattern,
+                                 const std::vector<char> &   constrained,
+                                 std::vector<std::int32_t> & freeIndex)
+{
+  const std::size_t nodes = constrained.size() / 3;
+  // The free nodes (a node's three dofs are constrained together) and their graph, from column 3n's rows 3m.
+  std::vector<idx_t>       nodeOf(nodes, -1);
+  std::vector<std::size_t> freeNodes;
+  for (std::size_t n = 0; n < nodes; ++n)
+  {
+    if (!constrained[3 * n])
+    {
+      nodeOf[n] = static_cast<idx_t>(freeNodes.size());
+      freeNodes.push_back(n);
+    }
+  }
+  freeIndex.assign(constrained.size(), -1);
+  if (freeNodes.empty())
+  {
+    return 0;
+  }
+  std::vector<std::vector<idx_t>> adjacent(freeNodes.size());
+  std::size_t                     edges = 0;
+  for (std::size_t a = 0; a < freeNodes.size(); ++a)
+  {
+    const std::size_t col = 3 * freeNodes[a];
+    for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
+    {
+      const auto  row = static_cast<std::size_t>(pattern.rowIndex[k]);
+      const idx_t b = nodeOf[row / 3];
+      if (row % 3 == 0 && b >= 0 && static_cast<std::size_t>(b) != a)
+      {
+        adjacent[a].push_back(b);
+        adjacent[static_cast<std::size_t>(b)].push_back(static_cast<idx_t>(a));
+        edges += 2;
+      }
+    }
+  }
+  std::vector<idx_t> xadj(1, 0), adjncy, perm(freeNodes.size()), iperm(freeNodes.size());
+  adjncy.reserve(edges);
+  for (auto & list : adjacent)
+  {
+    std::sort(list.begin(), list.end());
+    adjncy.insert(adjncy.end(), list.begin(), list.end());
+    xadj.push_back(static_cast<idx_t>(adjncy.size()));
+  }
+  idx_t vertices = static_cast<idx_t>(freeNodes.size());
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  const bool ordered =
+    edges > 0 &&
+    METIS_NodeND(&vertices, xadj.data(), adjncy.data(), nullptr, options, perm.data(), iperm.data()) == METIS_OK;
+  for (std::size_t a = 0; a < freeNodes.size(); ++a)
+  {
+    const std::size_t position = ordered ? static_cast<std::size_t>(iperm[a]) : a;
+    for (int c = 0; c < 3; ++c)
+    {
+      freeIndex[3 * freeNodes[a] + c] = static_cast<std::int32_t>(3 * position + c);
+    }
+  }
+  return 3 * freeNodes.size();
+}
+
+void
+OrderAsNumbered(cholmod_common & common)
+{
+  common.nmethods = 1;
+  common.method[0].ordering = CHOLMOD_NATURAL;
+  common.postorder = 1;
+}
+
 Eigen::SparseMatrix<double>
 FreeBlock(const LowerPattern &              pattern,
           const std::vector<double> &       values,
@@ -238,7 +312,11 @@ FreeBlock(const LowerPattern &              pattern,
     }
     for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
     {
-      perColumn[freeIndex[col]] += freeIndex[pattern.rowIndex[k]] >= 0;
+      const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
+      if (fr >= 0)
+      {
+        ++perColumn[std::min(fr, freeIndex[col])];
+      }
     }
   }
   block.reserve(perColumn);
@@ -258,7 +336,8 @@ FreeBlock(const LowerPattern &              pattern,
       const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
       if (fr >= 0)
       {
-        block.insert(fr, fc) = values[k];
+        // The lower triangle in the free numbering, which a nested-dissection numbering may turn around.
+        block.insert(std::max(fr, fc), std::min(fr, fc)) = values[k];
       }
     }
   }

@@ -449,22 +449,29 @@ LinearElasticModel::Analyze()
   fem::PinBlasToOneThread();
   auto t0 = Clock::now();
   fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
-  d.nfree = fem::NumberFreeDofs(d.constrained, d.freeIndex);
   d.timings.assemble += SecondsSince(t0);
+  t0 = Clock::now();
+  {
+    // The fill-reducing order from the node graph (nine times fewer edges than CHOLMOD's dof graph), given to
+    // CHOLMOD as the free dofs' numbering.
+    const auto serialized = fem::LockOrdering();
+    d.nfree = fem::NumberFreeDofsByNestedDissection(d.pattern, d.constrained, d.freeIndex);
+  }
   if (d.nfree == 0)
   {
     d.analyzed = true;
+    d.timings.analyze = SecondsSince(t0);
     return;
   }
+  const double ordering = SecondsSince(t0);
   t0 = Clock::now();
   d.UpdateFreeBlock();
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
-  fem::OrderByNestedDissection(d.solver.cholmod());
-  const auto serialized = fem::LockOrdering();
+  fem::OrderAsNumbered(d.solver.cholmod());
   d.solver.analyzePattern(d.Kff);
   d.analyzed = true;
-  d.timings.analyze = SecondsSince(t0);
+  d.timings.analyze = ordering + SecondsSince(t0);
 }
 
 void
