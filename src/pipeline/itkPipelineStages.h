@@ -83,12 +83,12 @@ MeshLabelImage(const BiomechanicalLabelImageType * labels,
 
 /** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
  * field on \a movingReference's grid. */
-/** A mesh made on a second thread (CGAL meshes on one core) while the caller does other work, when \a background
- * and more than one thread may run; otherwise made in Take(). The mesh is the same either way. */
+/** A mesh made on a second thread (CGAL meshes on one core) while the caller does other work, when more than one
+ * thread may run; otherwise made in Take(). The mesh is the same either way. */
 class BackgroundMesh
 {
 public:
-  BackgroundMesh(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene, bool background);
+  BackgroundMesh(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene);
   ~BackgroundMesh();
   BackgroundMesh(const BackgroundMesh &) = delete;
   BackgroundMesh &

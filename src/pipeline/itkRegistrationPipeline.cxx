@@ -420,7 +420,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, VoxelWarnings(scene, movingLabels, fixedLabels));
 
   // The fine mesh (CGAL, one core) is made alongside the distance maps and the coarse mesh.
-  pipeline::BackgroundMesh fineMesh(movingLabels, scene, true);
+  pipeline::BackgroundMesh fineMesh(movingLabels, scene);
   clock.Begin("distance maps (fixed labels)");
   const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
   clock.End(std::to_string(maps.size()) + " organs");

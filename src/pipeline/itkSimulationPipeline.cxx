@@ -97,11 +97,11 @@ struct RecordingObserver : PipelineObserver
 };
 } // namespace
 
-BackgroundMesh::BackgroundMesh(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene, bool background)
+BackgroundMesh::BackgroundMesh(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene)
   : m_Labels(labels)
   , m_Scene(scene)
 {
-  if (background && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
   {
     m_Made = std::async(std::launch::async, [this]() { return Make(m_Labels, m_Scene); });
   }
