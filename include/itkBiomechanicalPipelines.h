@@ -27,6 +27,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <string>
@@ -221,6 +222,8 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
   std::string           quantiles;                  ///< "calibrated", "student" or "normal" (curvature)
 };
 
+struct MovingAnatomyMeshes;
+
 /** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationSettings
@@ -231,7 +234,36 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
   UncertaintySettings    uncertainty;
   bool                   pushField{ false }; ///< also the push field (moving -> fixed) in state.push: 2-3 s more
+  /** The moving anatomy's meshes, made beforehand by MeshMovingAnatomy() for these labels, scene and settings
+   * (not owned; must outlive the call). Null (default): RegisterSegmentedPair() meshes them itself. */
+  const MovingAnatomyMeshes * meshes{ nullptr };
 };
+
+/** \brief The moving anatomy's meshes for RegisterSegmentedPair(), made before the fixed scan is there.
+ *
+ * A planning scan is segmented long before the daily scans arrive, and every mesh a registration needs depends
+ * on the moving labels, the scene and the settings only: the fit's mesh, the coarse mesh of the sweep and the
+ * re-meshed models of the stated interval's resamples (together about 25 s of one core on the 1 mm pelvis).
+ * MeshMovingAnatomy() makes them once, beforehand or on a spare core while other work runs, and every
+ * registration against that planning scan takes them through RegistrationSettings::meshes. They are the meshes
+ * RegisterSegmentedPair() would make itself (the same sizes and mesher seeds), so the results are the same bit
+ * for bit. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+struct BiomechanicalRegistration_EXPORT MovingAnatomyMeshes
+{
+  bmr::TetrahedralMesh              fine;      ///< the fit's mesh
+  bmr::TetrahedralMesh              coarse;    ///< the sweep's; empty when there is no modulus to sweep
+  std::vector<bmr::TetrahedralMesh> resamples; ///< the stated interval's, by resample; empty without resamples
+  std::uint64_t fingerprint{ 0 };    ///< of the labels, scene and settings they were made for (checked on use)
+  std::vector<PipelineStage> stages; ///< the meshing's wall times [s]
+};
+
+/** Meshes \a movingLabels for RegisterSegmentedPair() with \a scene and \a settings (MovingAnatomyMeshes). Throws
+ * itk::ExceptionObject when the labels are missing or the scene is invalid, as RegisterSegmentedPair() would.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT MovingAnatomyMeshes
+MeshMovingAnatomy(const BiomechanicalLabelImageType * movingLabels,
+                  const bmr::Scene &                  scene,
+                  const RegistrationSettings &        settings = RegistrationSettings());
 
 /** What RegisterSegmentedPair() found. \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT RegistrationResult
@@ -364,13 +396,23 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
 BiomechanicalRegistration_EXPORT PhantomPair
 MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer = nullptr);
 
+/** What MakePhantomPair() calls as soon as the moving labels and the estimation scene (PhantomPair::scene) exist,
+ * before the truth is meshed and simulated (most of its time, on one core): e.g. to mesh the moving anatomy for
+ * the registration alongside (MeshMovingAnatomy()). The image lives as long as the pair. */
+using PhantomMovingReady =
+  std::function<void(const BiomechanicalLabelImageType * movingLabels, const bmr::Scene & scene)>;
+
 /** As above, reusing the truth's mesh: an empty \a truthMesh receives the mesh made, a non-empty one is used
  * instead of meshing again. Only for pairs of one planning anatomy (the same grid, planningSeed, anatomy, model,
  * tumour and truthRefinement, as the fractions of one phantom-cohort patient), whose truth meshes are identical:
  * CGAL meshes the same labels with the same sizes and seed into the same mesh. The fillings, moduli and noise may
- * differ. \ingroup BiomechanicalRegistrationPipelines */
+ * differ. \a movingReady (may be empty) is called once the moving images exist (PhantomMovingReady).
+ * \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT PhantomPair
-MakePhantomPair(const PhantomSettings & settings, PipelineObserver * observer, bmr::TetrahedralMesh & truthMesh);
+MakePhantomPair(const PhantomSettings &    settings,
+                PipelineObserver *         observer,
+                bmr::TetrahedralMesh &     truthMesh,
+                const PhantomMovingReady & movingReady = PhantomMovingReady());
 
 /** The ranges DrawPhantomSet() draws from: [low, high] each. \ingroup BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT PhantomSetRanges

@@ -46,6 +46,8 @@ namespace {
 using IndicatorImageType = Image<float, 3>;
 using IndicatorInterpolatorType = LinearInterpolateImageFunction<IndicatorImageType, double>;
 using Random = std::mt19937_64;
+/** How far beyond the objective organs [mm] the rescans' grids reach (and their distance maps are exact). */
+constexpr double RescanMarginMM = 15.0;
 
 /** The values of the scene's objective labels, in objective order. */
 std::vector<std::int32_t>
@@ -72,33 +74,27 @@ VoxelCount(const BiomechanicalLabelImageType * labels, std::int32_t value)
   return n;
 }
 
-/** The index box of the voxels holding one of \a values, widened by \a marginMM and clipped to the image. */
+/** The index box of the voxels holding one of \a values, widened by \a marginMM and clipped to the image: the
+ * union of each value's detail::PaddedMaskBox(). */
 ImageRegion<3>
 LabelBox(const BiomechanicalLabelImageType * labels, const std::vector<std::int32_t> & values, double marginMM)
 {
-  const ImageRegion<3> whole = labels->GetLargestPossibleRegion();
-  Index<3>             lo, hi;
-  lo.Fill(std::numeric_limits<IndexValueType>::max());
-  hi.Fill(std::numeric_limits<IndexValueType>::min());
-  for (ImageRegionConstIteratorWithIndex<BiomechanicalLabelImageType> it(labels, whole); !it.IsAtEnd(); ++it)
-  {
-    if (std::find(values.begin(), values.end(), it.Get()) != values.end())
-    {
-      for (unsigned int a = 0; a < 3; ++a)
-      {
-        lo[a] = std::min(lo[a], it.GetIndex()[a]);
-        hi[a] = std::max(hi[a], it.GetIndex()[a]);
-      }
-    }
-  }
   ImageRegion<3> box;
-  for (unsigned int a = 0; a < 3; ++a)
+  for (std::int32_t value : values)
   {
-    const auto margin = static_cast<IndexValueType>(std::ceil(marginMM / labels->GetSpacing()[a]));
-    const auto first = std::max(whole.GetIndex(a), lo[a] - margin);
-    const auto last = std::min(whole.GetIndex(a) + IndexValueType(whole.GetSize(a)) - 1, hi[a] + margin);
-    box.SetIndex(a, first);
-    box.SetSize(a, static_cast<SizeValueType>(std::max<IndexValueType>(last - first + 1, 1)));
+    const ImageRegion<3> organ = detail::PaddedMaskBox(labels, value, value, marginMM);
+    if (organ.GetNumberOfPixels() == 0 || box.GetNumberOfPixels() == 0)
+    {
+      box = box.GetNumberOfPixels() == 0 ? organ : box;
+      continue;
+    }
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      const IndexValueType first = std::min(box.GetIndex(a), organ.GetIndex(a));
+      const IndexValueType last = std::max(box.GetUpperIndex()[a], organ.GetUpperIndex()[a]);
+      box.SetIndex(a, first);
+      box.SetSize(a, static_cast<SizeValueType>(last - first + 1));
+    }
   }
   return box;
 }
@@ -522,18 +518,57 @@ RevoxelizedMaps(const bmr::TetrahedralMesh *     deformed,
   {
     probabilities[scene.objective[f.first].label] = MakeImageOnGrid<BiomechanicalProbabilityImageType>(grid, f.second);
   }
-  return ObjectiveDistanceMaps(labels, probabilities, scene);
+  // The grid is a crop that reaches RescanMarginMM beyond the organs: each organ's map, exact that far, on its own box.
+  return ObjectiveDistanceMaps(labels, probabilities, scene, RescanMarginMM);
+}
+
+/** What the resamples revoxelize: the anatomy as a smooth function (the fixed one for the rescans, the moving one
+ * for the bootstrap) and the crop of the fixed grid around the objective organs. */
+struct ResampleSource
+{
+  SmoothAnatomy     anatomy;
+  bmr::GridGeometry crop;
+};
+
+ResampleSource
+MakeResampleSource(const EstimationSetup &             setup,
+                   const BiomechanicalLabelImageType * movingLabels,
+                   const BiomechanicalLabelImageType * fixedLabels)
+{
+  const UncertaintySettings & u = setup.settings->uncertainty;
+  ResampleSource              source{ u.method == UncertaintyMethodEnum::Rescan
+                                        ? SmoothAnatomy(fixedLabels, *setup.scene, u.smoothingVoxels, setup.probabilities)
+                                        : SmoothAnatomy(movingLabels, *setup.scene, u.smoothingVoxels),
+                         GridGeometryOf(fixedLabels) };
+  const ImageRegion<3> box = LabelBox(fixedLabels, source.anatomy.values, RescanMarginMM);
+  Point<double, 3>     corner;
+  fixedLabels->TransformIndexToPhysicalPoint(box.GetIndex(), corner);
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    source.crop.origin[a] = corner[a];
+    source.crop.size[a] = box.GetSize(a);
+  }
+  return source;
+}
+
+/** A rescan's distance maps: the fixed anatomy revoxelized on its grid, drawn by \a rng (ResampleRandom() after
+ * the draw of the resample's mesh scene). */
+DistanceMaps
+RescanMaps(const ResampleSource & source, const EstimationSetup & setup, Random & rng)
+{
+  const bmr::GridGeometry grid = ResampleGrid(source.crop, rng, setup.settings->uncertainty);
+  return RevoxelizedMaps(nullptr, grid, source.anatomy, *setup.scene, setup.probabilityOrgans);
 }
 
 /** The moduli [kPa, unknowns' order] re-estimated from resample \a k: of the resimulated anatomy \a sim
- * (bootstrap), or of the fixed anatomy itself when \a sim is null (rescan). */
+ * (bootstrap), or of the fixed anatomy itself when \a sim is null (rescan), whose maps may be \a premade. */
 std::vector<double>
 Resample(unsigned int                        k,
          bmr::TetrahedralMesh *              prefetched,
          const EstimationSetup &             setup,
          Resimulation *                      sim,
-         const SmoothAnatomy &               anatomy,
-         const bmr::GridGeometry &           crop,
+         const ResampleSource *              source,
+         DistanceMaps *                      premade,
          const RegistrationResult &          r,
          const BiomechanicalLabelImageType * movingLabels)
 {
@@ -564,18 +599,28 @@ Resample(unsigned int                        k,
     coarse = MeshLabelImage(movingLabels, ScaledMeshSizes(scene, setup.settings->coarseFactor), quiet, "coarse");
     resample.coarse = &coarse;
   }
-  bmr::TetrahedralMesh deformed;
-  if (sim)
+  DistanceMaps maps;
+  if (premade)
+  {
+    maps = std::move(*premade);
+  }
+  else if (!sim)
+  {
+    maps = RescanMaps(*source, setup, rng);
+  }
+  else
   {
     const std::vector<double> prescribed = PerturbedWallMotion(*sim, rng, u.tangentialWallFraction);
-    deformed = sim->mesh;
-    const std::lock_guard<std::mutex> lock(sim->solver);
-    sim->model->ForgetState(); // the resamples' order varies with the threads; their states must not
-    deformed.displacement = sim->model->SolveState(sim->forces, prescribed);
+    bmr::TetrahedralMesh      deformed = sim->mesh;
+    {
+      const std::lock_guard<std::mutex> lock(sim->solver);
+      sim->model->ForgetState(); // the resamples' order varies with the threads; their states must not
+      deformed.displacement = sim->model->SolveState(sim->forces, prescribed);
+    }
+    const bmr::GridGeometry grid = ResampleGrid(source->crop, rng, u);
+    maps = RevoxelizedMaps(&deformed, grid, source->anatomy, *setup.scene, setup.probabilityOrgans);
   }
-  const bmr::GridGeometry grid = ResampleGrid(crop, rng, u);
-  const auto maps = RevoxelizedMaps(sim ? &deformed : nullptr, grid, anatomy, *setup.scene, setup.probabilityOrgans);
-  const auto optimizer = RunEstimation(resample, maps, false, nullptr);
+  const auto          optimizer = RunEstimation(resample, maps, false, nullptr);
   std::vector<double> moduli;
   for (const bmr::UnknownModulus & unknown : r.unknowns)
   {
@@ -636,6 +681,37 @@ ResampleMeshPrefetch::Finish()
   return std::move(m_Meshes);
 }
 
+RescanMapsPrefetch::RescanMapsPrefetch(const BiomechanicalLabelImageType * fixedLabels, const EstimationSetup & setup)
+{
+  m_Maps = std::async(std::launch::async, [this, fixedLabels, setup]() {
+    const ResampleSource        source = MakeResampleSource(setup, nullptr, fixedLabels);
+    const UncertaintySettings & u = setup.settings->uncertainty;
+    std::vector<DistanceMaps>   maps;
+    for (unsigned int k = 0; k < u.resamples && !m_Stop; ++k)
+    {
+      Random rng = ResampleRandom(u, k);
+      ResampleMeshScene(*setup.scene, u, rng); // a resample draws its mesh scene first, then its grid
+      maps.push_back(RescanMaps(source, setup, rng));
+    }
+    return maps;
+  });
+}
+
+RescanMapsPrefetch::~RescanMapsPrefetch()
+{
+  m_Stop = true;
+  if (m_Maps.valid())
+  {
+    m_Maps.wait(); // its exception, if any, dies with the future
+  }
+}
+
+std::vector<DistanceMaps>
+RescanMapsPrefetch::Finish()
+{
+  return m_Maps.get();
+}
+
 std::map<std::string, ModulusInterval>
 BootstrapModuli(const EstimationSetup &             setup,
                 RegistrationResult &                r,
@@ -647,21 +723,18 @@ BootstrapModuli(const EstimationSetup &             setup,
   const bool                  rescan = u.method == UncertaintyMethodEnum::Rescan;
   const auto                  sim = rescan ? nullptr : MakeResimulation(setup, r, movingLabels, clock);
   clock.Begin("uncertainty: " + std::to_string(u.resamples) + (rescan ? " rescans" : " resamples"));
-  // The rescans revoxelize the fixed anatomy (its probabilities where given), the bootstrap the moving one.
-  const SmoothAnatomy  anatomy = rescan
-                                   ? SmoothAnatomy(fixedLabels, *setup.scene, u.smoothingVoxels, setup.probabilities)
-                                   : SmoothAnatomy(movingLabels, *setup.scene, u.smoothingVoxels);
-  const ImageRegion<3> box = LabelBox(fixedLabels, anatomy.values, 15.0);
-  bmr::GridGeometry    crop = GridGeometryOf(fixedLabels);
-  Point<double, 3>     corner;
-  fixedLabels->TransformIndexToPhysicalPoint(box.GetIndex(), corner);
-  for (unsigned int a = 0; a < 3; ++a)
+  // The rescans revoxelize the fixed anatomy (its probabilities where given), the bootstrap the moving one; the
+  // rescans' maps may have been made while the fit ran.
+  std::vector<DistanceMaps> premadeMaps =
+    rescan && setup.rescanMaps ? setup.rescanMaps->Finish() : std::vector<DistanceMaps>();
+  std::unique_ptr<const ResampleSource> source;
+  if (premadeMaps.size() < u.resamples)
   {
-    crop.origin[a] = corner[a];
-    crop.size[a] = box.GetSize(a);
+    source = std::make_unique<const ResampleSource>(MakeResampleSource(setup, movingLabels, fixedLabels));
   }
   std::vector<bmr::TetrahedralMesh> prefetched =
-    setup.prefetch ? setup.prefetch->Finish() : std::vector<bmr::TetrahedralMesh>();
+    setup.prefetch ? setup.prefetch->Finish()
+                   : (setup.resampleMeshes ? *setup.resampleMeshes : std::vector<bmr::TetrahedralMesh>());
   std::vector<std::vector<double>> moduli(u.resamples);
   std::vector<std::string>         failures(u.resamples);
   std::atomic<unsigned int>        next{ 0 };
@@ -676,8 +749,8 @@ BootstrapModuli(const EstimationSetup &             setup,
                              k < prefetched.size() && !prefetched[k].points.empty() ? &prefetched[k] : nullptr,
                              setup,
                              sim.get(),
-                             anatomy,
-                             crop,
+                             source.get(),
+                             k < premadeMaps.size() ? &premadeMaps[k] : nullptr,
                              r,
                              movingLabels);
       }

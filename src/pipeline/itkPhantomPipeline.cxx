@@ -69,6 +69,21 @@ MovingVolume(const PhantomSettings & s)
   return moving;
 }
 
+/** The scene the registration of the pair is given: the prostate's modulus unknown, the landmark files named
+ * when the anatomy has seeds. */
+bmr::Scene
+EstimationScene(const PhantomSettings & s, bool seeds)
+{
+  bmr::Scene scene = IsPelvis(s) ? bmr::PelvisPhantomScene(50.0, true) : bmr::SpherePhantomScene(50.0, true);
+  scene.model = s.model;
+  if (seeds)
+  {
+    scene.movingLandmarks = "landmarks_moving.csv";
+    scene.fixedLandmarks = "landmarks_fixed.csv";
+  }
+  return scene;
+}
+
 /** Known moduli and wall loads, on a finer mesh with another random seed of the mesher. */
 bmr::Scene
 TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
@@ -339,7 +354,10 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
 }
 
 PhantomPair
-MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer, bmr::TetrahedralMesh & truthMesh)
+MakePhantomPair(const PhantomSettings &    s,
+                PipelineObserver *         observer,
+                bmr::TetrahedralMesh &     truthMesh,
+                const PhantomMovingReady & movingReady)
 {
   PhantomPair          pair;
   pipeline::StageClock clock(observer, pair.stages);
@@ -351,6 +369,11 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer, bmr::Tet
   pair.truthScene.model = s.model;
   pair.movingCT = MakeImageOnGrid<BiomechanicalCTImageType>(moving.grid, moving.ct);
   pair.movingLabels = MakeImageOnGrid<BiomechanicalLabelImageType>(moving.grid, moving.labels);
+  pair.scene = EstimationScene(s, !moving.seeds.empty());
+  if (movingReady)
+  {
+    movingReady(pair.movingLabels.GetPointer(), pair.scene);
+  }
   BiomechanicalLabelImageType::Pointer truthLabels = pair.movingLabels;
   if (IsPelvis(s) && s.tumourFraction > 0.0)
   {
@@ -389,18 +412,11 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer, bmr::Tet
 
   MoveSeeds(pair, moving.seeds, truth.mesh);
   pair.trackedLandmarks = AddTrackingNoise(pair.fixedLandmarks, s.trackingNoiseMM, s.seed);
-  pair.scene = IsPelvis(s) ? bmr::PelvisPhantomScene(50.0, true) : bmr::SpherePhantomScene(50.0, true);
-  pair.scene.model = s.model;
   if (s.fractions)
   {
     clock.Begin("volume fractions of the fixed organs");
     pair.fixedFractions = FixedFractions(s, pair.scene, pair.fixedLabels, pair.truthField);
     clock.End();
-  }
-  if (!moving.seeds.empty())
-  {
-    pair.scene.movingLandmarks = "landmarks_moving.csv";
-    pair.scene.fixedLandmarks = "landmarks_fixed.csv";
   }
   return pair;
 }

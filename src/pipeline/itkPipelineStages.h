@@ -22,6 +22,7 @@
 #include "itkBiomechanicalPipelines.h"
 #include "itkFEMElasticityOptimizer.h"
 #include "itkImageWarper.h"
+#include "itkSceneDistanceMaps.h"
 
 #include "bmrStopwatch.h"
 
@@ -163,6 +164,8 @@ private:
   std::thread                       m_Thread;
 };
 
+class RescanMapsPrefetch;
+
 /** What an estimation runs on: the fine mesh (and a coarse one for the sweep, or null), the scene and the settings. */
 struct EstimationSetup
 {
@@ -178,13 +181,58 @@ struct EstimationSetup
   double                        warmStartRelativeCurvature{ 0.0 };
   /** The resamples' meshes, made while the fit ran (may be null: each resample meshes its own). */
   ResampleMeshPrefetch * prefetch{ nullptr };
+  /** Or made beforehand (MovingAnatomyMeshes::resamples; may be null). */
+  const std::vector<bmr::TetrahedralMesh> * resampleMeshes{ nullptr };
+  /** The rescans' distance maps, made while the fit runs (may be null: each rescan makes its own). */
+  RescanMapsPrefetch * rescanMaps{ nullptr };
 };
 
-/** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels. */
+/** The objective organs' distance maps by name. */
+using DistanceMaps = std::map<std::string, Image<float, 3>::Pointer>;
+
+/** \brief The rescans' distance maps (UncertaintyMethodEnum::Rescan), made on a second thread while the fit runs:
+ * they need only the fixed labels. The same maps, by rescan, as BootstrapModuli() would make itself. */
+class RescanMapsPrefetch
+{
+public:
+  /** Starts with \a setup's scene, settings and probabilities, which must outlive this object. */
+  RescanMapsPrefetch(const BiomechanicalLabelImageType * fixedLabels, const EstimationSetup & setup);
+  ~RescanMapsPrefetch();
+  RescanMapsPrefetch(const RescanMapsPrefetch &) = delete;
+  RescanMapsPrefetch &
+  operator=(const RescanMapsPrefetch &) = delete;
+
+  /** Waits for the maps, by rescan; rethrows what the thread threw. */
+  std::vector<DistanceMaps>
+  Finish();
+
+private:
+  std::atomic<bool>                      m_Stop{ false };
+  std::future<std::vector<DistanceMaps>> m_Maps;
+};
+
+/** Whether the registration of \a scaledScene (mesh sizes scaled by settings.meshScale) sweeps on a coarse mesh. */
+bool
+UsesCoarseMesh(const bmr::Scene & scaledScene, const RegistrationSettings & settings);
+
+/** Whether its stated interval re-meshes the moving anatomy per resample (rescans and bootstrap). */
+bool
+UsesResampleMeshes(const bmr::Scene & scaledScene, const RegistrationSettings & settings);
+
+/** What MovingAnatomyMeshes depend on: the moving labels and their grid, the scene (\a scene as given, before
+ * settings.meshScale) and the mesh settings (scale, coarse factor, the resamples' method, count, seed and jitter). */
+std::uint64_t
+MovingAnatomyFingerprint(const BiomechanicalLabelImageType * labels,
+                         const bmr::Scene &                  scene,
+                         const RegistrationSettings &        settings);
+
+/** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels, exact
+ * within \a exactWithinMM of each organ (ComputeSceneDistanceMaps()). */
 std::map<std::string, Image<float, 3>::Pointer>
 ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const OrganProbabilityImages &      probabilities,
-                      const bmr::Scene &                  scene);
+                      const bmr::Scene &                  scene,
+                      double                              exactWithinMM = SceneDistanceExactWithinMM);
 
 /** FEMElasticityOptimizer on \a setup with the distance maps \a maps; the curvature uncertainty only when
  * \a curvature; the observer (may be null) sees the inner solves. */

@@ -220,13 +220,26 @@ StartResampleMeshes(const BiomechanicalLabelImageType * movingLabels,
 {
   const UncertaintySettings & u = settings.uncertainty;
   const unsigned int threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
-  const bool         resamples =
-    (u.method == UncertaintyMethodEnum::Rescan || u.method == UncertaintyMethodEnum::Bootstrap) && u.resamples > 0;
-  if (!resamples || scene.UnknownLabels().empty() || threads < 2)
+  if (!pipeline::UsesResampleMeshes(scene, settings) || threads < 2)
   {
     return nullptr;
   }
   return std::make_unique<pipeline::ResampleMeshPrefetch>(movingLabels, scene, u);
+}
+
+/** The rescans' distance maps on a second thread while the fit runs (pipeline::RescanMapsPrefetch), when the
+ * interval rescans, there is a modulus to estimate and more than one thread may run; null otherwise. */
+std::unique_ptr<pipeline::RescanMapsPrefetch>
+StartRescanMaps(const BiomechanicalLabelImageType * fixedLabels, const pipeline::EstimationSetup & setup)
+{
+  const UncertaintySettings & u = setup.settings->uncertainty;
+  const unsigned int threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  if (u.method != UncertaintyMethodEnum::Rescan || !pipeline::UsesResampleMeshes(*setup.scene, *setup.settings) ||
+      threads < 2)
+  {
+    return nullptr;
+  }
+  return std::make_unique<pipeline::RescanMapsPrefetch>(fixedLabels, setup);
 }
 
 /** The stated interval of every unknown modulus, by the chosen method, and what it leaves undetermined in the
@@ -319,7 +332,8 @@ namespace pipeline {
 std::map<std::string, Image<float, 3>::Pointer>
 ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const OrganProbabilityImages &      probabilities,
-                      const bmr::Scene &                  scene)
+                      const bmr::Scene &                  scene,
+                      double                              exactWithinMM)
 {
   bmr::Scene fromLabels = scene;
   fromLabels.objective.clear();
@@ -330,7 +344,7 @@ ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
       fromLabels.objective.push_back(term);
     }
   }
-  auto maps = ComputeSceneDistanceMaps(labels, fromLabels);
+  auto maps = ComputeSceneDistanceMaps(labels, fromLabels, exactWithinMM);
   for (const auto & kv : probabilities)
   {
     maps[kv.first] = ComputeProbabilityDistanceMap(kv.second.GetPointer(), "fixed probability of \"" + kv.first + "\"");
@@ -419,28 +433,52 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, scene.Warnings());
   clock.Warn(r.state.warnings, VoxelWarnings(scene, movingLabels, fixedLabels));
 
+  const MovingAnatomyMeshes * premeshed = settings.meshes;
+  if (premeshed != nullptr &&
+      premeshed->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, inputScene, settings))
+  {
+    bmr::Fail("RegisterSegmentedPair",
+              "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
+              "(MeshMovingAnatomy)");
+  }
   // The fine mesh (CGAL, one core) is made alongside the distance maps and the coarse mesh.
-  pipeline::BackgroundMesh fineMesh(movingLabels, scene);
+  std::unique_ptr<pipeline::BackgroundMesh> fineMesh;
+  if (premeshed == nullptr)
+  {
+    fineMesh = std::make_unique<pipeline::BackgroundMesh>(movingLabels, scene);
+  }
   clock.Begin("distance maps (fixed labels)");
   const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
   clock.End(std::to_string(maps.size()) + " organs");
   // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
   bmr::TetrahedralMesh coarse;
-  if (!scene.UnknownLabels().empty() && settings.coarseFactor > 1.0)
+  if (premeshed != nullptr)
   {
-    coarse = pipeline::MeshLabelImage(
-      movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
+    coarse = premeshed->coarse;
+    r.state.mesh = premeshed->fine;
   }
-  r.state.mesh = fineMesh.Take(clock, "mesh (CGAL Mesh_3)");
+  else
+  {
+    if (pipeline::UsesCoarseMesh(scene, settings))
+    {
+      coarse = pipeline::MeshLabelImage(
+        movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
+    }
+    r.state.mesh = fineMesh->Take(clock, "mesh (CGAL Mesh_3)");
+  }
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
   // The resamples' meshes from here on: the fit's mesh came first.
-  const std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch = StartResampleMeshes(movingLabels, scene, settings);
-  const bmr::TetrahedralMesh                            estimationMesh = r.state.mesh;
-  pipeline::EstimationSetup                             setup{
+  const std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch =
+    premeshed ? nullptr : StartResampleMeshes(movingLabels, scene, settings);
+  const bmr::TetrahedralMesh estimationMesh = r.state.mesh;
+  pipeline::EstimationSetup  setup{
     &estimationMesh,    coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans,
     &fixedProbabilities
   };
   setup.prefetch = prefetch.get();
+  setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
+  const std::unique_ptr<pipeline::RescanMapsPrefetch> rescanMaps = StartRescanMaps(fixedLabels, setup);
+  setup.rescanMaps = rescanMaps.get();
   Estimate(r, setup, maps, clock);
   StateIntervals(r, setup, movingLabels, fixedLabels, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);

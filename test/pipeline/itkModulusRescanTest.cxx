@@ -23,7 +23,8 @@
 //   the rule by which the interval would correct it). The resimulating bootstrap is off by 0.1-0.5 in log E on
 //   the pelvis (docs/estimation.md);
 // - the spread comes from the data: it is larger on 2 mm voxels than on 1 mm ones;
-// - deterministic: the same seed gives bit-identical rescans, also on one thread (no meshes made ahead);
+// - deterministic: the same seed gives bit-identical rescans, also on one thread (no meshes made ahead) and with
+//   the moving anatomy meshed beforehand (MeshMovingAnatomy), whose meshes are checked against the settings;
 // - resampling scales the rescans cannot honour are refused with an itk::ExceptionObject naming the setting.
 #include "itkBiomechanicalPipelines.h"
 #include "itkBiomechanicalReports.h"
@@ -37,12 +38,8 @@
 namespace {
 itk::test::Checks Check;
 
-itk::ModulusInterval
-Rescan(const itk::PhantomPair &                 pair,
-       const itk::BiomechanicalLabelImageType * fixed,
-       double                                   meshJitter,
-       double                                   stepTolerance = itk::UncertaintySettings().stepTolerance,
-       unsigned int                             threads = 0)
+itk::RegistrationSettings
+RescanSettings(double meshJitter, double stepTolerance, unsigned int threads)
 {
   itk::RegistrationSettings settings;
   settings.uncertainty.threads = threads;
@@ -50,6 +47,19 @@ Rescan(const itk::PhantomPair &                 pair,
   settings.uncertainty.resamples = 4;
   settings.uncertainty.meshJitter = meshJitter;
   settings.uncertainty.stepTolerance = stepTolerance;
+  return settings;
+}
+
+itk::ModulusInterval
+Rescan(const itk::PhantomPair &                 pair,
+       const itk::BiomechanicalLabelImageType * fixed,
+       double                                   meshJitter,
+       double                                   stepTolerance = itk::UncertaintySettings().stepTolerance,
+       unsigned int                             threads = 0,
+       const itk::MovingAnatomyMeshes *         meshes = nullptr)
+{
+  itk::RegistrationSettings settings = RescanSettings(meshJitter, stepTolerance, threads);
+  settings.meshes = meshes;
   const itk::RegistrationResult r = itk::RegisterSegmentedPair(pair.movingLabels, fixed, nullptr, pair.scene, settings);
   const itk::ModulusInterval    i = r.modulusInterval.at("inner");
   std::cout << "  " << itk::ModulusIntervalText("inner", i) << "; b " << i.logBias << ", s " << i.logSigma
@@ -93,6 +103,17 @@ itkModulusRescanTest(int, char *[])
     Rescan(pair, pair.fixedLabels, jitter, itk::UncertaintySettings().stepTolerance, 1);
   Check(single.resampleModuli == one.resampleModuli,
         "one resampling thread without the meshes made ahead gives bit-identical rescans");
+  // The moving anatomy meshed beforehand (MeshMovingAnatomy, as for a planning scan): the same meshes, so the same
+  // fit and rescans bit for bit; meshes made for another resampling seed are refused.
+  const itk::RegistrationSettings defaults = RescanSettings(jitter, itk::UncertaintySettings().stepTolerance, 0);
+  const itk::MovingAnatomyMeshes  premeshed = itk::MeshMovingAnatomy(pair.movingLabels, pair.scene, defaults);
+  Check(premeshed.resamples.size() == 4 && !premeshed.coarse.points.empty(),
+        "MeshMovingAnatomy made the fit's, the sweep's and 4 resample meshes");
+  const itk::ModulusInterval reused =
+    Rescan(pair, pair.fixedLabels, jitter, itk::UncertaintySettings().stepTolerance, 0, &premeshed);
+  Check(reused.estimate == one.estimate && reused.resampleModuli == one.resampleModuli &&
+          reused.interval95 == one.interval95,
+        "the meshes made beforehand give the bit-identical fit and rescans");
 
   // The resamples' looser outer search: it stops once the next secant step in log E would be shorter than the
   // tolerance, and the secant's steps shrink superlinearly, so each rescan lies within that tolerance (plus the
@@ -126,5 +147,10 @@ itkModulusRescanTest(int, char *[])
   bad.uncertainty.stepTolerance = -0.01;
   Check(refusal(bad).find("stepTolerance") != std::string::npos,
         "a negative step tolerance is refused, naming the setting");
+  bad = defaults;
+  bad.uncertainty.seed += 1; // other resample meshes
+  bad.meshes = &premeshed;
+  Check(refusal(bad).find("MeshMovingAnatomy") != std::string::npos,
+        "meshes made for another resampling seed are refused, naming MeshMovingAnatomy");
   return Check.ExitCode();
 }

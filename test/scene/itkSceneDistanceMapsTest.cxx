@@ -28,6 +28,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 
 namespace {
 constexpr double Radius = 9.3;                        // mm, not a multiple of the 1 mm voxels
@@ -57,6 +58,70 @@ SurfaceError(const itk::Image<float, 3> * map, double & rms, double & mean)
   }
   mean = sum / count;
   rms = std::sqrt(sum2 / count);
+}
+
+/** The maps of ComputeSceneDistanceMaps, each computed on its organ's box, against the whole image's: on an
+ * anisotropic grid with a ball inside and a slab that touches the image's border, they must agree within the
+ * exact margin (to float rounding, 1e-4 mm: the same squared distances, summed from other index offsets) and
+ * be an upper bound beyond it. */
+bool
+CroppedMapsMatch()
+{
+  using LabelImageType = itk::Image<short, 3>;
+  auto labels = LabelImageType::New();
+  labels->SetRegions(itk::ImageRegion<3>(itk::Size<3>{ { 120, 90, 100 } }));
+  const double spacing[3] = { 0.8, 1.1, 1.3 };
+  labels->SetSpacing(spacing);
+  labels->Allocate();
+  for (itk::ImageRegionIteratorWithIndex<LabelImageType> it(labels, labels->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    double d2 = 0.0;
+    for (int c = 0; c < 3; ++c)
+    {
+      d2 += std::pow(it.GetIndex()[c] * spacing[c] - 2.0 * Center[c], 2);
+    }
+    const bool slab = it.GetIndex()[0] < 12 && it.GetIndex()[1] > 40;
+    it.Set(d2 <= Radius * Radius ? 2 : (slab ? 3 : 1));
+  }
+  bmr::Scene scene;
+  scene.labels = { { "tissue", 1, bmr::LabelRoleEnum::Material, 10.0, 0.35 },
+                   { "ball", 2, bmr::LabelRoleEnum::Material, 50.0, 0.4 },
+                   { "slab", 3, bmr::LabelRoleEnum::Material, 50.0, 0.4 } };
+  scene.objective = { { "ball", 1.0 }, { "slab", 1.0 } };
+  const double exact = 6.0; // mm: the ball's box, grown by this, is a fraction of the image
+  const auto   cropped = itk::ComputeSceneDistanceMaps(labels.GetPointer(), scene, exact);
+  const auto whole = itk::ComputeSceneDistanceMaps(labels.GetPointer(), scene, std::numeric_limits<double>::infinity());
+  bool       ok = true;
+  for (const char * organ : { "ball", "slab" })
+  {
+    const float *     a = cropped.at(organ)->GetBufferPointer();
+    const float *     b = whole.at(organ)->GetBufferPointer();
+    const std::size_t n = labels->GetBufferedRegion().GetNumberOfPixels();
+    double            nearError = 0.0, belowBound = 0.0;
+    std::size_t       near = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      if (std::abs(b[i]) <= exact)
+      {
+        nearError = std::max(nearError, std::abs(double(a[i]) - b[i]));
+        ++near;
+      }
+      else
+      {
+        belowBound = std::max(belowBound, double(b[i]) - a[i]);
+      }
+    }
+    std::cout << organ << ": " << near << " voxels within " << exact << " mm, largest difference " << nearError
+              << " mm; beyond, the cropped map lies below the exact one by at most " << belowBound << " mm"
+              << std::endl;
+    ok &= bmr::test::Expect(near > 1000 && nearError <= 1e-4,
+                            std::string(organ) + ": the cropped map equals the whole image's within the margin (got " +
+                              bmr::test::ToString(nearError) + " mm)");
+    ok &= bmr::test::Expect(belowBound <= 1e-4,
+                            std::string(organ) + ": beyond the margin the cropped map is an upper bound (got " +
+                              bmr::test::ToString(belowBound) + " mm below)");
+  }
+  return ok;
 }
 } // namespace
 
@@ -143,6 +208,7 @@ itkSceneDistanceMapsTest(int, char *[])
   missing.objective = { { "absent", 1.0 } };
   ITK_TRY_EXPECT_EXCEPTION(itk::ComputeSceneDistanceMaps(labels.GetPointer(), missing));
 
+  ok &= CroppedMapsMatch();
   std::cout << (ok ? "PASSED" : "FAILED") << std::endl;
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
