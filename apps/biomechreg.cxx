@@ -281,6 +281,7 @@ WritePhantom(const std::string &          out,
 int
 main(int argc, char * argv[])
 {
+  bmrcli::RestartWithHugePageMalloc(argv);
   try
   {
     std::vector<std::string> args(argv + 1, argv + argc);
@@ -291,6 +292,14 @@ main(int argc, char * argv[])
     {
       std::cout << "biomechreg " << BMR_VERSION << " (ITKBiomechanicalRegistration; ITK "
                 << itk::Version::GetITKVersion() << ")" << std::endl;
+      if (GetVerbosity() == Verbosity::Verbose)
+      {
+        const char * tunables = std::getenv("GLIBC_TUNABLES");
+        std::cout << "malloc: GLIBC_TUNABLES=" << (tunables ? tunables : "") << " (transparent huge pages "
+                  << (tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos ? "on"
+                                                                                                            : "off")
+                  << ")" << std::endl;
+      }
       return EXIT_SUCCESS;
     }
     if (command == "help" || global.help)

@@ -1,5 +1,6 @@
 # Command-line manners of biomechreg: per-subcommand --help/-h (exit 0, that subcommand's usage only),
-# help SUB, --version, exit codes (0 ok, 1 error, 2 usage), --threads, --quiet, the peak memory line,
+# help SUB, --version, exit codes (0 ok, 1 error, 2 usage), --threads, --quiet, the peak memory line, huge-page
+# malloc (restarted with glibc.malloc.hugetlb=1 unless the user set it),
 # ITK's warnings as one "warning: ..." line without source path or object address, and register's --outputs,
 # --field-precision and --compression-level.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregManners.cmake
@@ -42,6 +43,19 @@ endforeach()
 expect_rc(version 0 --version)
 if(NOT out MATCHES "^biomechreg [0-9]+\\.[0-9]+\\.[0-9]+ \\(ITKBiomechanicalRegistration; ITK [0-9.]+\\)\n$")
   message(SEND_ERROR "--version prints: ${out}")
+endif()
+# malloc's transparent huge pages: biomechreg restarts itself with glibc.malloc.hugetlb=1 unless the user set it.
+if(CMAKE_HOST_SYSTEM_NAME STREQUAL "Linux")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=GLIBC_TUNABLES --unset=BMR_RESTARTED ${CLI} --verbose
+    --version OUTPUT_VARIABLE out RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "malloc: GLIBC_TUNABLES=glibc.malloc.hugetlb=1 \\(transparent huge pages on\\)")
+    message(SEND_ERROR "without GLIBC_TUNABLES, biomechreg does not run with huge-page malloc: ${out}")
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env GLIBC_TUNABLES=glibc.malloc.hugetlb=0 --unset=BMR_RESTARTED ${CLI}
+    --verbose --version OUTPUT_VARIABLE out RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "malloc: GLIBC_TUNABLES=glibc.malloc.hugetlb=0 \\(transparent huge pages off\\)")
+    message(SEND_ERROR "the user's glibc.malloc.hugetlb=0 is not kept: ${out}")
+  endif()
 endif()
 expect_rc(help_unknown 2 help frobnicate)
 expect_rc(threads_zero 2 phantom --out ${OUT}/x --threads 0)
