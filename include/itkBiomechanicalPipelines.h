@@ -243,7 +243,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
  *
  * A planning scan is segmented long before the daily scans arrive, and every mesh a registration needs depends
  * on the moving labels, the scene and the settings only: the fit's mesh, the coarse mesh of the sweep and the
- * re-meshed models of the stated interval's resamples (together about 25 s of one core on the 1 mm pelvis).
+ * re-meshed models of the stated interval's resamples (together about 18 s of one core on the 1 mm pelvis).
  * MeshMovingAnatomy() makes them once, beforehand or on a spare core while other work runs, and every
  * registration against that planning scan takes them through RegistrationSettings::meshes. They are the meshes
  * RegisterSegmentedPair() would make itself (the same sizes and mesher seeds), so the results are the same bit
