@@ -21,6 +21,7 @@
 
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
+#include "bmrHash.h"
 #include "itkGDCMSeriesFileNames.h"
 
 #include "gdcmItem.h"
@@ -163,10 +164,7 @@ PatientAndStudyAttributes()
 std::uint64_t
 Fnv1a(const std::string & text, std::uint64_t hash)
 {
-  for (unsigned char c : text)
-  {
-    hash = (hash ^ c) * 0x100000001b3ULL;
-  }
+  hash = bmr::Fnv1a(text.data(), text.size(), hash);
   hash ^= hash >> 33; // the finalizer of MurmurHash3: every input bit reaches every output bit
   hash *= 0xff51afd7ed558ccdULL;
   hash ^= hash >> 33;

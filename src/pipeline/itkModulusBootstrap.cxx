@@ -767,7 +767,7 @@ BootstrapModuli(const EstimationSetup &             setup,
       }
     }
   };
-  const unsigned int       threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  const unsigned int       threads = ResampleThreads(u);
   std::vector<std::thread> workers;
   for (unsigned int t = 1; t < std::min(threads, u.resamples); ++t)
   {

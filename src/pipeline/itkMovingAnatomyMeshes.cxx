@@ -19,29 +19,16 @@
 #include "itkPipelineStages.h"
 
 #include "bmrError.h"
-
-#include <cstring>
+#include "bmrHash.h"
 
 namespace itk {
 namespace pipeline {
 namespace {
-/** FNV-1a over \a bytes bytes, continuing from \a hash. */
-std::uint64_t
-Fnv1a(const void * data, std::size_t bytes, std::uint64_t hash)
-{
-  const auto * p = static_cast<const unsigned char *>(data);
-  for (std::size_t i = 0; i < bytes; ++i)
-  {
-    hash = (hash ^ p[i]) * 1099511628211ull;
-  }
-  return hash;
-}
-
 template<typename T>
 std::uint64_t
 HashValue(const T & value, std::uint64_t hash)
 {
-  return Fnv1a(&value, sizeof(T), hash);
+  return bmr::Fnv1a(&value, sizeof(T), hash);
 }
 } // namespace
 
@@ -50,17 +37,9 @@ MovingAnatomyFingerprint(const BiomechanicalLabelImageType * labels,
                          const bmr::Scene &                  scene,
                          const RegistrationSettings &        settings)
 {
-  std::uint64_t hash = 1469598103934665603ull;
-  // The labels by words: 8 bytes per step keeps the 20 MB of a pelvis scan at a few milliseconds.
-  const std::size_t bytes = labels->GetBufferedRegion().GetNumberOfPixels() * sizeof(*labels->GetBufferPointer());
-  const auto *      words = reinterpret_cast<const unsigned char *>(labels->GetBufferPointer());
-  for (std::size_t i = 0; i + 8 <= bytes; i += 8)
-  {
-    std::uint64_t word;
-    std::memcpy(&word, words + i, 8);
-    hash = (hash ^ word) * 1099511628211ull;
-  }
-  hash = Fnv1a(words + bytes - bytes % 8, bytes % 8, hash);
+  std::uint64_t hash = bmr::Fnv1a(labels->GetBufferPointer(),
+                                  labels->GetBufferedRegion().GetNumberOfPixels() * sizeof(*labels->GetBufferPointer()),
+                                  bmr::FnvOffsetBasis);
   for (unsigned int a = 0; a < 3; ++a)
   {
     hash = HashValue(labels->GetLargestPossibleRegion().GetSize(a), hash);
@@ -72,7 +51,7 @@ MovingAnatomyFingerprint(const BiomechanicalLabelImageType * labels,
     }
   }
   const std::string json = bmr::SceneToJson(scene);
-  hash = Fnv1a(json.data(), json.size(), hash);
+  hash = bmr::Fnv1a(json.data(), json.size(), hash);
   const UncertaintySettings & u = settings.uncertainty;
   for (double value : { settings.meshScale, settings.coarseFactor, u.meshJitter })
   {

@@ -22,6 +22,7 @@
 #include "itkBiomechanicalPipelines.h"
 #include "itkFEMElasticityOptimizer.h"
 #include "itkImageWarper.h"
+#include "itkMultiThreaderBase.h"
 #include "itkSceneDistanceMaps.h"
 
 #include "bmrStopwatch.h"
@@ -120,6 +121,13 @@ ComputeFields(SimulationResult &   result,
               const ImageBase<3> * movingReference,
               bool                 pushField,
               StageClock &         clock);
+
+/** How many threads the stated interval's resamples may use: UncertaintySettings::threads, or ITK's default. */
+inline unsigned int
+ResampleThreads(const UncertaintySettings & u)
+{
+  return u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+}
 
 /** The random numbers of resample \a k of the stated interval: the same seed and k, the same resample. */
 inline std::mt19937_64

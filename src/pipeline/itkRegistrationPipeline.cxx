@@ -219,7 +219,7 @@ StartResampleMeshes(const BiomechanicalLabelImageType * movingLabels,
                     const RegistrationSettings &        settings)
 {
   const UncertaintySettings & u = settings.uncertainty;
-  const unsigned int threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  const unsigned int          threads = pipeline::ResampleThreads(u);
   if (!pipeline::UsesResampleMeshes(scene, settings) || threads < 2)
   {
     return nullptr;
@@ -233,7 +233,7 @@ std::unique_ptr<pipeline::RescanMapsPrefetch>
 StartRescanMaps(const BiomechanicalLabelImageType * fixedLabels, const pipeline::EstimationSetup & setup)
 {
   const UncertaintySettings & u = setup.settings->uncertainty;
-  const unsigned int threads = u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  const unsigned int          threads = pipeline::ResampleThreads(u);
   if (u.method != UncertaintyMethodEnum::Rescan || !pipeline::UsesResampleMeshes(*setup.scene, *setup.settings) ||
       threads < 2)
   {

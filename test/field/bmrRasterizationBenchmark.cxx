@@ -28,6 +28,7 @@
 // Time it under the benchmark lock (flock /tmp/bmr-bench.lock ...); count instructions with
 // valgrind --tool=callgrind ... run CACHE 1 1.
 #include "bmrDisplacementFieldRasterizer.h"
+#include "bmrHash.h"
 #include "itkBiomechanicalPipelines.h"
 #include "itkGridGeometryConversion.h"
 #include "itkPhysicsDeformationFieldSource.h"
@@ -149,17 +150,6 @@ Reference(const bmr::GridGeometry & grid)
   return image; // never allocated: only its geometry is used
 }
 
-std::uint64_t
-Fnv1a(const void * data, std::size_t bytes)
-{
-  const auto *  p = static_cast<const unsigned char *>(data);
-  std::uint64_t h = 1469598103934665603ULL;
-  for (std::size_t i = 0; i < bytes; ++i)
-  {
-    h = (h ^ p[i]) * 1099511628211ULL;
-  }
-  return h;
-}
 
 double
 Seconds(std::chrono::steady_clock::time_point since)
@@ -205,8 +195,9 @@ Run(const std::string & path, int runs, int threads)
     source->Update();
     times.push_back(Seconds(start));
     const FieldType *   field = source->GetOutput();
-    const std::uint64_t h =
-      Fnv1a(field->GetBufferPointer(), field->GetPixelContainer()->Size() * sizeof(FieldType::PixelType));
+    const std::uint64_t h = bmr::Fnv1a(field->GetBufferPointer(),
+                                       field->GetPixelContainer()->Size() * sizeof(FieldType::PixelType),
+                                       1469598103934665603ULL);
     if (r > 0 && h != hash)
     {
       std::cout << "run " << r << ": the field differs from run 0" << std::endl;
