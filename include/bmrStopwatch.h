@@ -19,6 +19,8 @@
 #define bmrStopwatch_h
 
 #include <chrono>
+#include <cstdio>
+#include <string>
 
 namespace bmr {
 
@@ -30,6 +32,15 @@ inline double
 SecondsSince(SteadyClock::time_point start)
 {
   return std::chrono::duration<double>(SteadyClock::now() - start).count();
+}
+
+/** \a seconds with two decimals, as the stage lines print them. */
+inline std::string
+SecondsText(double seconds)
+{
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.2f", seconds);
+  return text;
 }
 
 } // namespace bmr

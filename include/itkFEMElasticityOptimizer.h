@@ -24,6 +24,7 @@
 #include "itkProcessObject.h"
 #include "itkTetrahedralMeshObject.h"
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -36,10 +37,11 @@ namespace itk {
  * the ITK pipeline front door of bmr::ElasticityEstimator.
  *
  * Inputs: the moving anatomy as a tetrahedral mesh (input "Mesh", from LabelImageToTetrahedralMeshFilter with
- * the same scene), optionally a coarser mesh of it for the sweep of E ("CoarseMesh"), and one signed distance
- * map [mm] per objective label of the scene (SetDistanceMap(); negative inside, as
- * SignedMaurerDistanceMapImageFilter makes them, see ComputeSceneDistanceMaps()). The unknowns are the loads
- * on the scene's force surfaces and the moduli of the labels with the role unknown_material (any number).
+ * the same scene; or SetMeshSource(), which lets the mesh be finished while the sweep runs), optionally a coarser mesh
+ * of it for the sweep of E ("CoarseMesh"), and one signed distance map [mm] per objective label of the scene
+ * (SetDistanceMap(); negative inside, as SignedMaurerDistanceMapImageFilter makes them, see
+ * ComputeSceneDistanceMaps()). The unknowns are the loads on the scene's force surfaces and the moduli of the labels
+ * with the role unknown_material (any number).
  *
  * GenerateData() composes the scene's objective, bmr::SurfaceMatchingObjective, from its three parts:
  * - forward model bmr::LinearForwardModel: \f$ K(E) u = f \f$, P1 tetrahedra, u = 0 on fixed walls;
@@ -88,6 +90,14 @@ public:
   SetMesh(const MeshObjectType * mesh);
   const MeshObjectType *
   GetMesh() const;
+  /** Instead of input "Mesh": a function that returns the fine mesh when the estimation first needs it. With a
+   * coarse mesh to sweep on and more than one thread it is called on a second thread while the sweep runs, so a
+   * mesh that is still being made (CGAL meshes on one core) is finished alongside the sweep instead of before it;
+   * otherwise it is called at the start. Called once per Update(); what it throws, Update() throws. The result is
+   * the same as with SetMesh() of the mesh it returns. An empty function (default) uses input "Mesh". */
+  using MeshSourceType = std::function<bmr::TetrahedralMesh()>;
+  void
+  SetMeshSource(MeshSourceType source);
   /** Optional coarser mesh of the same anatomy for the initial sweep of E. */
   void
   SetCoarseMesh(const MeshObjectType * mesh);
@@ -292,6 +302,7 @@ private:
   bmr::WallMotionEnum           m_WallMotion{ bmr::WallLoadSettings{}.motion };
   std::map<std::string, double> m_WarmStartModuli;
   double                        m_WarmStartRelativeCurvature{ 0.0 };
+  MeshSourceType                m_MeshSource;
   SizeValueType                 m_NumberOfRejectedSteps{ 0 };
   SizeValueType                 m_NumberOfInvertedElements{ 0 };
   std::map<std::string, double> m_ModulusUncertainty;

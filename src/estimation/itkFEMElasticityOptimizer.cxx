@@ -46,6 +46,23 @@ FEMElasticityOptimizer::GetMesh() const
 }
 
 void
+FEMElasticityOptimizer::SetMeshSource(MeshSourceType source)
+{
+  // With a source the indexed input "Mesh" is not needed; VerifyPreconditions() asks for one of the two.
+  this->SetNumberOfRequiredInputs(source ? 0 : 1);
+  if (source)
+  {
+    this->RemoveRequiredInputName("Primary");
+  }
+  else if (!this->IsRequiredInputName("Primary"))
+  {
+    this->AddRequiredInputName("Primary");
+  }
+  m_MeshSource = std::move(source);
+  this->Modified();
+}
+
+void
 FEMElasticityOptimizer::SetCoarseMesh(const MeshObjectType * mesh)
 {
   this->SetInput("CoarseMesh", const_cast<MeshObjectType *>(mesh));
@@ -91,6 +108,10 @@ void
 FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
 {
   Superclass::VerifyPreconditions();
+  if (!m_MeshSource && this->GetMesh() == nullptr)
+  {
+    itkExceptionMacro(<< "no mesh: SetMesh() or SetMeshSource()");
+  }
   if (m_Scene.labels.empty())
   {
     itkExceptionMacro(<< "no scene was set (SetScene)");
@@ -213,13 +234,20 @@ FEMElasticityOptimizer::GenerateData()
   m_GaugeLabel = gauge ? gauge->name : std::string();
   const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
 
-  const bmr::TetrahedralMesh & fine = this->GetMesh()->Get();
   // The coarse mesh serves the sweep only: not built when there is no modulus to sweep.
   const bool sweeps = this->GetCoarseMesh() && !unknowns.empty() && m_WarmStartModuli.empty();
-  // While the sweep runs on the coarse objective (one core), a second thread builds the fine one and its sparse
-  // analysis: the same objective, sooner.
-  const auto makeFine = [this, &fine, &samplers]() {
-    std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(fine, samplers);
+  // The fine mesh: input "Mesh", or the source's, which is asked for only when the fine objective is made.
+  bmr::TetrahedralMesh         sourced;
+  const bmr::TetrahedralMesh * fine = m_MeshSource ? nullptr : &this->GetMesh()->Get();
+  // While the sweep runs on the coarse objective (one core), a second thread finishes the fine mesh (with a source)
+  // and builds the fine objective and its sparse analysis: the same objective, sooner.
+  const auto makeFine = [this, &fine, &sourced, &samplers]() {
+    if (fine == nullptr)
+    {
+      sourced = m_MeshSource();
+      fine = &sourced;
+    }
+    std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
     objective->GetForwardModel().Prepare();
     return objective;
   };
@@ -257,7 +285,7 @@ FEMElasticityOptimizer::GenerateData()
   const bmr::EstimationResult result = estimator.Run();
   this->TakeResult(result);
 
-  bmr::TetrahedralMesh out = fine;
+  bmr::TetrahedralMesh out = *fine; // set: the estimator always asks for the fine objective
   out.displacement = result.displacement;
   out.force = result.boundaryForces;
   this->GetOutput()->Set(out);
@@ -280,6 +308,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;
   os << indent << "WarmStart: " << m_WarmStartModuli.size() << " moduli, relative curvature "
      << m_WarmStartRelativeCurvature << std::endl;
+  os << indent << "MeshSource: " << (m_MeshSource ? "set" : "none (input Mesh)") << std::endl;
   os << indent << "LimitElementInversion: " << (m_LimitElementInversion ? "On" : "Off") << std::endl;
   os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
   os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;

@@ -586,6 +586,7 @@ Resample(unsigned int                        k,
   resample.settings = &settings;
   resample.prefetch = nullptr;
   resample.fine = &fine;
+  resample.fineSource = nullptr;
   bmr::TetrahedralMesh coarse;
   if (u.warmStart)
   {

@@ -83,8 +83,6 @@ MeshLabelImage(const BiomechanicalLabelImageType * labels,
                StageClock &                        clock,
                const std::string &                 stage);
 
-/** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
- * field on \a movingReference's grid. */
 /** A mesh made on a second thread (CGAL meshes on one core) while the caller does other work, when more than one
  * thread may run; otherwise made in Take(). The mesh is the same either way. */
 class BackgroundMesh
@@ -99,6 +97,22 @@ public:
    * to the wall time, and its detail says how long the meshing took in all. Rethrows the mesher's exception. */
   bmr::TetrahedralMesh
   Take(StageClock & clock, const std::string & stage);
+  /** Whether the mesh is being made on a second thread (until it is taken). */
+  bool
+  Alongside() const
+  {
+    return m_Made.valid();
+  }
+  /** The mesh made alongside, waiting for it (from any thread); \a detail says what was made. Only when
+   * Alongside(); rethrows the mesher's exception. */
+  bmr::TetrahedralMesh
+  TakeAlongside(std::string & detail);
+  /** How long the meshing took on its thread [s], once taken. */
+  double
+  MeshingSeconds() const
+  {
+    return m_Seconds;
+  }
 
 private:
   struct Made
@@ -113,8 +127,11 @@ private:
   const BiomechanicalLabelImageType * m_Labels;
   bmr::Scene                          m_Scene;
   std::future<Made>                   m_Made;
+  double                              m_Seconds{ 0.0 };
 };
 
+/** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
+ * field on \a movingReference's grid. */
 void
 ComputeFields(SimulationResult &   result,
               const ImageBase<3> * fixedReference,
@@ -177,12 +194,15 @@ class RescanMapsPrefetch;
 /** What an estimation runs on: the fine mesh (and a coarse one for the sweep, or null), the scene and the settings. */
 struct EstimationSetup
 {
-  const bmr::TetrahedralMesh *   fine{ nullptr };
-  const bmr::TetrahedralMesh *   coarse{ nullptr };
-  const bmr::Scene *             scene{ nullptr };
-  const RegistrationSettings *   settings{ nullptr };
-  std::vector<std::string>       probabilityOrgans;        ///< objective organs whose fixed data are probabilities
-  const OrganProbabilityImages * probabilities{ nullptr }; ///< those data (may be null when there are none)
+  const bmr::TetrahedralMesh * fine{ nullptr };
+  /** Or, when fine is null, the function that returns it when the estimation first needs it
+   * (FEMElasticityOptimizer::SetMeshSource). */
+  std::function<bmr::TetrahedralMesh()> fineSource;
+  const bmr::TetrahedralMesh *          coarse{ nullptr };
+  const bmr::Scene *                    scene{ nullptr };
+  const RegistrationSettings *          settings{ nullptr };
+  std::vector<std::string>              probabilityOrgans; ///< objective organs whose fixed data are probabilities
+  const OrganProbabilityImages *        probabilities{ nullptr }; ///< those data (may be null when there are none)
   /** When given (a resample's estimation), the outer search starts here instead of sweeping: moduli [kPa] by
    * name and the relative curvature of the estimate (FEMElasticityOptimizer::SetWarmStart). */
   std::map<std::string, double> warmStartModuli;

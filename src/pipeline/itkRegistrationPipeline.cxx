@@ -359,9 +359,16 @@ RunEstimation(const EstimationSetup &                                 setup,
               PipelineObserver *                                      observer)
 {
   auto optimizer = FEMElasticityOptimizer::New();
-  auto fine = TetrahedralMeshObject::New();
-  fine->Set(*setup.fine);
-  optimizer->SetMesh(fine);
+  if (setup.fine != nullptr)
+  {
+    auto fine = TetrahedralMeshObject::New();
+    fine->Set(*setup.fine);
+    optimizer->SetMesh(fine);
+  }
+  else
+  {
+    optimizer->SetMeshSource(setup.fineSource);
+  }
   if (setup.coarse)
   {
     auto coarse = TetrahedralMeshObject::New();
@@ -441,12 +448,15 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
               "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
               "(MeshMovingAnatomy)");
   }
-  // The fine mesh (CGAL, one core) is made alongside the distance maps and the coarse mesh.
+  // The fine mesh (CGAL, one core) is made alongside the distance maps, the coarse mesh and the sweep.
   std::unique_ptr<pipeline::BackgroundMesh> fineMesh;
   if (premeshed == nullptr)
   {
     fineMesh = std::make_unique<pipeline::BackgroundMesh>(movingLabels, scene);
   }
+  // With a sweep to run, the estimation takes the fine mesh when the sweep is done (FEMElasticityOptimizer's mesh
+  // source); without, it is taken before.
+  const bool meshDuringSweep = fineMesh && fineMesh->Alongside() && pipeline::UsesCoarseMesh(scene, settings);
   clock.Begin("distance maps (fixed labels)");
   const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
   clock.End(std::to_string(maps.size()) + " organs");
@@ -464,22 +474,47 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
       coarse = pipeline::MeshLabelImage(
         movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
     }
-    r.state.mesh = fineMesh->Take(clock, "mesh (CGAL Mesh_3)");
+    if (!meshDuringSweep)
+    {
+      r.state.mesh = fineMesh->Take(clock, "mesh (CGAL Mesh_3)");
+    }
+  }
+  pipeline::EstimationSetup setup{
+    nullptr, {}, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans, &fixedProbabilities
+  };
+  setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
+  // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
+  // the estimation's thread that takes the mesh when it is finished during the sweep.
+  std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch;
+  std::unique_ptr<pipeline::RescanMapsPrefetch>   rescanMaps;
+  const auto                                      startPrefetches = [&]() {
+    prefetch = premeshed ? nullptr : StartResampleMeshes(movingLabels, scene, settings);
+    rescanMaps = StartRescanMaps(fixedLabels, setup);
+  };
+  std::string                fineMeshDetail;
+  const bmr::TetrahedralMesh estimationMesh = r.state.mesh; // empty when made during the sweep
+  if (meshDuringSweep)
+  {
+    setup.fineSource = [&]() {
+      bmr::TetrahedralMesh mesh = fineMesh->TakeAlongside(fineMeshDetail);
+      startPrefetches();
+      return mesh;
+    };
+  }
+  else
+  {
+    setup.fine = &estimationMesh;
+    startPrefetches();
+  }
+  Estimate(r, setup, maps, clock);
+  if (meshDuringSweep)
+  {
+    clock.Begin("mesh (CGAL Mesh_3)");
+    clock.End(fineMeshDetail + " (meshed alongside the sweep: " + bmr::SecondsText(fineMesh->MeshingSeconds()) + " s)");
   }
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
-  // The resamples' meshes from here on: the fit's mesh came first.
-  const std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch =
-    premeshed ? nullptr : StartResampleMeshes(movingLabels, scene, settings);
-  const bmr::TetrahedralMesh estimationMesh = r.state.mesh;
-  pipeline::EstimationSetup  setup{
-    &estimationMesh,    coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans,
-    &fixedProbabilities
-  };
   setup.prefetch = prefetch.get();
-  setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
-  const std::unique_ptr<pipeline::RescanMapsPrefetch> rescanMaps = StartRescanMaps(fixedLabels, setup);
   setup.rescanMaps = rescanMaps.get();
-  Estimate(r, setup, maps, clock);
   StateIntervals(r, setup, movingLabels, fixedLabels, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;

@@ -136,11 +136,18 @@ BackgroundMesh::Take(StageClock & clock, const std::string & stage)
     return MeshLabelImage(m_Labels, m_Scene, clock, stage);
   }
   clock.Begin(stage);
-  Made               made = m_Made.get();
-  std::ostringstream detail;
-  detail << made.detail << " (meshed alongside: " << std::fixed << std::setprecision(2) << made.seconds
-         << " s, this stage the wait)";
-  clock.End(detail.str());
+  std::string          detail;
+  bmr::TetrahedralMesh mesh = TakeAlongside(detail);
+  clock.End(detail + " (meshed alongside: " + bmr::SecondsText(m_Seconds) + " s, this stage the wait)");
+  return mesh;
+}
+
+bmr::TetrahedralMesh
+BackgroundMesh::TakeAlongside(std::string & detail)
+{
+  Made made = m_Made.get();
+  detail = made.detail;
+  m_Seconds = made.seconds;
   return std::move(made.mesh);
 }
 

@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -156,6 +157,48 @@ CheckWarmStart(itk::FEMElasticityOptimizer & optimizer)
   ok &= bmr::test::ExpectException(
     "warm start outside the bounds", [&] { optimizer.Update(); }, "outside its bounds");
   optimizer.SetWarmStart({}, 0.0);
+  return ok;
+}
+
+/** A mesh source gives the estimate that input "Mesh" gives, bit for bit, with a coarse mesh to sweep on: it is
+ * called once, on another thread than Update()'s when more than one thread may run (it runs alongside the sweep).
+ * What it throws, Update() throws; with neither a source nor a mesh, Update() is refused. */
+bool
+CheckMeshSource(itk::FEMElasticityOptimizer & optimizer, const itk::TetrahedralMeshObject * mesh)
+{
+  auto coarse = itk::TetrahedralMeshObject::New();
+  coarse->Set(bmr::test::CavityInclusionBall(4.5));
+  optimizer.SetCoarseMesh(coarse);
+  ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
+  const double              fromInput = optimizer.GetEstimatedYoungsModuli().at("inclusion");
+  const std::vector<double> displacement = optimizer.GetOutput()->Get().displacement;
+
+  unsigned int    calls = 0;
+  std::thread::id caller;
+  optimizer.SetMesh(nullptr);
+  optimizer.SetMeshSource([&]() {
+    ++calls;
+    caller = std::this_thread::get_id();
+    return mesh->Get();
+  });
+  ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
+  const double fromSource = optimizer.GetEstimatedYoungsModuli().at("inclusion");
+  std::cout << "mesh source: E " << fromSource << " kPa (input: " << fromInput << " kPa), " << calls << " call(s)"
+            << std::endl;
+  bool ok = Expect(fromSource == fromInput && optimizer.GetOutput()->Get().displacement == displacement,
+                   "the mesh source gives the input mesh's estimate and displacement bit for bit (" +
+                     ToString(fromSource) + " vs " + ToString(fromInput) + " kPa)");
+  ok &= Expect(calls == 1, "the mesh source is called once (got " + ToString(calls) + ")");
+  const bool alongside = itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
+  ok &= Expect((caller != std::this_thread::get_id()) == alongside,
+               std::string("the mesh source is called on ") + (alongside ? "a second thread" : "Update()'s thread"));
+  optimizer.SetMeshSource([]() -> bmr::TetrahedralMesh { itkGenericExceptionMacro(<< "the mesher gave up"); });
+  ok &= bmr::test::ExpectException(
+    "a failing mesh source", [&] { optimizer.Update(); }, "the mesher gave up");
+  optimizer.SetMeshSource(nullptr);
+  ITK_TRY_EXPECT_EXCEPTION(optimizer.Update()); // neither a mesh nor a source
+  optimizer.SetMesh(mesh);
+  optimizer.SetCoarseMesh(nullptr);
   return ok;
 }
 
@@ -316,6 +359,7 @@ itkFEMElasticityOptimizerTest(int, char *[])
   optimizer->WallMotionAlongNormalsOn();
   ok &= CheckUncertainty(*optimizer);
   ok &= CheckWarmStart(*optimizer);
+  ok &= CheckMeshSource(*optimizer, mesh);
 
   std::cout << optimizer;
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
