@@ -21,6 +21,7 @@
 #include "bmrTestUtilities.h"
 
 #include <algorithm>
+#include <iostream>
 #include <cmath>
 #include <map>
 #include <cstdlib>
@@ -36,6 +37,46 @@ RelativeDifference(const std::vector<double> & a, const std::vector<double> & b)
     den += b[i] * b[i];
   }
   return std::sqrt(num / den);
+}
+
+/** Moduli changed by 0.5 % (one up, one down) are solved without refactorizing (IsFactorized() stays false), by
+ * conjugate gradients preconditioned with the kept factorization: equal to a refactorized model's solution to a
+ * relative 1e-10 (the iteration stops at 1e-13 of |u|; the rest is the two solves' rounding), while the change moves
+ * u by far more, so the stale factorization alone would fail. A 5 % change, above the 1 % threshold, refactorizes. */
+bool
+CheckRefactorizationThreshold(const bmr::TetrahedralMesh &      mesh,
+                              const std::vector<std::int32_t> & held,
+                              const std::vector<double> &       forces)
+{
+  using bmr::test::Expect;
+  using bmr::test::ToString;
+  const std::map<std::int32_t, bmr::MaterialParameters> materials{ { 1, { 10.0, 0.35 } }, { 2, { 50.0, 0.4 } } };
+  bmr::LinearElasticModel                               iterated(mesh, materials), direct(mesh, materials);
+  iterated.SetDirichletConditions(held, {});
+  direct.SetDirichletConditions(held, {});
+  direct.SetRefactorizationThreshold(0.0);
+  const std::vector<double> before = iterated.Solve(forces);
+  for (bmr::LinearElasticModel * m : { &iterated, &direct })
+  {
+    m->SetYoungsModulus(1, 10.0 * 0.995);
+    m->SetYoungsModulus(2, 50.0 * 1.005);
+  }
+  const std::vector<double> ui = iterated.Solve(forces), ud = direct.Solve(forces);
+  const double              difference = RelativeDifference(ui, ud), change = RelativeDifference(before, ud);
+  std::cout << "moduli changed by 0.5 %: u moves by " << change << " (relative); iterated against refactorized "
+            << difference << std::endl;
+  bool ok = Expect(!iterated.IsFactorized() && direct.IsFactorized(),
+                   "a 0.5 % change iterates without refactorizing, threshold 0 refactorizes");
+  ok &=
+    Expect(difference <= 1e-10,
+           "the iterated solution equals the refactorized one to a relative 1e-10 (got " + ToString(difference) + ")");
+  ok &= Expect(change >= 1e-3, "the change moves u by a relative 1e-3 or more (got " + ToString(change) + ")");
+  iterated.SetYoungsModulus(2, 50.0 * 1.05);
+  iterated.Solve(forces);
+  ok &= Expect(iterated.IsFactorized(), "a 5 % change refactorizes");
+  ok &= bmr::test::ExpectException(
+    "refactorization threshold 1", [&] { iterated.SetRefactorizationThreshold(1.0); }, "[0, 1)");
+  return ok;
 }
 } // namespace
 
@@ -146,6 +187,7 @@ bmrLinearElasticModelTest(int, char *[])
                        " s -> " + ToString(model.GetTimings().factorize) + " s)");
       }
     }
+    ok &= CheckRefactorizationThreshold(mesh, bottom, forces);
     std::cout << "scale invariance: worst relative difference over k = -6..6: " << worst << std::endl;
     // 1e-10: exact in exact arithmetic; the factorization's rounding is scale-free.
     ok &= Expect(worst <= 1e-10,
