@@ -71,6 +71,9 @@ ParsePhantomSettings(const Arguments & args)
   {
     throw UsageError("--truth-mesh-scale must lie in [0.3, 2] (the truth's mesh sizes relative to the scene's)");
   }
+  o.truthGeometry = args.Choice("--truth-geometry", { "voxels", "anatomy" }) == "anatomy"
+                      ? itk::PhantomSettings::TruthGeometryEnum::Anatomy
+                      : itk::PhantomSettings::TruthGeometryEnum::Voxels;
   o.fixedGridShiftVoxels = args.Number("--fixed-grid-shift-voxels", o.fixedGridShiftVoxels);
   if (!(o.fixedGridShiftVoxels >= 0.0 && o.fixedGridShiftVoxels <= 0.5))
   {

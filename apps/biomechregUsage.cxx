@@ -38,6 +38,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
     "                     [--tracking-noise-mm S (landmarks_tracked.csv: the fixed seeds + N(0, S^2); 0.5)]\n"
     "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"
+    "                     [--truth-geometry voxels|anatomy (the truth meshes the label map's voxels, or the\n"
+    "                      analytic anatomy they sample, whose surfaces stay put when --truth-mesh-scale refines)]\n"
     "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
   { "simulate",
     "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"

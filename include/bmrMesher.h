@@ -77,6 +77,17 @@ MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & l
                    double                                                      boundingRadius,
                    const MeshingParameters &                                   parameters);
 
+/** Meshes the labeled domain given by \a labelAt (physical mm -> label, 0 outside) within the box of \a grid's voxel
+ * centres (the extent MeshLabelVolume() meshes), seeding the refinement from \a gridLabels, the labels at those
+ * centres (grid.GetNumberOfVoxels() values, index 0 fastest; normally labelAt's own voxelization). The surfaces are
+ * labelAt's, not a label image's staircase: they stay put when the mesh is refined, so a field simulated on it
+ * converges as the elements allow instead of following the staircase's corners (the phantom's truth). */
+BiomechanicalRegistration_EXPORT TetrahedralMesh
+MeshImplicitLabelsOnGrid(const std::function<std::int32_t(double, double, double)> & labelAt,
+                         const GridGeometry &                                        grid,
+                         const std::vector<std::int32_t> &                           gridLabels,
+                         const MeshingParameters &                                   parameters);
+
 } // namespace bmr
 
 #endif

@@ -23,6 +23,7 @@
 
 #include <iosfwd>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -150,6 +151,19 @@ PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<dou
  * voxel centers: a deformed anatomy voxelized once, as PelvisLabelsAt(). */
 BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 SphereLabelsAt(const SpherePhantomParameters & parameters, const std::vector<double> & points);
+
+/** The label of the anatomy at one physical point [mm] (x, y, z): what PelvisLabelsAt() and SphereLabelsAt() give
+ * point by point. */
+using PhantomLabelFunction = std::function<std::int32_t(double, double, double)>;
+
+/** The pelvis phantom's anatomy as a function of the point (PelvisLabelsAt(), one point at a time), e.g. to mesh
+ * the anatomy itself instead of its voxelization (MeshSceneFunction()). */
+BiomechanicalRegistration_EXPORT PhantomLabelFunction
+PelvisLabelFunction(const PelvisPhantomParameters & parameters);
+
+/** The concentric spheres as a function of the point (SphereLabelsAt(), one point at a time). */
+BiomechanicalRegistration_EXPORT PhantomLabelFunction
+SphereLabelFunction(const SpherePhantomParameters & parameters);
 
 /** Builds the concentric-spheres phantom (core 60 HU, shell 20 HU, air -1000 HU). */
 BiomechanicalRegistration_EXPORT PhantomVolume

@@ -23,6 +23,8 @@
 #include "bmrLinearElasticModel.h"
 #include "bmrScene.h"
 
+#include <functional>
+
 namespace bmr {
 
 /** \brief Builds the FEM mesh a scene needs from a moving label volume.
@@ -37,6 +39,16 @@ namespace bmr {
  * Throws when a label the scene simulates did not survive meshing. */
 BiomechanicalRegistration_EXPORT TetrahedralMesh
 MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene);
+
+/** As MeshSceneLabels(), but the surfaces are those of \a labelAt (physical mm -> label), the anatomy that
+ * \a labels voxelizes on \a grid (MeshImplicitLabelsOnGrid()): the region of interest, the roles and the
+ * mesh sizes come from the voxels as there, the geometry from the function. Used for the phantom's truth, whose
+ * surfaces must not move with its mesh sizes. */
+BiomechanicalRegistration_EXPORT TetrahedralMesh
+MeshSceneFunction(const std::function<std::int32_t(double, double, double)> & labelAt,
+                  const std::int32_t *                                        labels,
+                  const GridGeometry &                                        grid,
+                  const Scene &                                               scene);
 
 /** Elements across a simulated label (bmr::LabelResolution) below which MeshResolutionWarnings() warns. */
 constexpr double MinimumElementsAcross = 2.0;

@@ -348,6 +348,15 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   double               trackingNoiseMM{ 0.5 }; ///< sigma of the tracked treatment markers' noise [mm] per axis
   bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
+  /** What the truth's mesh follows: the moving label map's voxels (Voxels), or the analytic anatomy those voxels
+   * sample (Anatomy: bmr::MeshSceneFunction(), smooth surfaces that stay put when the truth is refined, so that its
+   * field converges as the elements allow). The fixed labels voxelize the deformed anatomy either way. */
+  enum class TruthGeometryEnum : std::uint8_t
+  {
+    Voxels,
+    Anatomy
+  };
+  TruthGeometryEnum truthGeometry{ TruthGeometryEnum::Voxels };
   /** The fixed scan's grid is the moving one shifted by U(-this, this) voxels along each axis (seeded by seed):
    * two scans are not aligned to the voxel. 0 (default): the same grid, whose quantization then partly cancels
    * between the scans where the tissue moves little. */

@@ -273,9 +273,12 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
     motion[wall.first] = { { "max", Compact(wall.second[0]) }, { "mean", Compact(wall.second[1]) } };
   }
   j["wall_motion_mm"] = motion;
-  j["truth_mesh"] = { { "tetrahedra", pair.truthTetrahedra },
-                      { "nodes", pair.truthNodes },
-                      { "cell_size_mm", pair.truthScene.mesh.cellSize } };
+  j["truth_mesh"] = {
+    { "tetrahedra", pair.truthTetrahedra },
+    { "nodes", pair.truthNodes },
+    { "cell_size_mm", pair.truthScene.mesh.cellSize },
+    { "geometry", settings.truthGeometry == PhantomSettings::TruthGeometryEnum::Anatomy ? "anatomy" : "voxels" }
+  };
   if (pelvis)
   {
     const bmr::PelvisAnatomy & a = settings.organs;

@@ -409,6 +409,36 @@ ExtractMesh(const Complex & c3t3, const TMapToPhysical & toPhysical, const char 
   return mesh;
 }
 
+/** Meshes the labeled domain of \a labelAt (0 outside the ball (\a center, \a boundingRadius), which must hold it)
+ * with CGAL's exact function domain, seeded from \a lattice; \a toPhysical maps the result. */
+template<typename TLabelAt, typename TToPhysical>
+TetrahedralMesh
+MeshLabelFunction(const TLabelAt &              labelAt,
+                  const std::array<double, 3> & center,
+                  double                        boundingRadius,
+                  const SampleLattice &         lattice,
+                  const MeshingParameters &     parameters,
+                  const TToPhysical &           toPhysical,
+                  const char *                  where)
+{
+  // Exact function: the bisection only needs to be well below facetDistance.
+  const double relativeErrorBound = 2.0 * 0.01 * parameters.facetDistance / (2.0 * std::sqrt(3.0) * boundingRadius);
+
+  CGAL::get_default_random() = CGAL::Random(parameters.randomSeed);
+  CGAL::Random domainRandom(parameters.randomSeed); // must outlive the domain
+  namespace p = CGAL::parameters;
+  // Not create_implicit_mesh_domain(): that one wraps a signed function into a
+  // single subdomain (f < 0 -> 1) and would lose the labels.
+  const MeshDomain domain(std::function<int(const Point &)>([&labelAt](const Point & point) {
+                            return static_cast<int>(labelAt(point.x(), point.y(), point.z()));
+                          }),
+                          Kernel::Sphere_3(Point(center[0], center[1], center[2]), boundingRadius * boundingRadius),
+                          p::relative_error_bound = relativeErrorBound,
+                          p::p_rng = &domainRandom);
+  const Complex    c3t3 = GenerateMesh(domain, lattice, parameters, where);
+  return ExtractMesh(c3t3, toPhysical, where);
+}
+
 } // namespace
 
 
@@ -557,26 +587,67 @@ MeshImplicitLabels(const std::function<std::int32_t(double, double, double)> & l
   }
   lattice.labels = lattice.ownedLabels.data();
 
-  // Exact function: the bisection only needs to be well below facetDistance.
-  const double relativeErrorBound = 2.0 * 0.01 * parameters.facetDistance / (2.0 * std::sqrt(3.0) * boundingRadius);
-
-  CGAL::get_default_random() = CGAL::Random(parameters.randomSeed);
-  CGAL::Random domainRandom(parameters.randomSeed); // must outlive the domain
-  namespace p = CGAL::parameters;
-  // Not create_implicit_mesh_domain(): that one wraps a signed function into a
-  // single subdomain (f < 0 -> 1) and would lose the labels.
-  const MeshDomain domain(std::function<int(const Point &)>([clippedLabel](const Point & point) {
-                            return static_cast<int>(clippedLabel(point.x(), point.y(), point.z()));
-                          }),
-                          Kernel::Sphere_3(Point(center[0], center[1], center[2]), radius2),
-                          p::relative_error_bound = relativeErrorBound,
-                          p::p_rng = &domainRandom);
-
-  const Complex c3t3 = GenerateMesh(domain, lattice, parameters, where);
-  const auto    toPhysical = [](const Point & point) {
+  const auto toPhysical = [](const Point & point) {
     return std::array<double, 3>{ { point.x(), point.y(), point.z() } };
   };
-  return ExtractMesh(c3t3, toPhysical, where);
+  return MeshLabelFunction(clippedLabel, center, boundingRadius, lattice, parameters, toPhysical, where);
+}
+
+TetrahedralMesh
+MeshImplicitLabelsOnGrid(const std::function<std::int32_t(double, double, double)> & labelAt,
+                         const GridGeometry &                                        grid,
+                         const std::vector<std::int32_t> &                           gridLabels,
+                         const MeshingParameters &                                   parameters)
+{
+  const char * where = "bmr::MeshImplicitLabelsOnGrid";
+  grid.Validate("label grid");
+  CheckParameters(where, parameters);
+  if (!labelAt)
+  {
+    Fail(where, "no labeling function given");
+  }
+  if (gridLabels.size() != grid.GetNumberOfVoxels() || grid.size[0] < 2 || grid.size[1] < 2 || grid.size[2] < 2)
+  {
+    Fail(where, "the grid's labels must hold one value per voxel of a grid with at least 2 voxels along each axis");
+  }
+  // As MeshLabelVolume(): meshed in the scaled index space q = diag(spacing) index, whose box [0, (n - 1) h] is the
+  // voxel centres', and mapped to physical space afterwards.
+  const auto toPhysical = [&grid](const Point & point) {
+    const double          q[3] = { point.x(), point.y(), point.z() };
+    std::array<double, 3> x;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      x[r] = grid.origin[r] + grid.direction[3 * r] * q[0] + grid.direction[3 * r + 1] * q[1] +
+             grid.direction[3 * r + 2] * q[2];
+    }
+    return x;
+  };
+  std::array<double, 3> extent, center;
+  double                radius2 = 0.0;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    extent[d] = static_cast<double>(grid.size[d] - 1) * grid.spacing[d];
+    center[d] = 0.5 * extent[d];
+    radius2 += center[d] * center[d];
+  }
+  const auto clippedLabel = [&labelAt, &toPhysical, extent](double x, double y, double z) -> std::int32_t {
+    if (x < 0.0 || y < 0.0 || z < 0.0 || x > extent[0] || y > extent[1] || z > extent[2])
+    {
+      return 0;
+    }
+    const std::array<double, 3> p = toPhysical(Point(x, y, z));
+    return labelAt(p[0], p[1], p[2]);
+  };
+  SampleLattice lattice;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    lattice.size[d] = static_cast<std::ptrdiff_t>(grid.size[d]);
+  }
+  lattice.step = grid.spacing;
+  lattice.labels = gridLabels.data();
+  // The ball holds the box, with room for the bisection's end points.
+  const double boundingRadius = std::sqrt(radius2) + std::max({ grid.spacing[0], grid.spacing[1], grid.spacing[2] });
+  return MeshLabelFunction(clippedLabel, center, boundingRadius, lattice, parameters, toPhysical, where);
 }
 
 } // namespace bmr

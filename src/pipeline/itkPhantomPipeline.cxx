@@ -20,6 +20,8 @@
 #include "itkMarkerPipeline.h"
 
 #include "bmrError.h"
+#include "bmrPhantom.h"
+#include "bmrSimulation.h"
 #include "bmrDisplacementFieldRasterizer.h"
 #include "bmrTetrahedralMesh.h"
 #include "itkGridGeometryConversion.h"
@@ -27,7 +29,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <ostream>
+#include <sstream>
 #include <random>
 
 namespace itk {
@@ -120,46 +124,72 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
   return truth;
 }
 
-/** The truth may hold a stiffer tumour inside the prostate (dissertation Table 3.4): a ball at the
- * prostate's centroid with the requested fraction of its volume, labeled only in the truth's label map
- * and scene. The estimator sees one homogeneous prostate. */
-std::vector<std::int32_t>
-WithTumour(std::vector<std::int32_t> labels, const bmr::GridGeometry & g, const PhantomSettings & s, bmr::Scene & truth)
+/** The index of voxel \a v (index 0 fastest). */
+std::array<double, 3>
+VoxelIndex(const bmr::GridGeometry & g, std::size_t v)
 {
-  const auto at = [&g](std::size_t v) {
-    return g.IndexToPoint(
-      { { double(v % g.size[0]), double((v / g.size[0]) % g.size[1]), double(v / (g.size[0] * g.size[1])) } });
-  };
-  std::array<double, 3> c{ { 0, 0, 0 } };
-  std::size_t           n = 0;
+  return { { double(v % g.size[0]), double((v / g.size[0]) % g.size[1]), double(v / (g.size[0] * g.size[1])) } };
+}
+
+/** The truth may hold a stiffer tumour inside the prostate (dissertation Table 3.4): a ball at the prostate's
+ * centroid with the requested fraction of its volume [mm], labeled only in the truth's label map (or anatomy) and
+ * scene. The estimator sees one homogeneous prostate. */
+struct TumourBall
+{
+  std::array<double, 3> center{ { 0, 0, 0 } };
+  double                radius{ 0.0 };
+
+  bool
+  Contains(const std::array<double, 3> & x) const
+  {
+    return std::hypot(x[0] - center[0], x[1] - center[1], x[2] - center[2]) <= radius;
+  }
+};
+
+TumourBall
+TumourBallOf(const std::vector<std::int32_t> & labels, const bmr::GridGeometry & g, const PhantomSettings & s)
+{
+  TumourBall  ball;
+  std::size_t n = 0;
   for (std::size_t v = 0; v < labels.size(); ++v)
   {
     if (labels[v] == bmr::PelvisProstate)
     {
-      const auto x = at(v);
+      const auto x = g.IndexToPoint(VoxelIndex(g, v));
       for (int a = 0; a < 3; ++a)
       {
-        c[a] += x[a];
+        ball.center[a] += x[a];
       }
       ++n;
     }
   }
   const double voxel = g.spacing[0] * g.spacing[1] * g.spacing[2];
-  const double r = std::cbrt(s.tumourFraction * double(n) * voxel * 3.0 / (4.0 * 3.14159265358979));
+  ball.radius = std::cbrt(s.tumourFraction * double(n) * voxel * 3.0 / (4.0 * 3.14159265358979));
   for (int a = 0; a < 3; ++a)
   {
-    c[a] /= double(std::max<std::size_t>(n, 1));
+    ball.center[a] /= double(std::max<std::size_t>(n, 1));
   }
+  return ball;
+}
+
+/** Adds the tumour's label and material to the truth scene. */
+void
+AddTumourLabel(const PhantomSettings & s, bmr::Scene & truth)
+{
+  truth.labels.push_back({ "tumour", PelvisTumour, bmr::LabelRoleEnum::Material, s.tumourE, s.prostateNu });
+  truth.mesh.cellSizePerLabel[PelvisTumour] = truth.mesh.cellSizePerLabel[bmr::PelvisProstate];
+}
+
+std::vector<std::int32_t>
+WithTumour(std::vector<std::int32_t> labels, const bmr::GridGeometry & g, const TumourBall & ball)
+{
   for (std::size_t v = 0; v < labels.size(); ++v)
   {
-    const auto x = at(v);
-    if (labels[v] == bmr::PelvisProstate && std::hypot(x[0] - c[0], x[1] - c[1], x[2] - c[2]) <= r)
+    if (labels[v] == bmr::PelvisProstate && ball.Contains(g.IndexToPoint(VoxelIndex(g, v))))
     {
       labels[v] = PelvisTumour;
     }
   }
-  truth.labels.push_back({ "tumour", PelvisTumour, bmr::LabelRoleEnum::Material, s.tumourE, s.prostateNu });
-  truth.mesh.cellSizePerLabel[PelvisTumour] = truth.mesh.cellSizePerLabel[bmr::PelvisProstate];
   return labels;
 }
 
@@ -171,15 +201,44 @@ PullBackPoints(const bmr::GridGeometry & grid, const BiomechanicalFieldType * fi
   const auto *        d = field->GetBufferPointer();
   for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
   {
-    const auto x = grid.IndexToPoint({ { double(v % grid.size[0]),
-                                         double((v / grid.size[0]) % grid.size[1]),
-                                         double(v / (grid.size[0] * grid.size[1])) } });
+    const auto x = grid.IndexToPoint(VoxelIndex(grid, v));
     for (int c = 0; c < 3; ++c)
     {
       points[3 * v + c] = x[c] + d[v][c];
     }
   }
   return points;
+}
+
+/** The analytic anatomy as a function of the point (its labels at physical mm). */
+bmr::PhantomLabelFunction
+AnatomyLabelFunction(const PhantomSettings & s)
+{
+  if (IsPelvis(s))
+  {
+    return bmr::PelvisLabelFunction(PelvisParameters(s));
+  }
+  bmr::SpherePhantomParameters p;
+  p.grid = s.grid;
+  return bmr::SphereLabelFunction(p);
+}
+
+/** The truth's mesh of the anatomy \a labelAt itself (bmr::MeshSceneFunction), whose voxelization \a labels is,
+ * as one stage. */
+bmr::TetrahedralMesh
+MeshTruthAnatomy(const bmr::PhantomLabelFunction &   labelAt,
+                 const BiomechanicalLabelImageType * labels,
+                 const bmr::Scene &                  truth,
+                 pipeline::StageClock &              clock)
+{
+  clock.Begin("mesh (CGAL Mesh_3, the anatomy's own surfaces)");
+  const bmr::TetrahedralMesh mesh =
+    bmr::MeshSceneFunction(labelAt, labels->GetBufferPointer(), GridGeometryOf(labels), truth);
+  std::ostringstream detail;
+  detail << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << mesh.GetNumberOfPoints() << " nodes, min dihedral "
+         << std::setprecision(1) << bmr::ComputeMeshQuality(mesh).minimumDihedralAngleDegrees << " deg";
+  clock.End(detail.str());
+  return mesh;
 }
 
 /** The deformed analytic anatomy's labels at \a points [mm, 3 per point]. */
@@ -375,10 +434,24 @@ MakePhantomPair(const PhantomSettings &    s,
     movingReady(pair.movingLabels.GetPointer(), pair.scene);
   }
   BiomechanicalLabelImageType::Pointer truthLabels = pair.movingLabels;
+  bmr::PhantomLabelFunction            truthAnatomy;
+  if (s.truthGeometry == PhantomSettings::TruthGeometryEnum::Anatomy)
+  {
+    truthAnatomy = AnatomyLabelFunction(s);
+  }
   if (IsPelvis(s) && s.tumourFraction > 0.0)
   {
-    truthLabels = MakeImageOnGrid<BiomechanicalLabelImageType>(
-      moving.grid, WithTumour(moving.labels, moving.grid, s, pair.truthScene));
+    const TumourBall tumour = TumourBallOf(moving.labels, moving.grid, s);
+    AddTumourLabel(s, pair.truthScene);
+    truthLabels =
+      MakeImageOnGrid<BiomechanicalLabelImageType>(moving.grid, WithTumour(moving.labels, moving.grid, tumour));
+    if (truthAnatomy)
+    {
+      truthAnatomy = [anatomy = truthAnatomy, tumour](double x, double y, double z) {
+        const std::int32_t label = anatomy(x, y, z);
+        return label == bmr::PelvisProstate && tumour.Contains({ { x, y, z } }) ? PelvisTumour : label;
+      };
+    }
   }
   // The fixed scan's own grid: the moving one shifted by a sub-voxel offset (fixedGridShiftVoxels), as two scans of
   // a patient are never aligned to the voxel. The truth field and the fixed images live on it.
@@ -388,7 +461,8 @@ MakePhantomPair(const PhantomSettings &    s,
   if (truthMesh.points.empty())
   {
     pipeline::StageClock meshClock(observer, pair.stages);
-    truthMesh = pipeline::MeshLabelImage(truthLabels, pair.truthScene, meshClock, "mesh (CGAL Mesh_3)");
+    truthMesh = truthAnatomy ? MeshTruthAnatomy(truthAnatomy, truthLabels, pair.truthScene, meshClock)
+                             : pipeline::MeshLabelImage(truthLabels, pair.truthScene, meshClock, "mesh (CGAL Mesh_3)");
   }
   const SimulationResult truth = SimulateMesh(truthMesh, pair.truthScene, fixedReference, truthLabels, observer, false);
   pair.truthField = truth.pullBack;

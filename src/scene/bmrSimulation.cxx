@@ -231,37 +231,76 @@ CheckPresentLabelsMeshed(const Scene & scene, const std::set<std::int32_t> & pre
 }
 } // namespace
 
+namespace {
+/** What MeshSceneLabels() and MeshSceneFunction() mesh: the region of interest's grid and voxels (outside labels
+ * as 0), the mesh sizes (excluded labels coarse) and what the result is checked against. */
+struct SceneMeshInput
+{
+  GridGeometry              roi;
+  std::vector<std::int32_t> cropped;
+  MeshingParameters         parameters;
+  std::vector<std::int32_t> outside;
+  std::vector<std::int32_t> excluded;
+  std::set<std::int32_t>    present;
+};
+
+SceneMeshInput
+PrepareSceneMesh(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
+{
+  grid.Validate("moving label image");
+  SceneMeshInput in;
+  in.outside = scene.OutsideLabels();
+  in.present = PresentLabels(labels, grid.GetNumberOfVoxels());
+  scene.ValidateAgainstLabels(in.present, "the moving label image");
+  std::array<std::size_t, 3> lo, hi;
+  RegionOfInterestBox(labels, grid, scene, RegionOfInterestLabels(scene), lo, hi);
+  in.cropped = CropLabels(labels, grid, lo, hi, in.outside, in.roi);
+  // Excluded regions only contribute their surface: mesh their interior coarsely.
+  in.parameters = scene.mesh;
+  in.excluded = scene.ExcludedLabels();
+  for (std::int32_t v : in.excluded)
+  {
+    if (in.parameters.cellSizePerLabel.count(v) == 0)
+    {
+      in.parameters.cellSizePerLabel[v] = 4.0 * in.parameters.cellSize;
+    }
+  }
+  return in;
+}
+
+TetrahedralMesh
+FinishSceneMesh(const TetrahedralMesh & full, const Scene & scene, const SceneMeshInput & in)
+{
+  TetrahedralMesh mesh = ExtractSubmesh(full, in.excluded);
+  CheckMinimumDihedralAngle(scene, mesh);
+  CheckPresentLabelsMeshed(scene, in.present, mesh);
+  return mesh;
+}
+} // namespace
+
 TetrahedralMesh
 MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
 {
-  grid.Validate("moving label image");
-  const std::size_t               n = grid.GetNumberOfVoxels();
-  const std::vector<std::int32_t> outside = scene.OutsideLabels();
-  const std::set<std::int32_t>    present = PresentLabels(labels, n);
-  const std::set<std::int32_t>    roiLabels = RegionOfInterestLabels(scene);
-  scene.ValidateAgainstLabels(present, "the moving label image");
+  const SceneMeshInput in = PrepareSceneMesh(labels, grid, scene);
+  return FinishSceneMesh(MeshLabelVolume(in.cropped.data(), in.roi, in.parameters), scene, in);
+}
 
-  std::array<std::size_t, 3> lo, hi;
-  RegionOfInterestBox(labels, grid, scene, roiLabels, lo, hi);
-  GridGeometry                    roi;
-  const std::vector<std::int32_t> cropped = CropLabels(labels, grid, lo, hi, outside, roi);
-
-  // Excluded regions only contribute their surface: mesh their interior coarsely.
-  MeshingParameters               parameters = scene.mesh;
-  const std::vector<std::int32_t> excluded = scene.ExcludedLabels();
-  for (std::int32_t v : excluded)
+TetrahedralMesh
+MeshSceneFunction(const std::function<std::int32_t(double, double, double)> & labelAt,
+                  const std::int32_t *                                        labels,
+                  const GridGeometry &                                        grid,
+                  const Scene &                                               scene)
+{
+  if (!labelAt)
   {
-    if (parameters.cellSizePerLabel.count(v) == 0)
-    {
-      parameters.cellSizePerLabel[v] = 4.0 * parameters.cellSize;
-    }
+    Fail("MeshSceneFunction", "no labeling function given");
   }
-  const TetrahedralMesh full = MeshLabelVolume(cropped.data(), roi, parameters);
-  TetrahedralMesh       mesh = ExtractSubmesh(full, excluded);
-
-  CheckMinimumDihedralAngle(scene, mesh);
-  CheckPresentLabelsMeshed(scene, present, mesh);
-  return mesh;
+  const SceneMeshInput in = PrepareSceneMesh(labels, grid, scene);
+  const auto           simulated = [&labelAt, &in](double x, double y, double z) -> std::int32_t {
+    const std::int32_t v = labelAt(x, y, z);
+    return std::find(in.outside.begin(), in.outside.end(), v) == in.outside.end() ? v : 0;
+  };
+  return FinishSceneMesh(MeshImplicitLabelsOnGrid(simulated, in.roi, in.cropped, in.parameters), scene, in);
 }
 
 BoundaryConditions

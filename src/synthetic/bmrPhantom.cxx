@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -830,25 +831,39 @@ MakePelvisPhantom(const PelvisPhantomParameters & parameters)
   return volume;
 }
 
+namespace {
 std::vector<std::int32_t>
-PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<double> & points)
+LabelsAt(const PhantomLabelFunction & labelAt, const std::vector<double> & points, const char * where)
 {
-  const char * where = "PelvisLabelsAt";
-  CheckPhantomGrid(parameters.grid, "pelvis phantom grid", where);
   if (points.size() % 3 != 0)
   {
     Fail(where, "expected 3 coordinates per point");
   }
-  const Vec3          center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
-  const OrganGeometry organs = Organs(parameters.anatomy);
-  const PelvisModel   model(
-    center, organs, PlaceSeeds(center, organs, parameters.numberOfSeeds, parameters.seedPlacementSeed));
   std::vector<std::int32_t> labels(points.size() / 3);
   for (std::size_t n = 0; n < labels.size(); ++n)
   {
-    labels[n] = PelvisTissueLabel[model.Classify({ { points[3 * n], points[3 * n + 1], points[3 * n + 2] } })];
+    labels[n] = labelAt(points[3 * n], points[3 * n + 1], points[3 * n + 2]);
   }
   return labels;
+}
+} // namespace
+
+PhantomLabelFunction
+PelvisLabelFunction(const PelvisPhantomParameters & parameters)
+{
+  const char * where = "PelvisLabelFunction";
+  CheckPhantomGrid(parameters.grid, "pelvis phantom grid", where);
+  const Vec3          center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
+  const OrganGeometry organs = Organs(parameters.anatomy);
+  const auto          model = std::make_shared<const PelvisModel>(
+    center, organs, PlaceSeeds(center, organs, parameters.numberOfSeeds, parameters.seedPlacementSeed));
+  return [model](double x, double y, double z) { return PelvisModel::Label(model->Classify({ { x, y, z } })); };
+}
+
+std::vector<std::int32_t>
+PelvisLabelsAt(const PelvisPhantomParameters & parameters, const std::vector<double> & points)
+{
+  return LabelsAt(PelvisLabelFunction(parameters), points, "PelvisLabelsAt");
 }
 
 namespace {
@@ -948,22 +963,19 @@ MeasurePelvisClearance(const PelvisAnatomy & anatomy)
   return clearance;
 }
 
+PhantomLabelFunction
+SphereLabelFunction(const SpherePhantomParameters & parameters)
+{
+  const Vec3 center =
+    PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, "SphereLabelFunction");
+  const auto model = std::make_shared<const SphereModel>(center, parameters.innerRadius, parameters.outerRadius);
+  return [model](double x, double y, double z) { return SphereModel::Label(model->Classify({ { x, y, z } })); };
+}
+
 std::vector<std::int32_t>
 SphereLabelsAt(const SpherePhantomParameters & parameters, const std::vector<double> & points)
 {
-  const char * where = "SphereLabelsAt";
-  if (points.size() % 3 != 0)
-  {
-    Fail(where, "expected 3 coordinates per point");
-  }
-  const Vec3                center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
-  const SphereModel         model(center, parameters.innerRadius, parameters.outerRadius);
-  std::vector<std::int32_t> labels(points.size() / 3);
-  for (std::size_t n = 0; n < labels.size(); ++n)
-  {
-    labels[n] = SphereModel::Label(model.Classify({ { points[3 * n], points[3 * n + 1], points[3 * n + 2] } }));
-  }
-  return labels;
+  return LabelsAt(SphereLabelFunction(parameters), points, "SphereLabelsAt");
 }
 
 PhantomVolume

@@ -1,0 +1,29 @@
+# phantom --truth-geometry anatomy: the truth is meshed from the analytic anatomy (truth.json says so), which gives
+# another truth mesh than the label map's voxels (the mesher's own test checks that its surfaces lie on the analytic
+# ones); the default stays the voxels.
+# Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregTruthGeometryCheck.cmake
+file(REMOVE_RECURSE ${OUT})
+foreach(geometry voxels anatomy)
+  execute_process(COMMAND ${CLI} phantom --scene spheres --size 40,40,40 --spacing 2,2,2 --seed 5
+    --truth-mesh-scale 1.5 --truth-geometry ${geometry} --out ${OUT}/${geometry} RESULT_VARIABLE rc OUTPUT_QUIET)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "phantom --truth-geometry ${geometry} failed")
+  endif()
+  file(READ ${OUT}/${geometry}/truth.json json)
+  string(JSON recorded GET "${json}" truth_mesh geometry)
+  string(JSON tetrahedra_${geometry} GET "${json}" truth_mesh tetrahedra)
+  message(STATUS "--truth-geometry ${geometry}: truth.json says ${recorded}, ${tetrahedra_${geometry}} tetrahedra")
+  if(NOT recorded STREQUAL geometry)
+    message(SEND_ERROR "truth.json records the truth geometry as \"${recorded}\", not \"${geometry}\"")
+  endif()
+endforeach()
+if(tetrahedra_voxels EQUAL tetrahedra_anatomy)
+  message(SEND_ERROR "the anatomy's truth mesh has as many tetrahedra as the voxels' (${tetrahedra_voxels})")
+endif()
+execute_process(COMMAND ${CLI} phantom --scene spheres --size 40,40,40 --spacing 2,2,2 --truth-mesh-scale 1.5 --out ${OUT}/default
+  RESULT_VARIABLE rc OUTPUT_QUIET)
+file(READ ${OUT}/default/truth.json json)
+string(JSON recorded GET "${json}" truth_mesh geometry)
+if(NOT rc EQUAL 0 OR NOT recorded STREQUAL "voxels")
+  message(SEND_ERROR "the default truth geometry is \"${recorded}\", not the voxels")
+endif()
