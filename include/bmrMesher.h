@@ -23,6 +23,7 @@
 
 #include <functional>
 #include <map>
+#include <vector>
 
 namespace bmr {
 
@@ -53,6 +54,19 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
    * sliver is all but flat: its stiffness matrix is near singular and the pull-back inside it ill defined. */
   double       minimumDihedralAngle{ 0.1 };
   unsigned int randomSeed{ 0 };
+  /** Local refinement: within refineDistance [mm] of the voxels labeled with one of refineNearLabels (measured on
+   * the label grid), cells and surface facets are at most refineSize [mm]. For the thin tissue between an organ
+   * whose modulus is estimated and the walls that load it, which a uniform size resolves only at a far higher
+   * cost. Off when the list is empty or refineSize is 0. */
+  std::vector<std::int32_t> refineNearLabels;
+  double                    refineDistance{ 0.0 };
+  double                    refineSize{ 0.0 };
+
+  bool
+  Refines() const
+  {
+    return !refineNearLabels.empty() && refineSize > 0.0;
+  }
 };
 
 /** Meshes every non-zero label of a label volume with CGAL Mesh_3

@@ -463,7 +463,8 @@ BiomechanicalRegistration_EXPORT BiomechanicalFieldType::Pointer
                                                    const DemonsSettings &              settings,
                                                    PipelineObserver *                  observer = nullptr);
 
-/** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes) multiplied by \a factor. */
+/** \a scene with every mesh size (cell, facet, facet distance, per-label cell sizes, the local refinement's size but
+ * not its distance) multiplied by \a factor. */
 BiomechanicalRegistration_EXPORT bmr::Scene
                                  ScaledMeshSizes(bmr::Scene scene, double factor);
 

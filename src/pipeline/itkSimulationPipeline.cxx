@@ -191,6 +191,7 @@ ScaledMeshSizes(bmr::Scene scene, double factor)
   scene.mesh.cellSize *= factor;
   scene.mesh.facetSize *= factor;
   scene.mesh.facetDistance *= factor;
+  scene.mesh.refineSize *= factor; // a size; its distance is the anatomy's, not scaled
   for (auto & kv : scene.mesh.cellSizePerLabel)
   {
     kv.second *= factor;

@@ -417,6 +417,10 @@ CheckMeshingParameters(const MeshingParameters & m, const std::string & src)
       SceneError(src, "mesh.cell_size_per_label_mm", "sizes must be > 0");
     }
   }
+  if (!(m.refineDistance >= 0.0) || !(m.refineSize >= 0.0) || (m.Refines() && !(m.refineSize > 0.0)))
+  {
+    SceneError(src, "mesh.refine_near", "distance_mm and size_mm must be >= 0");
+  }
   if (!(m.minimumDihedralAngle >= 0.0 && m.minimumDihedralAngle < 70.0))
   {
     SceneError(src, "mesh.minimum_dihedral_angle_deg", "must lie in [0, 70) degrees");
@@ -790,7 +794,8 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
               "optimize",
               "exude",
               "random_seed",
-              "minimum_dihedral_angle_deg" },
+              "minimum_dihedral_angle_deg",
+              "refine_near" },
             source,
             "mesh");
   if (j.contains("cell_size_mm"))
@@ -821,6 +826,32 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
   {
     SceneError(source, "mesh.cell_size_per_label_mm", "must be an object {label name: size in mm}");
   }
+}
+
+// "refine_near": {"labels": [names], "distance_mm": d, "size_mm": s} (MeshingParameters::refineNearLabels).
+void
+ParseRefineNear(const Json & j, const std::string & source, Scene & scene)
+{
+  if (!j.is_object())
+  {
+    SceneError(source, "mesh.refine_near", "must be an object {labels, distance_mm, size_mm}");
+  }
+  CheckKeys(j, { "labels", "distance_mm", "size_mm" }, source, "mesh.refine_near");
+  if (!j.contains("labels") || !j["labels"].is_array() || j["labels"].empty())
+  {
+    SceneError(source, "mesh.refine_near.labels", "must be a non-empty list of label names");
+  }
+  for (const Json & name : j["labels"])
+  {
+    const SceneLabel * l = name.is_string() ? scene.FindLabel(name.get<std::string>()) : nullptr;
+    if (!l)
+    {
+      SceneError(source, "mesh.refine_near.labels", "holds " + name.dump() + ", which is not a label of the scene");
+    }
+    scene.mesh.refineNearLabels.push_back(l->value);
+  }
+  scene.mesh.refineDistance = GetNumber(j, "distance_mm", source, "mesh.refine_near");
+  scene.mesh.refineSize = GetNumber(j, "size_mm", source, "mesh.refine_near");
 }
 
 // Per-label sizes refer to label names, resolved once the labels are known.
@@ -913,6 +944,10 @@ ParseScene(const std::string & text, const std::string & source)
   if (root.contains("mesh") && root["mesh"].contains("cell_size_per_label_mm"))
   {
     ParseCellSizePerLabel(root["mesh"]["cell_size_per_label_mm"], source, scene);
+  }
+  if (root.contains("mesh") && root["mesh"].contains("refine_near"))
+  {
+    ParseRefineNear(root["mesh"]["refine_near"], source, scene);
   }
   scene.Validate();
   return scene;
@@ -1021,6 +1056,18 @@ SceneToJson(const Scene & scene)
       per[l ? l->name : std::to_string(kv.first)] = kv.second;
     }
     mesh["cell_size_per_label_mm"] = per;
+  }
+  if (scene.mesh.Refines())
+  {
+    Json names = Json::array();
+    for (std::int32_t value : scene.mesh.refineNearLabels)
+    {
+      const SceneLabel * l = scene.FindLabelValue(value);
+      names.push_back(l ? l->name : std::to_string(value));
+    }
+    mesh["refine_near"] = { { "labels", names },
+                            { "distance_mm", scene.mesh.refineDistance },
+                            { "size_mm", scene.mesh.refineSize } };
   }
   root["mesh"] = mesh;
   return root.dump(2) + "\n";

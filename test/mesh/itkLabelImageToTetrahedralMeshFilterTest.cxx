@@ -189,6 +189,70 @@ CheckImplicitLabelsOnGrid()
   return ok;
 }
 
+/** Local refinement (MeshingParameters::refineNearLabels): a ball of label 2 (radius 5 mm) in a 40 mm cube of label
+ * 1, sizes 6 mm, refined to 1.5 mm within 4 mm of the ball. Elements whose centroid lies within 1 mm of the ball's
+ * surface (3 mm inside the refined shell, which leaves room for the circumcentre, where Mesh_3 reads the size) have
+ * no edge longer than twice 1.5 mm (the circumradius bound); elements 12 mm or more from the ball keep the coarse
+ * size (some edge longer than 3 mm); and the refinement adds elements. */
+bool
+CheckLocalRefinement()
+{
+  using bmr::test::Expect;
+  using bmr::test::ToString;
+  bmr::GridGeometry grid;
+  grid.size = { { 40, 40, 40 } };
+  const double              c = 19.5, radius = 5.0;
+  std::vector<std::int32_t> labels(grid.GetNumberOfVoxels());
+  for (std::size_t v = 0; v < labels.size(); ++v)
+  {
+    const double x = double(v % 40), y = double((v / 40) % 40), z = double(v / 1600);
+    labels[v] = std::hypot(x - c, y - c, z - c) < radius ? 2 : 1;
+  }
+  bmr::MeshingParameters p;
+  p.cellSize = p.facetSize = 6.0;
+  p.facetDistance = 0.5;
+  const std::size_t uniform = bmr::MeshLabelVolume(labels.data(), grid, p).GetNumberOfTetrahedra();
+  p.refineNearLabels = { 2 };
+  p.refineDistance = 4.0;
+  p.refineSize = 1.5;
+  const bmr::TetrahedralMesh mesh = bmr::MeshLabelVolume(labels.data(), grid, p);
+  double                     nearLongest = 0.0, farLongest = 0.0;
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    std::array<double, 3> centroid{ { 0, 0, 0 } };
+    double                longest = 0.0;
+    for (int a = 0; a < 4; ++a)
+    {
+      const double * xa = &mesh.points[3 * std::size_t(mesh.tetrahedra[4 * e + a])];
+      for (int k = 0; k < 3; ++k)
+      {
+        centroid[k] += 0.25 * xa[k];
+      }
+      for (int b = a + 1; b < 4; ++b)
+      {
+        const double * xb = &mesh.points[3 * std::size_t(mesh.tetrahedra[4 * e + b])];
+        longest = std::max(longest, std::hypot(xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]));
+      }
+    }
+    const double fromBall = std::hypot(centroid[0] - c, centroid[1] - c, centroid[2] - c) - radius;
+    if (fromBall <= 1.0)
+    {
+      nearLongest = std::max(nearLongest, longest);
+    }
+    else if (fromBall >= 12.0)
+    {
+      farLongest = std::max(farLongest, longest);
+    }
+  }
+  std::cout << "local refinement: " << uniform << " -> " << mesh.GetNumberOfTetrahedra()
+            << " tetrahedra; longest edge near the ball " << nearLongest << " mm, far from it " << farLongest << " mm"
+            << std::endl;
+  bool ok = Expect(nearLongest <= 3.0, "edges near the ball at most 3 mm (got " + ToString(nearLongest) + ")");
+  ok &= Expect(farLongest > 3.0, "edges far from the ball keep the coarse size (got " + ToString(farLongest) + ")");
+  ok &= Expect(mesh.GetNumberOfTetrahedra() > uniform, "the refinement adds elements");
+  return ok;
+}
+
 int
 itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
 {
@@ -311,5 +375,6 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
     },
     "spacing");
   ok &= CheckImplicitLabelsOnGrid();
+  ok &= CheckLocalRefinement();
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

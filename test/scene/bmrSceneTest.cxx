@@ -96,6 +96,23 @@ bmrSceneTest(int, char *[])
   ok &= Expect(nh.model == bmr::MaterialModelEnum::NeoHookean &&
                  bmr::ParseScene(bmr::SceneToJson(nh), "roundtrip").model == bmr::MaterialModelEnum::NeoHookean,
                "\"model\": \"neo_hookean\" is read and survives the round trip");
+  // Local refinement near named labels: read, written, and refused with a label the scene does not have.
+  const std::string refined =
+    Replace(ValidScene,
+            "\"cell_size_per_label_mm\"",
+            "\"refine_near\": {\"labels\": [\"prostate\"], \"distance_mm\": 6, \"size_mm\": 1.5}, "
+            "\"cell_size_per_label_mm\"");
+  const bmr::Scene r = bmr::ParseScene(refined, "refined.json");
+  ok &= Expect(r.mesh.Refines() && r.mesh.refineNearLabels == std::vector<std::int32_t>{ 2 } &&
+                 r.mesh.refineDistance == 6.0 && r.mesh.refineSize == 1.5,
+               "refine_near: 1.5 mm within 6 mm of the prostate (label 2)");
+  ok &= Expect(bmr::SceneToJson(bmr::ParseScene(bmr::SceneToJson(r), "roundtrip")) == bmr::SceneToJson(r) &&
+                 bmr::SceneToJson(r).find("refine_near") != std::string::npos,
+               "refine_near survives the round trip");
+  ok &= ExpectException(
+    "refine_near with an unknown label",
+    [&] { bmr::ParseScene(Replace(refined, "[\"prostate\"]", "[\"liver\"]"), "bad.json"); },
+    "mesh.refine_near.labels");
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
   // A tube load: the axis is normalized on reading and survives the round trip.
   const std::string tube = Replace(ValidScene, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 2], \"magnitude_mm\": 6");
