@@ -587,6 +587,23 @@ MeshLabelFunction(const TLabelAt &              labelAt,
   return ExtractMesh(c3t3, toPhysical, where);
 }
 
+/** The map from Mesh_3's space for a grid, the scaled index space q = diag(spacing) index (exact, origin 0; CGAL's
+ * images have neither direction cosines nor a double-precision origin), to physical mm. */
+auto
+ScaledIndexToPhysical(const GridGeometry & grid)
+{
+  return [&grid](const Point & point) {
+    const double          q[3] = { point.x(), point.y(), point.z() };
+    std::array<double, 3> x;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      x[r] = grid.origin[r] + grid.direction[3 * r] * q[0] + grid.direction[3 * r + 1] * q[1] +
+             grid.direction[3 * r + 2] * q[2];
+    }
+    return x;
+  };
+}
+
 } // namespace
 
 
@@ -663,16 +680,7 @@ MeshLabelVolume(const std::int32_t * labels, const GridGeometry & grid, const Me
   lattice.labels = labels;
   const Complex c3t3 = GenerateMesh(domain, lattice, parameters, where);
 
-  const auto toPhysical = [&grid](const Point & point) {
-    const double          q[3] = { point.x(), point.y(), point.z() };
-    std::array<double, 3> x;
-    for (unsigned r = 0; r < 3; ++r)
-    {
-      x[r] = grid.origin[r] + grid.direction[3 * r] * q[0] + grid.direction[3 * r + 1] * q[1] +
-             grid.direction[3 * r + 2] * q[2];
-    }
-    return x;
-  };
+  const auto toPhysical = ScaledIndexToPhysical(grid);
   return ExtractMesh(c3t3, toPhysical, where);
 }
 
@@ -760,16 +768,7 @@ MeshImplicitLabelsOnGrid(const std::function<std::int32_t(double, double, double
   }
   // As MeshLabelVolume(): meshed in the scaled index space q = diag(spacing) index, whose box [0, (n - 1) h] is the
   // voxel centres', and mapped to physical space afterwards.
-  const auto toPhysical = [&grid](const Point & point) {
-    const double          q[3] = { point.x(), point.y(), point.z() };
-    std::array<double, 3> x;
-    for (unsigned r = 0; r < 3; ++r)
-    {
-      x[r] = grid.origin[r] + grid.direction[3 * r] * q[0] + grid.direction[3 * r + 1] * q[1] +
-             grid.direction[3 * r + 2] * q[2];
-    }
-    return x;
-  };
+  const auto            toPhysical = ScaledIndexToPhysical(grid);
   std::array<double, 3> extent, center;
   double                radius2 = 0.0;
   for (unsigned d = 0; d < 3; ++d)

@@ -59,6 +59,14 @@ PelvisParameters(const PhantomSettings & s)
   return p;
 }
 
+bmr::SpherePhantomParameters
+SphereParameters(const PhantomSettings & s)
+{
+  bmr::SpherePhantomParameters p;
+  p.grid = s.grid;
+  return p;
+}
+
 bmr::PhantomVolume
 MovingVolume(const PhantomSettings & s)
 {
@@ -66,9 +74,7 @@ MovingVolume(const PhantomSettings & s)
   {
     return bmr::MakePelvisPhantom(PelvisParameters(s));
   }
-  bmr::SpherePhantomParameters p;
-  p.grid = s.grid;
-  bmr::PhantomVolume moving = bmr::MakeSpherePhantom(p);
+  bmr::PhantomVolume moving = bmr::MakeSpherePhantom(SphereParameters(s));
   bmr::AddGaussianNoise(moving.ct, s.noiseHU, 1000 + (s.planningSeed != 0 ? s.planningSeed : s.seed));
   return moving;
 }
@@ -218,9 +224,7 @@ AnatomyLabelFunction(const PhantomSettings & s)
   {
     return bmr::PelvisLabelFunction(PelvisParameters(s));
   }
-  bmr::SpherePhantomParameters p;
-  p.grid = s.grid;
-  return bmr::SphereLabelFunction(p);
+  return bmr::SphereLabelFunction(SphereParameters(s));
 }
 
 /** The truth's mesh of the anatomy \a labelAt itself (bmr::MeshSceneFunction), whose voxelization \a labels is,
@@ -249,9 +253,7 @@ AnatomyLabelsAt(const PhantomSettings & s, const std::vector<double> & points)
   {
     return bmr::PelvisLabelsAt(PelvisParameters(s), points);
   }
-  bmr::SpherePhantomParameters p;
-  p.grid = s.grid;
-  return bmr::SphereLabelsAt(p, points);
+  return bmr::SphereLabelsAt(SphereParameters(s), points);
 }
 
 /** The fixed labels voxelize the deformed analytic anatomy once (the label at each voxel's pull-back
