@@ -148,10 +148,9 @@ struct LinearElasticModel::Impl
  * preconditioned matrix has condition number at most (1 + t)^2 and the error falls by at least
  * (sqrt(kappa) - 1) / (sqrt(kappa) + 1) = t / (2 + t) per iteration: for t = 1 %, from 1 % after the first solve to
  * the tolerance, 1e-13 of |x|, in at most about 5 iterations (3 for the demo's last step of 0.2 % in E), each a pair
- * of triangular solves and a product with K_ff. The
- * stopping test is the preconditioned residual |M^-1 r|, which is the error to within that same factor: the
- * direct solve's accuracy, not the residual's. Sequential and in a fixed order: deterministic. False (x then
- * undefined) when 8 iterations do not reach the tolerance. */
+ * of triangular solves and a product with K_ff. The stopping test is the preconditioned residual |M^-1 r|, which is
+ * the error to within that same factor: the direct solve's accuracy, not the residual's. Sequential and in a fixed
+ * order: deterministic. False (x then undefined) when 8 iterations do not reach the tolerance. */
 bool
 LinearElasticModel::Impl::PreconditionedSolve(const Eigen::VectorXd & b, Eigen::VectorXd & x)
 {
