@@ -74,6 +74,12 @@ ParsePhantomSettings(const Arguments & args)
   o.truthGeometry = args.Choice("--truth-geometry", { "voxels", "anatomy" }) == "anatomy"
                       ? itk::PhantomSettings::TruthGeometryEnum::Anatomy
                       : itk::PhantomSettings::TruthGeometryEnum::Voxels;
+  o.truthRefineSize = args.Number("--truth-refine-size-mm", o.truthRefineSize);
+  o.truthRefineDistance = args.Number("--truth-refine-distance-mm", o.truthRefineDistance);
+  if (!(o.truthRefineSize >= 0.0) || !(o.truthRefineDistance >= 0.0))
+  {
+    throw UsageError("--truth-refine-size-mm and --truth-refine-distance-mm must be >= 0");
+  }
   o.fixedGridShiftVoxels = args.Number("--fixed-grid-shift-voxels", o.fixedGridShiftVoxels);
   if (!(o.fixedGridShiftVoxels >= 0.0 && o.fixedGridShiftVoxels <= 0.5))
   {

@@ -40,6 +40,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"
     "                     [--truth-geometry voxels|anatomy (the truth meshes the label map's voxels, or the\n"
     "                      analytic anatomy they sample, whose surfaces stay put when --truth-mesh-scale refines)]\n"
+    "                     [--truth-refine-size-mm S [--truth-refine-distance-mm D (6)] (the truth's cells <= S mm\n"
+    "                      within D mm of the prostate; default none)]\n"
     "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
   { "simulate",
     "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"

@@ -357,6 +357,11 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
     Anatomy
   };
   TruthGeometryEnum truthGeometry{ TruthGeometryEnum::Voxels };
+  /** mm: the truth's cells and surface facets at most truthRefineSize within truthRefineDistance of the organ whose
+   * modulus is estimated (the prostate; the spheres' core), where the tissue between it and the loaded walls is thin
+   * (bmr::MeshingParameters::refineNearLabels); a size of 0 (default): no local refinement. */
+  double truthRefineDistance{ 6.0 };
+  double truthRefineSize{ 0.0 };
   /** The fixed scan's grid is the moving one shifted by U(-this, this) voxels along each axis (seeded by seed):
    * two scans are not aligned to the voxel. 0 (default): the same grid, whose quantization then partly cancels
    * between the scans where the tissue moves little. */

@@ -112,6 +112,12 @@ TruthScene(const PhantomSettings & s, const bmr::GridGeometry & grid)
   // The surfaces a further 0.8 x closer to the labels than the cells' scale: no uniform mesh scale of the
   // estimation scene (register --mesh-scale) can reproduce the truth's mesh.
   truth.mesh.facetDistance *= 0.8;
+  if (s.truthRefineSize > 0.0)
+  {
+    truth.mesh.refineNearLabels = { IsPelvis(s) ? bmr::PelvisProstate : truth.FindLabel("inner")->value };
+    truth.mesh.refineDistance = s.truthRefineDistance;
+    truth.mesh.refineSize = s.truthRefineSize;
+  }
   if (IsPelvis(s) && (s.bladderKPa > 0.0 || s.rectumKPa > 0.0))
   {
     // Pressure in the lumens: the walls move as the tissue lets them (no wall is driven into the prostate).

@@ -1,6 +1,6 @@
 # phantom --truth-geometry anatomy: the truth is meshed from the analytic anatomy (truth.json says so), which gives
 # another truth mesh than the label map's voxels (the mesher's own test checks that its surfaces lie on the analytic
-# ones); the default stays the voxels.
+# ones); the default stays the voxels. --truth-refine-size-mm refines the truth around the core (more elements).
 # Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregTruthGeometryCheck.cmake
 file(REMOVE_RECURSE ${OUT})
 foreach(geometry voxels anatomy)
@@ -26,4 +26,12 @@ file(READ ${OUT}/default/truth.json json)
 string(JSON recorded GET "${json}" truth_mesh geometry)
 if(NOT rc EQUAL 0 OR NOT recorded STREQUAL "voxels")
   message(SEND_ERROR "the default truth geometry is \"${recorded}\", not the voxels")
+endif()
+execute_process(COMMAND ${CLI} phantom --scene spheres --size 40,40,40 --spacing 2,2,2 --seed 5 --truth-mesh-scale 1.5
+  --truth-geometry anatomy --truth-refine-size-mm 2 --out ${OUT}/refined RESULT_VARIABLE rc OUTPUT_QUIET)
+file(READ ${OUT}/refined/truth.json json)
+string(JSON refined GET "${json}" truth_mesh tetrahedra)
+message(STATUS "--truth-refine-size-mm 2: ${refined} tetrahedra (${tetrahedra_anatomy} without)")
+if(NOT rc EQUAL 0 OR NOT refined GREATER tetrahedra_anatomy)
+  message(SEND_ERROR "the truth refined near the core has ${refined} tetrahedra, not more than ${tetrahedra_anatomy}")
 endif()
