@@ -71,7 +71,7 @@ ParsePhantomSettings(const Arguments & args)
   {
     throw UsageError("--truth-mesh-scale must lie in [0.3, 2] (the truth's mesh sizes relative to the scene's)");
   }
-  o.truthGeometry = args.Choice("--truth-geometry", { "voxels", "anatomy" }) == "anatomy"
+  o.truthGeometry = args.Choice("--truth-geometry", { "anatomy", "voxels" }) == "anatomy"
                       ? itk::PhantomSettings::TruthGeometryEnum::Anatomy
                       : itk::PhantomSettings::TruthGeometryEnum::Voxels;
   o.truthRefineSize = args.Number("--truth-refine-size-mm", o.truthRefineSize);

@@ -38,10 +38,10 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--tumour-fraction F --tumour-E-kPa E] [--noise-HU S] [--seed N]\n"
     "                     [--tracking-noise-mm S (landmarks_tracked.csv: the fixed seeds + N(0, S^2); 0.5)]\n"
     "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"
-    "                     [--truth-geometry voxels|anatomy (the truth meshes the label map's voxels, or the\n"
-    "                      analytic anatomy they sample, whose surfaces stay put when --truth-mesh-scale refines)]\n"
+    "                     [--truth-geometry anatomy|voxels (the truth meshes the analytic anatomy the labels\n"
+    "                      sample, whose surfaces stay put when --truth-mesh-scale refines; or the label map's voxels)]\n"
     "                     [--truth-refine-size-mm S [--truth-refine-distance-mm D (6)] (the truth's cells <= S mm\n"
-    "                      within D mm of the prostate; default none)]\n"
+    "                      within D mm of the prostate; pelvis 1.25 (the converged truth), spheres 0 = none)]\n"
     "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
   { "simulate",
     "  biomechreg simulate --moving-labels FILE --scene FILE --out DIR [--moving-ct FILE] [--reference IMAGE]\n"

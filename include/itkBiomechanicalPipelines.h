@@ -349,19 +349,21 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
   /** What the truth's mesh follows: the moving label map's voxels (Voxels), or the analytic anatomy those voxels
-   * sample (Anatomy: bmr::MeshSceneFunction(), smooth surfaces that stay put when the truth is refined, so that its
-   * field converges as the elements allow). The fixed labels voxelize the deformed anatomy either way. */
+   * sample (Anatomy, the default: bmr::MeshSceneFunction(), smooth surfaces that stay put when the truth is refined,
+   * so that its field converges as the elements allow). The fixed labels voxelize the deformed anatomy either way. */
   enum class TruthGeometryEnum : std::uint8_t
   {
     Voxels,
     Anatomy
   };
-  TruthGeometryEnum truthGeometry{ TruthGeometryEnum::Voxels };
+  TruthGeometryEnum truthGeometry{ TruthGeometryEnum::Anatomy };
   /** mm: the truth's cells and surface facets at most truthRefineSize within truthRefineDistance of the organ whose
    * modulus is estimated (the prostate; the spheres' core), where the tissue between it and the loaded walls is thin
-   * (bmr::MeshingParameters::refineNearLabels); a size of 0 (default): no local refinement. */
+   * (bmr::MeshingParameters::refineNearLabels); 0: no local refinement. The pelvis's default, 1.25 mm within 6 mm
+   * of the 0.5x mesh, is the converged truth: refined further (0.4x, 0.7 mm) its field changes by at most 0.8 % of its
+   * maximum in the prostate (docs/benchmarks.md, "Truth meshed from the analytic anatomy"). The spheres': 0. */
   double truthRefineDistance{ 6.0 };
-  double truthRefineSize{ 0.0 };
+  double truthRefineSize{ 1.25 };
   /** The fixed scan's grid is the moving one shifted by U(-this, this) voxels along each axis (seeded by seed):
    * two scans are not aligned to the voxel. 0 (default): the same grid, whose quantization then partly cancels
    * between the scans where the tissue moves little. */

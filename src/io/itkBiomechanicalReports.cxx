@@ -277,7 +277,9 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
     { "tetrahedra", pair.truthTetrahedra },
     { "nodes", pair.truthNodes },
     { "cell_size_mm", pair.truthScene.mesh.cellSize },
-    { "geometry", settings.truthGeometry == PhantomSettings::TruthGeometryEnum::Anatomy ? "anatomy" : "voxels" }
+    { "geometry", settings.truthGeometry == PhantomSettings::TruthGeometryEnum::Anatomy ? "anatomy" : "voxels" },
+    { "refine_near_size_mm", settings.truthRefineSize }, // 0: no local refinement
+    { "refine_near_distance_mm", settings.truthRefineDistance }
   };
   if (pelvis)
   {

@@ -512,6 +512,7 @@ PhantomSettings::Defaults(AnatomyEnum anatomy)
   {
     s.grid = bmr::SpherePhantomParameters().grid;
     s.bladderMM = 1.5;
+    s.truthRefineSize = 0.0;
   }
   return s;
 }
