@@ -150,6 +150,24 @@ UsesCalibratedHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum qua
 BiomechanicalRegistration_EXPORT std::array<double, 2>
 IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles, std::size_t resamples);
 
+/** Mean and standard deviation of a normal sample of which some values are censored: those at or below
+ * \a lowerLimit are known only to lie there or below, those at or above \a upperLimit only to lie there or above
+ * (re-estimations stopped by a search bound). The maximum-likelihood estimate by expectation-maximization: each
+ * censored value is replaced by its conditional moments under the current fit, \f$ E[x \mid x \ge c] = \mu +
+ * \sigma \lambda(\alpha) \f$, \f$ \mathrm{Var}[x \mid x \ge c] = \sigma^2 (1 + \alpha \lambda - \lambda^2) \f$ with
+ * \f$ \alpha = (c - \mu) / \sigma \f$, \f$ \lambda = \varphi(\alpha) / (1 - \Phi(\alpha)) \f$ (mirrored below), until
+ * mu and sigma change by less than 1e-12 of sigma. Without censored values: the sample mean and the maximum-likelihood
+ * (divide-by-n) deviation. Fewer than two distinct uncensored values determine no spread: sigma is then NaN.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+struct CensoredNormalFit
+{
+  double      mean{ 0.0 };
+  double      sigma{ 0.0 };
+  std::size_t censored{ 0 }; ///< values at or beyond a limit
+};
+BiomechanicalRegistration_EXPORT CensoredNormalFit
+FitCensoredNormal(const std::vector<double> & values, double lowerLimit, double upperLimit);
+
 /** Settings of the modulus uncertainty (the rescans or the parametric bootstrap of ModulusInterval).
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT UncertaintySettings
@@ -205,7 +223,9 @@ constexpr double BootstrapBiasSignificance = 3.0;
  * corrected for the resamples' offset b only when asked and when it exceeds three standard errors of their median;
  * k from IntervalHalfWidths(): calibrated on phantoms for the rescans, else \f$ t_{1-\alpha/2,n-1} \sqrt{1+1/n} \f$).
  * An interval end beyond the scene's bounds is not determined by the images: the modulus is then reported as a bound
- * ("E >= lower end"). */
+ * ("E >= lower end"). Resamples on a search bound stopped there: they only say "at least" (or "at most") the bound,
+ * and their SD understates the spread. Then s is the larger of the SD and the censored maximum-likelihood sigma
+ * (FitCensoredNormal(), times sqrt(n / (n - 1)) to compare with the SD), which widens the bound's determined end. */
 struct BiomechanicalRegistration_EXPORT ModulusInterval
 {
   double                fit{ 0.0 };                 ///< kPa: the estimate of the fit (the state and fields use it)
@@ -217,6 +237,7 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
   std::array<double, 2> interval95{ { 0.0, 0.0 } }; ///< kPa
   bool                  lowerDetermined{ true };    ///< false: the images do not bound E from below
   bool                  upperDetermined{ true };    ///< false: only "at least interval95[0]"
+  std::size_t           censoredResamples{ 0 };     ///< resamples on a search bound (their spread: censored fit)
   std::vector<double>   resampleModuli;             ///< kPa, in resample order
   std::string           method;                     ///< "rescan", "bootstrap", "curvature"
   std::string           quantiles;                  ///< "calibrated", "student" or "normal" (curvature)

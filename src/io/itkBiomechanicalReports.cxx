@@ -97,6 +97,7 @@ ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
                             { "log_bias", Number(i.logBias) },
                             { "bias_corrected", i.biasCorrected },
                             { "sigma_log_E", Number(i.logSigma) },
+                            { "censored_resamples", i.censoredResamples },
                             { "interval_68_kPa", { Number(i.interval68[0]), Number(i.interval68[1]) } },
                             { "interval_95_kPa", { Number(i.interval95[0]), Number(i.interval95[1]) } },
                             { "lower_end_determined", i.lowerDetermined },
@@ -273,14 +274,13 @@ PhantomTruthJson(const PhantomPair & pair, const PhantomSettings & settings)
     motion[wall.first] = { { "max", Compact(wall.second[0]) }, { "mean", Compact(wall.second[1]) } };
   }
   j["wall_motion_mm"] = motion;
-  j["truth_mesh"] = {
-    { "tetrahedra", pair.truthTetrahedra },
-    { "nodes", pair.truthNodes },
-    { "cell_size_mm", pair.truthScene.mesh.cellSize },
-    { "geometry", settings.truthGeometry == PhantomSettings::TruthGeometryEnum::Anatomy ? "anatomy" : "voxels" },
-    { "refine_near_size_mm", settings.truthRefineSize }, // 0: no local refinement
-    { "refine_near_distance_mm", settings.truthRefineDistance }
-  };
+  j["truth_mesh"] = { { "tetrahedra", pair.truthTetrahedra },
+                      { "nodes", pair.truthNodes },
+                      { "cell_size_mm", pair.truthScene.mesh.cellSize },
+                      { "geometry",
+                        settings.truthGeometry == PhantomSettings::TruthGeometryEnum::Anatomy ? "anatomy" : "voxels" },
+                      { "refine_near_size_mm", settings.truthRefineSize }, // 0: no local refinement
+                      { "refine_near_distance_mm", settings.truthRefineDistance } };
   if (pelvis)
   {
     const bmr::PelvisAnatomy & a = settings.organs;

@@ -112,6 +112,94 @@ IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles
              RescanCalibratedHalfWidth95 * student[1] / reference[1] } };
 }
 
+namespace {
+/** phi(a) / (1 - Phi(a)), the inverse Mills ratio; its asymptote a + 1/a where the tail underflows. */
+double
+InverseMillsRatio(double a)
+{
+  const double tail = 0.5 * std::erfc(a / std::sqrt(2.0));
+  if (tail < 1e-300)
+  {
+    return a + 1.0 / a;
+  }
+  return std::exp(-0.5 * a * a) / std::sqrt(2.0 * 3.14159265358979323846) / tail;
+}
+
+/** First and second moments of x ~ N(mu, sigma^2) conditioned on x >= c (\a above) or x <= c. */
+std::array<double, 2>
+CensoredMoments(double mu, double sigma, double c, bool above)
+{
+  // Below c mirrors above -c: x <= c  <=>  -x >= -c.
+  const double m = above ? mu : -mu;
+  const double a = ((above ? c : -c) - m) / sigma;
+  const double lambda = InverseMillsRatio(a);
+  const double mean = m + sigma * lambda;
+  const double variance = sigma * sigma * std::max(0.0, 1.0 + a * lambda - lambda * lambda);
+  return { { above ? mean : -mean, variance + mean * mean } };
+}
+} // namespace
+
+CensoredNormalFit
+FitCensoredNormal(const std::vector<double> & values, double lowerLimit, double upperLimit)
+{
+  CensoredNormalFit   fit;
+  std::vector<double> seen;
+  for (double x : values)
+  {
+    if (x <= lowerLimit || x >= upperLimit)
+    {
+      ++fit.censored;
+    }
+    else
+    {
+      seen.push_back(x);
+    }
+  }
+  const auto [lowest, highest] = std::minmax_element(seen.begin(), seen.end());
+  if (seen.size() < 2 || *lowest == *highest)
+  {
+    fit.mean = fit.sigma = std::numeric_limits<double>::quiet_NaN();
+    return fit;
+  }
+  const double n = double(values.size());
+  double       mu = 0.0, sigma = 0.0;
+  for (double x : values)
+  {
+    mu += x / n;
+  }
+  for (double x : values)
+  {
+    sigma += (x - mu) * (x - mu) / n;
+  }
+  sigma = std::sqrt(sigma);
+  // EM raises the likelihood every step; 10000 steps bound the loop where heavy censoring makes it crawl.
+  for (int step = 0; step < 10000; ++step)
+  {
+    double sum = 0.0, sum2 = 0.0;
+    for (double x : values)
+    {
+      const bool                  below = x <= lowerLimit, above = x >= upperLimit;
+      const std::array<double, 2> moments = below   ? CensoredMoments(mu, sigma, lowerLimit, false)
+                                            : above ? CensoredMoments(mu, sigma, upperLimit, true)
+                                                    : std::array<double, 2>{ { x, x * x } };
+      sum += moments[0];
+      sum2 += moments[1];
+    }
+    const double nextMu = sum / n;
+    const double nextSigma = std::sqrt(std::max(sum2 / n - nextMu * nextMu, 0.0));
+    const bool   settled = std::abs(nextMu - mu) < 1e-12 * sigma && std::abs(nextSigma - sigma) < 1e-12 * sigma;
+    mu = nextMu;
+    sigma = nextSigma;
+    if (settled || !(sigma > 0.0))
+    {
+      break;
+    }
+  }
+  fit.mean = mu;
+  fit.sigma = sigma;
+  return fit;
+}
+
 namespace pipeline {
 ModulusInterval
 BootstrapInterval(double                        fit,
@@ -153,6 +241,14 @@ BootstrapInterval(double                        fit,
     sum2 += (l - mean) * (l - mean);
   }
   i.logSigma = std::sqrt(sum2 / double(n - 1));
+  // Resamples that stopped on a search bound hide how far they would have gone: their SD understates the spread.
+  const CensoredNormalFit censored =
+    FitCensoredNormal(logs, std::log(1.001 * unknown.lowerBound), std::log(0.999 * unknown.upperBound));
+  i.censoredResamples = censored.censored;
+  if (censored.censored > 0 && std::isfinite(censored.sigma))
+  {
+    i.logSigma = std::max(i.logSigma, censored.sigma * std::sqrt(double(n) / double(n - 1)));
+  }
   // The median of n resamples has a standard error of about 1.25 s / sqrt(n): a smaller b is the resamples'
   // own noise, and correcting by it only adds that noise.
   i.biasCorrected =
