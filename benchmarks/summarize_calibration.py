@@ -68,18 +68,20 @@ def fit_centred(r):
     return r
 
 
-# The calibration set of the conformal half-widths (itkBiomechanicalPipelines.h, RescanCalibratedHalfWidth68/95):
-# the rescan runs on two-grid phantoms stated with Student's half-widths, pairs with no resample on a bound.
-CONFORMAL_TAGS = ("rescan-shifted-sweep", "rescan-warm")
+# The calibration set of the conformal half-widths (itkBiomechanicalPipelines.h, RescanCalibrations): the rescan
+# run on the default, converged truths, pairs with no resample on a bound, s from each pair's first n rescans.
+CONFORMAL_TAGS = ("converged",)
+CONFORMAL_RESAMPLES = (4, 8)
 
 
-def conformal_half_widths(rows):
-    """The split-conformal half-widths: the ceil((m + 1) p)-th smallest of the m scores |log fit - log E| / s."""
+def conformal_half_widths(rows, n):
+    """The split-conformal half-widths for n rescans: the ceil((m + 1) p)-th smallest of the m scores
+    |log fit - log E| / s, s from the first n rescans."""
     scores = []
     for r in rows:
-        if r["tag"] not in CONFORMAL_TAGS or calibrated(r):
+        resamples = [float(x) for x in r["resamples_kPa"].split(";")][:n]
+        if r["tag"] not in CONFORMAL_TAGS or len(resamples) < n:
             continue
-        resamples = [float(x) for x in r["resamples_kPa"].split(";")]
         if max(resamples) >= 599.4 or min(resamples) <= 20.02:
             continue
         s = statistics.stdev(math.log(x) for x in resamples)
@@ -138,10 +140,11 @@ for d in summary:
     print(f'| {d["tag"]} | {d["band"]} | {d["n"]} | {d["cov68"]:.2f} | {d["cov68d"]:.2f} | {d["cov95"]:.2f} | '
           f'{d["bounds"]:.2f} | {100 * d["med"]:.1f} % | {100 * d["p90"]:.1f} % | {100 * d["fitmed"]:.1f} % | '
           f'{d["width"]:.2f} |')
-m, (k68, k95) = conformal_half_widths(rows)
-if m:
-    print(f"\nconformal half-widths from {m} scores of {', '.join(CONFORMAL_TAGS)}: k68 {k68:.3f}, k95 {k95:.3f} "
-          "(RescanCalibratedHalfWidth68/95)")
+for n in CONFORMAL_RESAMPLES:
+    m, (k68, k95) = conformal_half_widths(rows, n)
+    if m:
+        print(f"\nconformal half-widths for {n} rescans from {m} scores of {', '.join(CONFORMAL_TAGS)}: k68 {k68:.3f}, "
+              f"k95 {k95:.3f} (RescanCalibrations)")
 
 print("\n| settings | pair | true E | fit | stated | 68 % | 95 % | covered 68/95 |")
 print("|---|---:|---:|---:|---|---|---|---|")

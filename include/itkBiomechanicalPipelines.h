@@ -124,33 +124,39 @@ enum class UncertaintyMethodEnum : std::uint8_t
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 enum class IntervalQuantilesEnum : std::uint8_t
 {
-  /** Rescans: k from split-conformal calibration on pelvis phantoms (RescanCalibratedHalfWidth68/95); the
+  /** Rescans: k from split-conformal calibration on pelvis phantoms (RescanCalibrations); the
    * bootstrap, which was not calibrated, falls back to Student. Default. */
   Calibrated,
   Student ///< k = t_(n-1) sqrt(1 + 1/n) at 68 % and 95 %: the resamples' log E taken as normal
 };
 
-/** Half-width of the rescans' 68 % interval in units of their spread s (4 resamples): the ceil(0.68 (m + 1))-th
- * smallest of m = 23 calibration scores |log Ehat - log E_true| / s (split-conformal prediction: coverage >= 68 %
- * for a pair exchangeable with the calibration set). The scores are the pelvis phantom pairs of the calibration run
- * on the default, converged truths (benchmarks/results/calibration_runs_converged.csv, seed 2043; 1 mm voxels,
- * moduli log-uniform in 30-500 kPa), s from each pair's first 4 rescans (a rescan's random numbers depend only on
- * the seed and its index, so these are the rescans a 4-rescan run makes), the pairs with none on a search bound.
- * Student's 1.34 would be 18 % wider. Checked on pairs not used here: Table 3.1's 70 and the 20 anatomy-truth
- * pairs (docs/benchmarks.md). */
-constexpr double RescanCalibratedHalfWidth68 = 1.134;
-/** The same at 95 % (the 23rd of 23 scores; Student's t_3 sqrt(5/4) is 3.56). */
-constexpr double RescanCalibratedHalfWidth95 = 3.384;
-/** The number of rescans the half-widths were calibrated with; others scale them by Student's ratio. */
-constexpr unsigned int RescanCalibrationResamples = 4;
+/** Half-widths {k68, k95} of the rescans' intervals in units of their spread s, calibrated for a number of rescans:
+ * the ceil(0.68 (m + 1))-th and ceil(0.95 (m + 1))-th smallest of m calibration scores |log Ehat - log E_true| / s
+ * (split-conformal prediction: coverage >= 68 % and 95 % for a pair exchangeable with the calibration set). The
+ * scores are the pelvis phantom pairs of the calibration run on the default, converged truths
+ * (benchmarks/results/calibration_runs_converged.csv, seed 2043; 1 mm voxels, moduli log-uniform in 30-500 kPa),
+ * the pairs with no rescan on a search bound, s from each pair's first n rescans (a rescan's random numbers depend
+ * only on the seed and its index: these are the rescans an n-rescan run makes). Checked on pairs not used here:
+ * Table 3.1's 70 and the 20 anatomy-truth pairs (docs/benchmarks.md).
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+struct RescanCalibration
+{
+  unsigned int resamples;
+  double       halfWidth68;
+  double       halfWidth95;
+};
+/** 4 rescans (the default; 23 scores): Student's t_3 sqrt(5/4) would be 1.33 and 3.56. 8 rescans (22 scores): the
+ * 95 % one is the largest score; Student's would be 1.14 and 2.51. */
+constexpr RescanCalibration RescanCalibrations[] = { { 4, 1.134, 3.384 }, { 8, 0.880, 1.708 } };
 
 /** Whether \a method states its intervals with the calibrated half-widths under \a quantiles (rescans only). */
 BiomechanicalRegistration_EXPORT bool
 UsesCalibratedHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles);
 
 /** Half-widths {k68, k95} of the intervals, in units of the resamples' spread s, for \a resamples resamples of
- * \a method: Student's t_(n-1) sqrt(1 + 1/n), or the calibrated ones (rescans only) scaled by Student's ratio
- * between n and the calibration's RescanCalibrationResamples. Fewer than 3 resamples: infinite. */
+ * \a method: Student's t_(n-1) sqrt(1 + 1/n), or the calibrated ones (rescans only): those of RescanCalibrations
+ * for the largest calibrated count not above n (the smallest when n is below all), scaled by Student's ratio between
+ * n and that count. Fewer than 3 resamples: infinite. */
 BiomechanicalRegistration_EXPORT std::array<double, 2>
 IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles, std::size_t resamples);
 
@@ -177,9 +183,8 @@ FitCensoredNormal(const std::vector<double> & values, double lowerLimit, double 
 struct BiomechanicalRegistration_EXPORT UncertaintySettings
 {
   UncertaintyMethodEnum method{ UncertaintyMethodEnum::Rescan };
-  /** Re-estimations (rescan, bootstrap). 4 by default: the rescans' half-widths were calibrated with 4, which run
-   * in half the time of 8; their 95 % intervals came out 0-25 % wider than 8 rescans' with the earlier constants
-   * on the same pairs (docs/benchmarks.md). */
+  /** Re-estimations (rescan, bootstrap). 4 by default, which run in about half the time of 8; 8 (also calibrated,
+   * RescanCalibrations) give intervals about a quarter narrower in log E (docs/benchmarks.md). */
   unsigned int  resamples{ 4 };
   std::uint64_t seed{ 1 }; ///< the resamples' random numbers: same seed, same interval
   /** Resamples run at once; 0 (default): ITK's global default number of threads (`--threads`). Each resample

@@ -126,10 +126,16 @@ IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles
   {
     return student;
   }
-  // Another n than the calibration's changes how well s is known as Student's factor says.
-  const std::array<double, 2> reference = pipeline::StudentHalfWidths(RescanCalibrationResamples);
-  return { { RescanCalibratedHalfWidth68 * student[0] / reference[0],
-             RescanCalibratedHalfWidth95 * student[1] / reference[1] } };
+  // Another n than a calibration's changes how well s is known as Student's factor says; scaling up from the
+  // count below only narrows as more draws of a normal sample would.
+  const RescanCalibration * calibration = &RescanCalibrations[0];
+  for (const RescanCalibration & c : RescanCalibrations)
+  {
+    calibration = c.resamples <= resamples ? &c : calibration;
+  }
+  const std::array<double, 2> reference = pipeline::StudentHalfWidths(calibration->resamples);
+  return { { calibration->halfWidth68 * student[0] / reference[0],
+             calibration->halfWidth95 * student[1] / reference[1] } };
 }
 
 namespace {

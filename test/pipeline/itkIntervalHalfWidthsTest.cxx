@@ -21,8 +21,8 @@
 //   t_3(0.975) = 3.1824463, t_7(0.84) = 1.0702874, t_7(0.975) = 2.3646243, t_15(0.84) = 1.0285328,
 //   t_15(0.975) = 2.1314495) to 1e-6, the tabulated digits (the quantile is inverted from the distribution
 //   function to 1e-10);
-// - calibrated (the default, rescans): at the calibration's 4 resamples exactly the conformal constants; at other
-//   n scaled by Student's ratio, so more resamples narrow the interval as they would a normal sample's;
+// - calibrated (the default, rescans): at the calibrated 4 and 8 resamples exactly their conformal constants, 8
+//   narrower; other n scaled by Student's ratio from the largest calibrated count not above n (4 below 4);
 // - the bootstrap, which the calibration did not measure, keeps Student's; fewer than 3 resamples give no width.
 // The censored normal fit (itk::FitCensoredNormal) that widens a bound's determined end:
 // - without censoring it is the sample mean and the divide-by-n deviation (to 1e-12: the same sums);
@@ -134,18 +134,26 @@ itkIntervalHalfWidthsTest(int, char *[])
   Check(near(student4[0], 1.1889286 * root4, 1e-6) && near(student4[1], 3.1824463 * root4, 1e-6),
         "Student, 4 resamples: t_3 sqrt(5/4) at 68 and 95 % to 1e-6");
   const auto calibrated4 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 4);
-  Check(itk::RescanCalibrationResamples == 4 && itk::UncertaintySettings{}.resamples == 4 &&
-          calibrated4[0] == itk::RescanCalibratedHalfWidth68 && calibrated4[1] == itk::RescanCalibratedHalfWidth95,
-        "calibrated, 4 resamples (the calibration's and the default): the conformal constants");
-  Check(calibrated4[0] < 0.9 * student4[0] && near(calibrated4[1], student4[1], 0.06 * student4[1]),
-        "calibrated: the 68 % interval narrower than Student's by more than 10 %, the 95 % one within 6 %");
   const auto calibrated8 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 8);
+  const auto & table = itk::RescanCalibrations;
+  Check(itk::UncertaintySettings{}.resamples == 4 && table[0].resamples == 4 && table[1].resamples == 8 &&
+          near(calibrated4[0], table[0].halfWidth68, 1e-15) && near(calibrated4[1], table[0].halfWidth95, 1e-15) &&
+          near(calibrated8[0], table[1].halfWidth68, 1e-15) && near(calibrated8[1], table[1].halfWidth95, 1e-15),
+        "calibrated, 4 (the default) and 8 resamples: their conformal constants (to rounding)");
+  Check(calibrated4[0] < 0.9 * student4[0] && near(calibrated4[1], student4[1], 0.06 * student4[1]),
+        "calibrated, 4: the 68 % interval narrower than Student's by more than 10 %, the 95 % one within 6 %");
+  Check(calibrated8[0] < calibrated4[0] && calibrated8[1] < 0.6 * calibrated4[1],
+        "calibrated: 8 rescans give the narrower interval");
+  const auto calibrated6 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 6);
+  const auto student6 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 6);
   const auto calibrated16 =
     itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 16);
-  Check(near(calibrated8[0] / calibrated4[0], student8[0] / student4[0], 1e-12) &&
-          near(calibrated16[1] / calibrated4[1], student16[1] / student4[1], 1e-12),
-        "calibrated, 8 and 16 resamples: scaled by Student's ratio to 4");
-
+  const auto calibrated3 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 3);
+  const auto student3 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 3);
+  Check(near(calibrated6[0] / calibrated4[0], student6[0] / student4[0], 1e-12) &&
+          near(calibrated16[1] / calibrated8[1], student16[1] / student8[1], 1e-12) &&
+          near(calibrated3[1] / calibrated4[1], student3[1] / student4[1], 1e-12),
+        "calibrated, 6, 16 and 3 resamples: scaled by Student's ratio from 4, 8 and 4");
   const auto bootstrap =
     itk::IntervalHalfWidths(UncertaintyMethodEnum::Bootstrap, IntervalQuantilesEnum::Calibrated, 8);
   Check(bootstrap == student8, "the bootstrap was not calibrated: Student's half-widths");
