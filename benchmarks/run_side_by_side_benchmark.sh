@@ -4,7 +4,8 @@
 #      prostate 100 kPa, phantom seeds 1..PAIRS);
 #   2. per pair, RUNS runs of each method, timed with /usr/bin/time (wall clock, peak resident memory):
 #      - fem: `biomechreg register --uncertainty none --outputs field,report` (the point estimate);
-#      - fem+interval: the same with the default rescan interval (one run: it is the slow option);
+#      - fem+interval: the same with the default rescan interval (4 rescans), and fem+interval8 with 8 rescans
+#        (INTERVAL_RUNS runs each, default RUNS);
 #      - plastimatch: `plastimatch register`, native demons (xform=vf optim=demons impl=plastimatch), 3 stages at
 #        res 4/2/1 x 50 iterations (its defaults otherwise), on the raw CTs (the seeds are visible to it);
 #      - itk-demons: `biomechreg demons` (ITK diffeomorphic Demons, our baseline: 3 levels x 50 iterations,
@@ -30,6 +31,7 @@ read -r main_size main_spacing <<< "${MAIN_GRID:-200,160,160 1}"
 sizes="${SIZES-128 1.5,160 1.2,256 0.75}" # set and empty: no image-size study
 mesh_scales="${MESH_SCALES-1.5 1 0.75 0.5}" # set and empty: no mesh-size study
 interval="${INTERVAL:-on}"
+interval_runs="${INTERVAL_RUNS:-$runs}"
 IFS=, read -r nx ny nz <<< "$main_size"
 main_voxels=$((nx * ny * nz))
 read -r -a main_methods <<< "${METHODS:-fem plastimatch itk-demons}"
@@ -74,9 +76,10 @@ run_methods() {
       fem) timed "$study" "$pair" fem "$run" "$voxels" "$dir" "$bin" register --moving-ct "$p/moving_ct.nrrd" \
           --moving-labels "$p/moving_labels.nrrd" --fixed-ct "$p/fixed_ct.nrrd" --fixed-labels "$p/fixed_labels.nrrd" \
           --scene "$p/scene.json" --uncertainty none --outputs field,report --out "$dir" ;;
-      fem+interval) timed "$study" "$pair" fem+interval "$run" "$voxels" "$dir" "$bin" register \
+      fem+interval | fem+interval8) timed "$study" "$pair" "$method" "$run" "$voxels" "$dir" "$bin" register \
           --moving-ct "$p/moving_ct.nrrd" --moving-labels "$p/moving_labels.nrrd" --fixed-ct "$p/fixed_ct.nrrd" \
-          --fixed-labels "$p/fixed_labels.nrrd" --scene "$p/scene.json" --outputs field,report --out "$dir" ;;
+          --fixed-labels "$p/fixed_labels.nrrd" --scene "$p/scene.json" --outputs field,report --out "$dir" \
+          $([ "$method" = fem+interval8 ] && echo --resamples 8) ;;
       plastimatch) mkdir -p "$dir"
         plastimatch_command "$p/fixed_ct.nrrd" "$p/moving_ct.nrrd" "$dir/field.nrrd" > "$dir/command.txt"
         timed "$study" "$pair" plastimatch "$run" "$voxels" "$dir" plastimatch register "$dir/command.txt" ;;
@@ -115,11 +118,13 @@ for k in $(seq 1 "$pairs"); do
   [ -f "$p/truth.json" ] || "$bin" phantom --size "$main_size" --spacing "$main_spacing,$main_spacing,$main_spacing" \
     --bladder-mm 8 --rectum-mm 4 \
     --true-E-kPa 100 --seed "$k" --out "$p" >> "$log" 2>&1
-  echo "pair $k: $runs runs of ${main_methods[*]}; one fem+interval"
+  echo "pair $k: $runs runs of ${main_methods[*]}; $interval_runs of fem+interval and fem+interval8"
   for r in $(seq 1 "$runs"); do
     run_methods main "pair$k" "$r" "$main_voxels" "$p" "${main_methods[@]}"
   done
-  [ "$interval" != on ] || run_methods main "pair$k" 1 "$main_voxels" "$p" fem+interval
+  for r in $(seq 1 "$interval_runs"); do
+    [ "$interval" != on ] || run_methods main "pair$k" "$r" "$main_voxels" "$p" fem+interval fem+interval8
+  done
   score main "pair$k" "$p"
 done
 

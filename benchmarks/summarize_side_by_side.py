@@ -25,7 +25,7 @@ for r in runs:
     if r["study"] == "main":
         main[r["method"]].append(r)
 pairs = sorted({r["pair"] for r in runs if r["study"] == "main"})
-methods = [m for m in ["fem", "fem+interval", "plastimatch", "itk-demons"] if m in main]
+methods = [m for m in ["fem", "fem+interval", "fem+interval8", "plastimatch", "itk-demons"] if m in main]
 wall = {m: median_of(main[m], "wall_s") for m in methods}
 lines = [f"# Side by side on {len(pairs)} demo-sized pelvis pairs (200 x 160 x 160 voxels of 1 mm)", "",
          "Median over runs and pairs (runs per method and pair: "

@@ -184,7 +184,7 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
 {
   UncertaintyMethodEnum method{ UncertaintyMethodEnum::Rescan };
   /** Re-estimations (rescan, bootstrap). 4 by default, which run in about half the time of 8; 8 (also calibrated,
-   * RescanCalibrations) give intervals about a quarter narrower in log E (docs/benchmarks.md). */
+   * RescanCalibrations) give intervals about a third narrower in log E (docs/benchmarks.md). */
   unsigned int  resamples{ 4 };
   std::uint64_t seed{ 1 }; ///< the resamples' random numbers: same seed, same interval
   /** Resamples run at once; 0 (default): ITK's global default number of threads (`--threads`). Each resample
