@@ -152,6 +152,18 @@ public:
   {
     m_Observer = std::move(observer);
   }
+
+  /** Called once during the sweep, as soon as it knows the moduli the fine stage will start from: when the last
+   * unknown's sweep brackets its minimum (its first sign change of dPhi* / dlogE, which no later sample can change).
+   * Not called when the sweep brackets nothing, or without a sweep. A caller can prepare the fine objective's solves
+   * at those moduli (its factorization) on another core while the sweep's remaining samples run; the results are
+   * the same with or without it. */
+  using SweepPrediction = std::function<void(const std::vector<double> & fineStartModuli)>;
+  void
+  SetSweepPrediction(SweepPrediction prediction)
+  {
+    m_SweepPrediction = std::move(prediction);
+  }
   EstimationResult
   Run();
 
@@ -166,6 +178,7 @@ private:
   std::vector<UnknownModulus>            m_Unknowns;
   EstimatorSettings                      m_Settings;
   Observer                               m_Observer;
+  SweepPrediction                        m_SweepPrediction;
 };
 
 } // namespace bmr

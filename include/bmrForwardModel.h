@@ -68,6 +68,11 @@ public:
   virtual void
   Prepare()
   {}
+  /** Does ahead what the next solve at the current moduli needs (a factorization), e.g. on another thread while
+   * other work runs; results are the same with or without it. The default does nothing. */
+  virtual void
+  PrepareSolves()
+  {}
   /** Modulus [kPa] of every element of \a label. */
   virtual void
   SetYoungsModulus(std::int32_t label, double youngsModulus) = 0;
@@ -150,6 +155,9 @@ public:
   /** LinearElasticModel::Analyze(). */
   void
   Prepare() override;
+  /** LinearElasticModel::Factorize() at the current moduli. */
+  void
+  PrepareSolves() override;
   void
   SetYoungsModulus(std::int32_t label, double youngsModulus) override;
   double

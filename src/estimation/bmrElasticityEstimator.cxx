@@ -110,6 +110,27 @@ struct SweepAnalysis
  * gradient dPhi* / dlogE_k from - to + (more robust than the sampled values, which carry the inner
  * solver's tolerance); the zero is interpolated linearly in log E_k. Without a sign change the minimum
  * lies on a bound; when Phi* varies by less than \a flatness (relative) the modulus is not identifiable. */
+/** The first bracket of the sweep's minimum: the first sign change of dPhi* / dlogE_k from - to + among the
+ * samples so far, its zero interpolated linearly in log E_k. A later sample cannot change it. False: none yet. */
+bool
+FirstBracket(const std::vector<IterationRecord> & sweep, std::size_t k, double & logE, double & curvature)
+{
+  for (std::size_t i = 0; i + 1 < sweep.size(); ++i)
+  {
+    const double g0 = sweep[i].logModulusGradient[k], g1 = sweep[i + 1].logModulusGradient[k];
+    if (g0 < 0.0 && g1 >= 0.0)
+    {
+      const double l0 = std::log(sweep[i].youngsModuli[k]), l1 = std::log(sweep[i + 1].youngsModuli[k]);
+      logE = l0 + (l1 - l0) * g0 / (g0 - g1);
+      // Phi* grows with the number of objective nodes and so does its curvature: relative to Phi*, the
+      // coarse sweep's curvature predicts the fine mesh's.
+      curvature = (g1 - g0) / (l1 - l0) / std::max(0.5 * (sweep[i].value + sweep[i + 1].value), 1e-300);
+      return true;
+    }
+  }
+  return false;
+}
+
 SweepAnalysis
 Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const UnknownModulus & unknown, double flatness)
 {
@@ -119,23 +140,10 @@ Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const Un
     vmin = std::min(vmin, r.value);
     vmax = std::max(vmax, r.value);
   }
-  std::size_t best = sweep.back().logModulusGradient[k] < 0.0 ? sweep.size() - 1 : 0;
-  double      logE = std::log(sweep[best].youngsModuli[k]);
-  bool        bracketed = false;
-  double      curvature = 0.0;
-  for (std::size_t i = 0; i + 1 < sweep.size() && !bracketed; ++i)
-  {
-    const double g0 = sweep[i].logModulusGradient[k], g1 = sweep[i + 1].logModulusGradient[k];
-    if (g0 < 0.0 && g1 >= 0.0)
-    {
-      const double l0 = std::log(sweep[i].youngsModuli[k]), l1 = std::log(sweep[i + 1].youngsModuli[k]);
-      logE = l0 + (l1 - l0) * g0 / (g0 - g1);
-      bracketed = true;
-      // Phi* grows with the number of objective nodes and so does its curvature: relative to Phi*, the
-      // coarse sweep's curvature predicts the fine mesh's.
-      curvature = (g1 - g0) / (l1 - l0) / std::max(0.5 * (sweep[i].value + sweep[i + 1].value), 1e-300);
-    }
-  }
+  std::size_t        best = sweep.back().logModulusGradient[k] < 0.0 ? sweep.size() - 1 : 0;
+  double             logE = std::log(sweep[best].youngsModuli[k]);
+  double             curvature = 0.0;
+  const bool         bracketed = FirstBracket(sweep, k, logE, curvature);
   SweepAnalysis      a;
   std::ostringstream msg;
   a.modulus = std::exp(logE);
@@ -234,6 +242,7 @@ struct ElasticityEstimator::Stages
   std::vector<double>        loads;  // warm start of the next inner solve
   std::vector<SweepAnalysis> status; // per unknown
   double                     progress{ 0.0 };
+  bool                       predicted{ false }; // the sweep prediction was called
 
   explicit Stages(ElasticityEstimator & e)
     : estimator(e)
@@ -275,6 +284,21 @@ struct ElasticityEstimator::Stages
   }
   void
   Sweep();
+  /** Tells the sweep prediction the fine stage's start, once, when the last unknown's sweep \a samples bracket it. */
+  void
+  PredictFineStart(const std::vector<IterationRecord> & samples, std::size_t k)
+  {
+    double logE = 0.0, curvature = 0.0;
+    if (!estimator.m_SweepPrediction || predicted || k + 1 != moduli.size() ||
+        !FirstBracket(samples, k, logE, curvature))
+    {
+      return;
+    }
+    predicted = true;
+    std::vector<double> start = moduli;
+    start[k] = std::exp(logE); // as Analyzesweep() sets it
+    estimator.m_SweepPrediction(start);
+  }
   struct FineEvaluations;
   void
   Fine();
@@ -313,6 +337,7 @@ ElasticityEstimator::Stages::Sweep()
       const unsigned int index = static_cast<unsigned int>(k * n + i);
       samples.push_back(MakeRecord("sweep", index, E, s, SecondsSince(ts)));
       Record(samples.back(), result.sweep, 0.5 * double(index + 1) / total);
+      PredictFineStart(samples, k);
     }
     status[k] = Analyzesweep(samples, k, unknown, settings.flatnessThreshold);
     moduli[k] = status[k].modulus;

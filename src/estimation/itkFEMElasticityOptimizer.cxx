@@ -240,8 +240,19 @@ FEMElasticityOptimizer::GenerateData()
   bmr::TetrahedralMesh         sourced;
   const bmr::TetrahedralMesh * fine = m_MeshSource ? nullptr : &this->GetMesh()->Get();
   // While the sweep runs on the coarse objective (one core), a second thread finishes the fine mesh (with a source)
-  // and builds the fine objective and its sparse analysis: the same objective, sooner.
-  const auto makeFine = [this, &fine, &sourced, &samplers]() {
+  // and builds the fine objective and its sparse analysis, then factorizes it at the moduli the fine stage starts
+  // from, which the sweep tells (fineStart) before its last samples: the same objective and factor, sooner.
+  std::promise<std::vector<double>> fineStart; // empty: nothing to factorize ahead
+  std::future<std::vector<double>>  fineStartKnown = fineStart.get_future();
+  bool                              fineStartTold = false;
+  const auto                        tellFineStart = [&fineStart, &fineStartTold](const std::vector<double> & moduli) {
+    if (!fineStartTold)
+    {
+      fineStartTold = true;
+      fineStart.set_value(moduli);
+    }
+  };
+  const auto makeFine = [this, &fine, &sourced, &samplers, &fineStartKnown](bool factorizeAtFineStart) {
     if (fine == nullptr)
     {
       sourced = m_MeshSource();
@@ -249,18 +260,32 @@ FEMElasticityOptimizer::GenerateData()
     }
     std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
     objective->GetForwardModel().Prepare();
+    const std::vector<double> moduli = factorizeAtFineStart ? fineStartKnown.get() : std::vector<double>();
+    if (!moduli.empty())
+    {
+      objective->SetYoungsModuli(moduli);
+      objective->GetForwardModel().PrepareSolves();
+    }
     return objective;
   };
   std::future<std::unique_ptr<bmr::SurfaceMatchingObjective>> fineInMaking;
   std::unique_ptr<bmr::SurfaceMatchingObjective>              fineObjective;
-  if (sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  const bool alongside = sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
+  if (alongside)
   {
-    fineInMaking = std::async(std::launch::async, makeFine);
+    fineInMaking = std::async(std::launch::async, makeFine, true);
   }
   else
   {
-    fineObjective = makeFine();
+    fineObjective = makeFine(false);
   }
+  // Declared after fineInMaking, so destroyed before it: should the sweep throw, the second thread is told that
+  // there is nothing to factorize instead of waiting for the sweep forever.
+  struct TellOnExit
+  {
+    std::function<void()> tell;
+    ~TellOnExit() { tell(); }
+  } const tellOnExit{ [&tellFineStart]() { tellFineStart({}); } };
   std::unique_ptr<bmr::SurfaceMatchingObjective> coarseObjective;
   if (sweeps)
   {
@@ -270,6 +295,7 @@ FEMElasticityOptimizer::GenerateData()
     [&]() -> bmr::EstimationObjective & {
       if (!fineObjective)
       {
+        tellFineStart({}); // a sweep without a bracket has told nothing
         fineObjective = fineInMaking.get();
       }
       return *fineObjective;
@@ -277,6 +303,10 @@ FEMElasticityOptimizer::GenerateData()
     coarseObjective.get(),
     unknowns,
     this->Settings());
+  if (alongside)
+  {
+    estimator.SetSweepPrediction(tellFineStart);
+  }
   estimator.SetObserver([this](const IterationRecord & record, double progress) {
     m_CurrentRecord = record;
     this->InvokeEvent(IterationEvent());

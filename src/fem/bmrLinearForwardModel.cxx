@@ -60,6 +60,12 @@ LinearForwardModel::Prepare()
   m_Model->Analyze();
 }
 
+void
+LinearForwardModel::PrepareSolves()
+{
+  m_Model->Factorize();
+}
+
 double
 LinearForwardModel::GetYoungsModulus(std::int32_t label) const
 {
