@@ -59,7 +59,9 @@ timed() {
   local tets=""
   [ -f "$dir/report.json" ] && tets=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['mesh']['tetrahedra'])" "$dir/report.json")
   read -r wall kb < "$dir/time.txt"
-  echo "$study,$pair,$method,$run,$voxels,$tets,$wall,$((kb / 1024))" >> "$csv"
+  # One row per run, also when a method is both in METHODS and the interval loop (fem+interval).
+  grep -q "^$study,$pair,$method,$run," "$csv" ||
+    echo "$study,$pair,$method,$run,$voxels,$tets,$wall,$((kb / 1024))" >> "$csv"
 }
 
 plastimatch_command() { # FIXED MOVING VF -> command file on stdout
