@@ -106,10 +106,6 @@ struct SweepAnalysis
   std::string message;
 };
 
-/** The sweep \a sweep of unknown \a k: the minimum is bracketed by the first sign change of the envelope
- * gradient dPhi* / dlogE_k from - to + (more robust than the sampled values, which carry the inner
- * solver's tolerance); the zero is interpolated linearly in log E_k. Without a sign change the minimum
- * lies on a bound; when Phi* varies by less than \a flatness (relative) the modulus is not identifiable. */
 /** The first bracket of the sweep's minimum: the first sign change of dPhi* / dlogE_k from - to + among the
  * samples so far, its zero interpolated linearly in log E_k. A later sample cannot change it. False: none yet. */
 bool
@@ -131,6 +127,10 @@ FirstBracket(const std::vector<IterationRecord> & sweep, std::size_t k, double &
   return false;
 }
 
+/** The sweep \a sweep of unknown \a k: the minimum is bracketed by the first sign change of the envelope
+ * gradient dPhi* / dlogE_k from - to + (more robust than the sampled values, which carry the inner
+ * solver's tolerance); the zero is interpolated linearly in log E_k. Without a sign change the minimum
+ * lies on a bound; when Phi* varies by less than \a flatness (relative) the modulus is not identifiable. */
 SweepAnalysis
 Analyzesweep(const std::vector<IterationRecord> & sweep, std::size_t k, const UnknownModulus & unknown, double flatness)
 {

@@ -261,7 +261,7 @@ FEMElasticityOptimizer::GenerateData()
     std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
     objective->GetForwardModel().Prepare();
     const std::vector<double> moduli = factorizeAtFineStart ? fineStartKnown.get() : std::vector<double>();
-    if (!moduli.empty())
+    if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
     {
       objective->SetYoungsModuli(moduli);
       objective->GetForwardModel().PrepareSolves();
