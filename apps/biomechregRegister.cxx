@@ -215,8 +215,9 @@ RegisterCommand(const Arguments & args)
   const auto fixedMap = ReadLabelsOrRTStruct(fixedLabels, "fixed label image", fixed, scene, ignoreROIs);
   const auto fixedProbabilities = ReadProbabilityImages(probabilities);
   timer.End();
-  const auto result =
-    itk::RegisterSegmentedPair(movingMap, fixedMap, fixedProbabilities, moving, scene, settings, &timer);
+  // The moving CT is warped only when the warped CT is written.
+  const auto result = itk::RegisterSegmentedPair(
+    movingMap, fixedMap, fixedProbabilities, outputs.warpedCT ? moving : nullptr, scene, settings, &timer);
   timer.stages.insert(timer.stages.end(), result.state.stages.begin(), result.state.stages.end());
   WriteRegistration(out, result, settings, outputs, timer);
 

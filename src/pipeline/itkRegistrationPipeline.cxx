@@ -521,7 +521,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   DescribeState(r, scene);
 
   pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, clock);
-  clock.Begin("warp (CT linear; labels nearest)");
+  clock.Begin(movingCT ? "warp (CT linear; labels nearest)" : "warp (labels nearest)");
   r.warpedLabels = WarpImage(movingLabels, r.state.pullBack.GetPointer(), true, 0);
   if (movingCT)
   {
