@@ -51,9 +51,10 @@ VonMises(const double sigma[3][3]);
 std::string
 MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio);
 
-/** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
+/** Runs CHOLMOD and the BLAS it calls on the calling thread (determinism, and no spinning OpenMP teams; see the
+ * definition). Call before every CHOLMOD call on a thread. */
 void
-PinBlasToOneThread();
+PinSolverThreads();
 
 /** Orders the factorizations of \a common by METIS nested dissection alone (see the definition). */
 void

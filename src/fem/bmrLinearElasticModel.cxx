@@ -521,7 +521,7 @@ LinearElasticModel::Analyze()
   {
     return;
   }
-  fem::PinBlasToOneThread();
+  fem::PinSolverThreads();
   auto t0 = Clock::now();
   fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
   d.timings.assemble += SecondsSince(t0);
@@ -563,7 +563,7 @@ LinearElasticModel::Factorize()
     d.factorized = true;
     return;
   }
-  fem::PinBlasToOneThread();
+  fem::PinSolverThreads();
   auto t0 = Clock::now();
   d.UpdateFreeBlock();
   d.timings.assemble += SecondsSince(t0);
@@ -601,6 +601,7 @@ std::vector<double>
 LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<double> & prescribedAll)
 {
   Impl & d = *m_Impl;
+  fem::PinSolverThreads(); // the factorization may have been made on another thread
   if (!forces.empty() && forces.size() != d.ndof)
   {
     Fail("LinearElasticModel::Solve", "the force vector must hold 3 values per node");

@@ -411,6 +411,7 @@ NeoHookeanForwardModel::Impl::CopyTangentToFreeBlock()
 bool
 NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
 {
+  fem::PinSolverThreads(); // on whichever thread solves
   if (!analyzed)
   {
     fem::OrderByNestedDissection(solver.cholmod());
@@ -811,7 +812,7 @@ NeoHookeanForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & no
       d.freeDiagonal.push_back(d.freePositions[d.pattern.EntryIndex(i, i)]);
     }
   }
-  fem::PinBlasToOneThread();
+  fem::PinSolverThreads();
   d.analyzed = false;
   d.haveFactorization = d.factorizationExact = d.refactorNext = false;
   d.hasState = false;

@@ -16,12 +16,16 @@
  *
  *=========================================================================*/
 // Linear-elastic FEM core: patch test, scale invariance of u under E, F -> 10^k (E, F),
-// reaction forces in equilibrium, reuse of the factorization, and every error path.
+// reaction forces in equilibrium, reuse of the factorization, CHOLMOD's OpenMP teams serialized on the solving
+// thread, and every error path.
 #include "bmrLinearElasticModel.h"
 #include "bmrTestUtilities.h"
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <iostream>
+#include <thread>
 #include <cmath>
 #include <map>
 #include <cstdlib>
@@ -80,6 +84,35 @@ CheckRefactorizationThreshold(const bmr::TetrahedralMesh &      mesh,
 }
 } // namespace
 
+/** A solve leaves its thread's OpenMP parallel regions serialized (max active levels 0: CHOLMOD's spinning teams of 4
+ * would take CPU from the other thread's work), and only that thread's: a thread that never solved keeps the
+ * default. Skipped when no OpenMP runtime is loaded (a CHOLMOD built without it). */
+bool
+CheckSolverThreadsSerialized(const bmr::TetrahedralMesh &      mesh,
+                             const std::vector<std::int32_t> & nodes,
+                             const std::vector<double> &       values)
+{
+  using GetLevels = int (*)();
+  const auto get = reinterpret_cast<GetLevels>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
+  if (get == nullptr)
+  {
+    std::cout << "no OpenMP runtime loaded: nothing to serialize" << std::endl;
+    return true;
+  }
+  int solving = -1, idle = -1;
+  std::thread([&] {
+    bmr::LinearElasticModel model(mesh, { { 1, { 10.0, 0.3 } } });
+    model.SetDirichletConditions(nodes, values);
+    model.Solve({});
+    solving = get();
+  }).join();
+  std::thread([&] { idle = get(); }).join();
+  std::cout << "OpenMP max active levels: " << solving << " on a solving thread, " << idle << " on another"
+            << std::endl;
+  return bmr::test::Expect(solving == 0, "a solving thread runs its OpenMP regions serially") &&
+         bmr::test::Expect(idle > 0, "a thread that never solved keeps OpenMP's default");
+}
+
 int
 bmrLinearElasticModelTest(int, char *[])
 {
@@ -116,6 +149,7 @@ bmrLinearElasticModelTest(int, char *[])
     std::cout << "patch test relative error " << err << std::endl;
     // 1e-10: the linear field is in the element space, so only rounding remains.
     ok &= Expect(err <= 1e-10, "patch test exact to a relative 1e-10 (got " + ToString(err) + ")");
+    ok &= CheckSolverThreadsSerialized(mesh, nodes, values);
   }
 
   // 2. Scale invariance: u(10^k E, 10^k F) = u(E, F).
