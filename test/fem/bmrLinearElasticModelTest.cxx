@@ -82,7 +82,6 @@ CheckRefactorizationThreshold(const bmr::TetrahedralMesh &      mesh,
     "refactorization threshold 1", [&] { iterated.SetRefactorizationThreshold(1.0); }, "[0, 1)");
   return ok;
 }
-} // namespace
 
 /** A solve leaves its thread's OpenMP parallel regions serialized (max active levels 0: CHOLMOD's spinning teams of 4
  * would take CPU from the other thread's work), and only that thread's: a thread that never solved keeps the
@@ -112,6 +111,7 @@ CheckSolverThreadsSerialized(const bmr::TetrahedralMesh &      mesh,
   return bmr::test::Expect(solving == 0, "a solving thread runs its OpenMP regions serially") &&
          bmr::test::Expect(idle > 0, "a thread that never solved keeps OpenMP's default");
 }
+} // namespace
 
 int
 bmrLinearElasticModelTest(int, char *[])
