@@ -70,22 +70,14 @@ ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
   return det / 6.0;
 }
 
-/** Runs CHOLMOD and the BLAS it calls on the calling thread.
- * - BLAS: a multithreaded OpenBLAS splits the supernodal updates differently for different thread counts, and so
- *   rounds differently: the factorization, and with it every field and estimate, would change with the machine's
- *   core count (measured: fields differing in the last bits between OPENBLAS_NUM_THREADS=1 and 2). Process-wide,
- *   once.
- * - OpenMP: Debian's CHOLMOD runs its supernodal copy loops in teams of 4 OpenMP threads (CHOLMOD_OMP_NUM_THREADS)
- *   whose idle workers spin. The estimation factorizes on two threads at once (the sweep's coarse model and the fine
- *   one) beside the mesher, so on 2 cores those teams took CPU from the work that mattered: `register` on the demo
- *   pair took 7.0-7.2 s with OMP_THREAD_LIMIT=1 against 7.6-7.9 s without (5 alternating runs). The loops only copy,
- *   so results are the same bit for bit. omp_set_max_active_levels(0) makes every parallel region of the calling
- *   thread run on that thread alone; it is a per-thread setting, hence made once per thread.
- * The symbols are looked up at run time, so any other BLAS (reference, single-threaded) and a CHOLMOD without
- * OpenMP work unchanged. Determinism costs little here: the factorizations of this project take well under a
- * second and are reused for every solve. */
+/** Runs the BLAS that CHOLMOD calls on one thread. A multithreaded OpenBLAS splits the supernodal
+ * updates differently for different thread counts, and so rounds differently: the factorization, and with
+ * it every field and estimate, would change with the machine's core count (measured: fields differing in
+ * the last bits between OPENBLAS_NUM_THREADS=1 and 2). The symbol is looked up at run time, so any other
+ * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorizations of
+ * this project take well under a second and are reused for every solve. */
 void
-PinSolverThreads()
+PinBlasToOneThread()
 {
   static std::once_flag once;
   std::call_once(once, [] {
@@ -95,15 +87,50 @@ PinSolverThreads()
       set(1);
     }
   });
-  thread_local bool serialized = false;
-  if (!serialized)
+}
+
+namespace {
+/** The OpenMP runtime's max-active-levels calls, looked up once at run time (null without an OpenMP runtime). */
+struct OpenMPLevels
+{
+  int (*get)(){ nullptr };
+  void (*set)(int){ nullptr };
+};
+
+const OpenMPLevels &
+Levels()
+{
+  static const OpenMPLevels levels = [] {
+    OpenMPLevels l;
+    l.get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
+    l.set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"));
+    return l.get && l.set ? l : OpenMPLevels{};
+  }();
+  return levels;
+}
+} // namespace
+
+/** Debian's CHOLMOD runs the copy loops of its supernodal factorization in teams of 4 OpenMP threads
+ * (CHOLMOD_OMP_NUM_THREADS) whose idle workers spin. The estimation factorizes on two threads at once (the sweep's
+ * coarse model and the fine one) beside the mesher, so on 2 cores those teams took CPU from the work that mattered:
+ * `register` on the demo pair took 7.0-7.2 s with OMP_THREAD_LIMIT=1 against 7.6-7.9 s without (5 alternating
+ * runs). The loops only copy, so the results are the same bit for bit. Max active levels 0 makes every parallel
+ * region of the calling thread run on that thread alone; it is a per-thread setting, restored on exit so that a
+ * program's own OpenMP on that thread is left as it was. */
+SerialOpenMP::SerialOpenMP()
+{
+  if (Levels().get)
   {
-    serialized = true;
-    using SetLevels = void (*)(int);
-    if (auto set = reinterpret_cast<SetLevels>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels")))
-    {
-      set(0);
-    }
+    m_Previous = Levels().get();
+    Levels().set(0);
+  }
+}
+
+SerialOpenMP::~SerialOpenMP()
+{
+  if (m_Previous >= 0)
+  {
+    Levels().set(m_Previous);
   }
 }
 

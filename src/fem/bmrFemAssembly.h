@@ -51,10 +51,24 @@ VonMises(const double sigma[3][3]);
 std::string
 MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio);
 
-/** Runs CHOLMOD and the BLAS it calls on the calling thread (determinism, and no spinning OpenMP teams; see the
- * definition). Call before every CHOLMOD call on a thread. */
+/** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
 void
-PinSolverThreads();
+PinBlasToOneThread();
+
+/** While it lives, the OpenMP parallel regions the calling thread starts (CHOLMOD's) run on that thread alone;
+ * the thread's previous setting is restored after. Wrap every CHOLMOD call in one (see the definition). */
+class SerialOpenMP
+{
+public:
+  SerialOpenMP();
+  ~SerialOpenMP();
+  SerialOpenMP(const SerialOpenMP &) = delete;
+  SerialOpenMP &
+  operator=(const SerialOpenMP &) = delete;
+
+private:
+  int m_Previous{ -1 }; // -1: no OpenMP runtime
+};
 
 /** Orders the factorizations of \a common by METIS nested dissection alone (see the definition). */
 void

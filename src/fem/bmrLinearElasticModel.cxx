@@ -521,8 +521,9 @@ LinearElasticModel::Analyze()
   {
     return;
   }
-  fem::PinSolverThreads();
-  auto t0 = Clock::now();
+  fem::PinBlasToOneThread();
+  const fem::SerialOpenMP serial;
+  auto                    t0 = Clock::now();
   fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
@@ -563,8 +564,9 @@ LinearElasticModel::Factorize()
     d.factorized = true;
     return;
   }
-  fem::PinSolverThreads();
-  auto t0 = Clock::now();
+  fem::PinBlasToOneThread();
+  const fem::SerialOpenMP serial;
+  auto                    t0 = Clock::now();
   d.UpdateFreeBlock();
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
@@ -600,8 +602,8 @@ LinearElasticModel::Solve(const std::vector<double> & forces)
 std::vector<double>
 LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<double> & prescribedAll)
 {
-  Impl & d = *m_Impl;
-  fem::PinSolverThreads(); // the factorization may have been made on another thread
+  Impl &                  d = *m_Impl;
+  const fem::SerialOpenMP serial;
   if (!forces.empty() && forces.size() != d.ndof)
   {
     Fail("LinearElasticModel::Solve", "the force vector must hold 3 values per node");
