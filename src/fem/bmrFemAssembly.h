@@ -51,20 +51,18 @@ VonMises(const double sigma[3][3]);
 std::string
 MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio);
 
-/** Runs the BLAS that CHOLMOD calls on one thread (determinism; see the definition). */
-void
-PinBlasToOneThread();
-
-/** While it lives, the OpenMP parallel regions the calling thread starts (CHOLMOD's) run on that thread alone;
- * the thread's previous setting is restored after. Wrap every CHOLMOD call in one (see the definition). */
-class SerialOpenMP
+/** While it lives, CHOLMOD calls made on the calling thread run on that thread alone: the BLAS under them on one
+ * thread (determinism; process-wide, from the first one on) and the thread's OpenMP parallel regions (CHOLMOD's copy
+ * loops) serialized, the thread's previous OpenMP setting restored after. Wrap every CHOLMOD call in one (see the
+ * definitions). */
+class SingleThreadedCholmod
 {
 public:
-  SerialOpenMP();
-  ~SerialOpenMP();
-  SerialOpenMP(const SerialOpenMP &) = delete;
-  SerialOpenMP &
-  operator=(const SerialOpenMP &) = delete;
+  SingleThreadedCholmod();
+  ~SingleThreadedCholmod();
+  SingleThreadedCholmod(const SingleThreadedCholmod &) = delete;
+  SingleThreadedCholmod &
+  operator=(const SingleThreadedCholmod &) = delete;
 
 private:
   int m_Previous{ -1 }; // -1: no OpenMP runtime

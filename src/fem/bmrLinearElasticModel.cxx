@@ -521,9 +521,8 @@ LinearElasticModel::Analyze()
   {
     return;
   }
-  fem::PinBlasToOneThread();
-  const fem::SerialOpenMP serial;
-  auto                    t0 = Clock::now();
+  const fem::SingleThreadedCholmod serial;
+  auto                             t0 = Clock::now();
   fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
@@ -564,9 +563,8 @@ LinearElasticModel::Factorize()
     d.factorized = true;
     return;
   }
-  fem::PinBlasToOneThread();
-  const fem::SerialOpenMP serial;
-  auto                    t0 = Clock::now();
+  const fem::SingleThreadedCholmod serial;
+  auto                             t0 = Clock::now();
   d.UpdateFreeBlock();
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
@@ -602,8 +600,8 @@ LinearElasticModel::Solve(const std::vector<double> & forces)
 std::vector<double>
 LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<double> & prescribedAll)
 {
-  Impl &                  d = *m_Impl;
-  const fem::SerialOpenMP serial;
+  Impl &                           d = *m_Impl;
+  const fem::SingleThreadedCholmod serial;
   if (!forces.empty() && forces.size() != d.ndof)
   {
     Fail("LinearElasticModel::Solve", "the force vector must hold 3 values per node");

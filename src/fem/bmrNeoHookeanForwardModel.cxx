@@ -411,7 +411,7 @@ NeoHookeanForwardModel::Impl::CopyTangentToFreeBlock()
 bool
 NeoHookeanForwardModel::Impl::Factorize(bool allowShift)
 {
-  const fem::SerialOpenMP serial;
+  const fem::SingleThreadedCholmod serial;
   if (!analyzed)
   {
     fem::OrderByNestedDissection(solver.cholmod());
@@ -517,8 +517,8 @@ NeoHookeanForwardModel::Impl::SolveTangent(const std::vector<double> & rhs,
                                            bool                        exact,
                                            double                      tolerance)
 {
-  const fem::SerialOpenMP serial;
-  Eigen::VectorXd         b(static_cast<Eigen::Index>(nfree)), x;
+  const fem::SingleThreadedCholmod serial;
+  Eigen::VectorXd                  b(static_cast<Eigen::Index>(nfree)), x;
   for (std::size_t i = 0; i < ndof; ++i)
   {
     if (freeIndex[i] >= 0)
@@ -813,7 +813,6 @@ NeoHookeanForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & no
       d.freeDiagonal.push_back(d.freePositions[d.pattern.EntryIndex(i, i)]);
     }
   }
-  fem::PinBlasToOneThread();
   d.analyzed = false;
   d.haveFactorization = d.factorizationExact = d.refactorNext = false;
   d.hasState = false;
