@@ -1,0 +1,112 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "bmrMemoryWarmUp.h"
+
+#include <cstring>
+#include <vector>
+
+#if defined(__unix__) || defined(__APPLE__)
+#  include <sys/mman.h>
+#  define BMR_HAVE_MMAP 1
+#endif
+
+namespace bmr {
+
+namespace {
+// Chunks of 32 MiB: Close() waits at most one chunk's writes (about 50 ms at the cost above) before the release.
+constexpr std::size_t ChunkBytes = std::size_t{ 32 } << 20;
+} // namespace
+
+MemoryWarmUp::MemoryWarmUp(std::size_t capBytes)
+  : m_Cap(capBytes)
+{}
+
+MemoryWarmUp::~MemoryWarmUp()
+{
+  Close();
+}
+
+std::size_t
+MemoryWarmUp::WarmWhileOpen()
+{
+#if defined(BMR_HAVE_MMAP)
+  {
+    const std::lock_guard<std::mutex> lock(m_Mutex);
+    if (m_Closed || m_Warming)
+    {
+      return 0;
+    }
+    m_Warming = true;
+  }
+  // Mapped directly rather than through malloc, so that every chunk is fresh memory and is returned to the
+  // system (not kept in a malloc arena) when released.
+  std::vector<void *> chunks;
+  std::size_t         held = 0;
+  while (held + ChunkBytes <= m_Cap && !IsClosed())
+  {
+    void * chunk = mmap(nullptr, ChunkBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (chunk == MAP_FAILED)
+    {
+      break; // out of address space or memory: warm no further
+    }
+#  if defined(MADV_HUGEPAGE)
+    madvise(chunk, ChunkBytes, MADV_HUGEPAGE); // as malloc's large blocks get them (glibc.malloc.hugetlb=1)
+#  endif
+    std::memset(chunk, 0, ChunkBytes);
+    chunks.push_back(chunk);
+    held += ChunkBytes;
+    m_Held.store(held);
+  }
+  {
+    // Held until Close(): memory released long before the allocation would be handed back to the host again.
+    std::unique_lock<std::mutex> lock(m_Mutex);
+    m_Changed.wait(lock, [this] { return m_Closed; });
+  }
+  for (void * chunk : chunks)
+  {
+    munmap(chunk, ChunkBytes);
+  }
+  m_Held.store(0);
+  {
+    const std::lock_guard<std::mutex> lock(m_Mutex);
+    m_Warming = false;
+  }
+  m_Changed.notify_all();
+  return held;
+#else
+  return 0;
+#endif
+}
+
+void
+MemoryWarmUp::Close()
+{
+  std::unique_lock<std::mutex> lock(m_Mutex);
+  m_Closed = true;
+  m_Changed.notify_all();
+  m_Changed.wait(lock, [this] { return !m_Warming; });
+}
+
+bool
+MemoryWarmUp::IsClosed() const
+{
+  const std::lock_guard<std::mutex> lock(m_Mutex);
+  return m_Closed;
+}
+
+} // namespace bmr
