@@ -199,6 +199,7 @@ RegisterCommand(const Arguments & args)
   const auto        outputs = ParseRegistrationOutputs(args);
   auto              settings = ParseRegistrationSettings(args);
   settings.pushField = outputs.forwardField; // computed only when written
+  settings.elementState = outputs.mesh;
   const std::string probabilities = args.Get("--fixed-probabilities");
   const bool        ignoreROIs = IgnoreUnmappedROIs(args);
   args.CheckAllUsed();

@@ -267,6 +267,9 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
   UncertaintySettings    uncertainty;
   bool                   pushField{ false }; ///< also the push field (moving -> fixed) in state.push: 2-3 s more
+  /** The estimated state's per-element moduli, von Mises stress and Dirichlet flags in state.simulation, which
+   * mesh.vtu holds; false leaves them empty (state.simulation then has the nodal displacement and force only). */
+  bool elementState{ true };
   /** The moving anatomy's meshes, made beforehand by MeshMovingAnatomy() for these labels, scene and settings
    * (not owned; must outlive the call). Null (default): RegisterSegmentedPair() meshes them itself. */
   const MovingAnatomyMeshes * meshes{ nullptr };

@@ -45,6 +45,13 @@ MakeOutputDirectory(const std::string & path)
 void
 WriteSimulationMesh(const std::string & path, const SimulationResult & s)
 {
+  if (s.simulation.vonMises.size() != s.mesh.GetNumberOfTetrahedra())
+  {
+    bmr::Fail("WriteSimulationMesh",
+              "cannot write \"" + path +
+                "\": the state has no per-element moduli and stress (computed when "
+                "RegistrationSettings::elementState is on)");
+  }
   const std::vector<double> dirichlet(s.simulation.dirichlet.begin(), s.simulation.dirichlet.end());
   const std::vector<double> labels(s.mesh.labels.begin(), s.mesh.labels.end());
   bmr::WriteVtu(

@@ -283,10 +283,19 @@ StateIntervals(RegistrationResult &                r,
   }
 }
 
-/** Per-element moduli, stress and the Dirichlet flags of the estimated state (for mesh.vtu). */
+/** The estimated state's nodal displacement and force, and with \a elements its per-element moduli, stress and
+ * Dirichlet flags (for mesh.vtu). */
 void
-DescribeState(RegistrationResult & r, const bmr::Scene & scene)
+DescribeState(RegistrationResult & r, const bmr::Scene & scene, bool elements)
 {
+  const bmr::TetrahedralMesh & mesh = r.state.mesh;
+  bmr::ForwardSimulation &     s = r.state.simulation;
+  s.displacement = mesh.displacement;
+  s.force = mesh.force;
+  if (!elements)
+  {
+    return;
+  }
   auto materials = bmr::SceneMaterials(scene);
   for (const auto & l : scene.labels)
   {
@@ -296,10 +305,6 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene)
       materials[l.value].youngsModulus = it->second;
     }
   }
-  const bmr::TetrahedralMesh & mesh = r.state.mesh;
-  bmr::ForwardSimulation &     s = r.state.simulation;
-  s.displacement = mesh.displacement;
-  s.force = mesh.force;
   s.vonMises = bmr::SceneVonMisesStress(scene, mesh, materials, mesh.displacement);
   bmr::SetElementMaterials(mesh, materials, s);
   s.dirichlet.assign(mesh.GetNumberOfPoints(), 0);
@@ -518,7 +523,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   StateIntervals(r, setup, movingLabels, fixedLabels, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
-  DescribeState(r, scene);
+  DescribeState(r, scene, settings.elementState);
 
   pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, clock);
   clock.Begin(movingCT ? "warp (CT linear; labels nearest)" : "warp (labels nearest)");

@@ -27,11 +27,13 @@
 // twenty by design. This pair is such a miss (fit +8.8 %, the truth 1.45 half-widths below the 95 % interval's lower
 // end); the calibration benchmark checks coverage on 30 fresh pairs (0.73 / 0.97 at 68 / 95 %, docs/benchmarks.md).
 #include "itkBiomechanicalPipelines.h"
+#include "itkBiomechanicalWriters.h"
 #include "itkBiomechanicalReports.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdlib>
 #include <iostream>
 
@@ -48,8 +50,9 @@ itkRegistrationPipelineTest(int, char *[])
   phantom.seed = 3;
   const itk::PhantomPair pair = itk::MakePhantomPair(phantom);
 
-  const itk::RegistrationSettings settings;
-  const itk::RegistrationResult   r =
+  itk::RegistrationSettings settings;
+  settings.elementState = false; // as biomechreg register without mesh.vtu among its outputs
+  const itk::RegistrationResult r =
     itk::RegisterSegmentedPair(pair.movingLabels, pair.fixedLabels, pair.movingCT, pair.scene, settings);
   const itk::ModulusInterval & stated = r.modulusInterval.at("prostate");
   const double                 E = stated.estimate;
@@ -94,5 +97,22 @@ itkRegistrationPipelineTest(int, char *[])
   check(report["youngs_modulus_interval"]["prostate"]["estimate_kPa"].get<double>() == E,
         "report.json holds the stated modulus");
   check(report["gauge"]["label"] == "soft_tissue", "report.json names the gauge");
+  // Without the element state: the nodal solution only, and mesh.vtu refused (naming the setting), not written.
+  check(r.state.simulation.vonMises.empty() && r.state.simulation.youngsModulus.empty() &&
+          r.state.simulation.displacement == r.state.mesh.displacement,
+        "elementState off: no per-element stress or moduli, the nodal displacement kept");
+  const std::string vtu = (std::filesystem::temp_directory_path() / "bmr_pipeline_test_state.vtu").string();
+  std::filesystem::remove(vtu);
+  std::string refusal;
+  try
+  {
+    itk::WriteSimulationMesh(vtu, r.state);
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    refusal = e.GetDescription();
+  }
+  check(refusal.find("elementState") != std::string::npos && !std::filesystem::exists(vtu),
+        "mesh.vtu of a state without element fields refused naming elementState: " + refusal);
   return failures == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }
