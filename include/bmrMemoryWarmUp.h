@@ -41,9 +41,9 @@ namespace bmr {
  * reached, holds it until Close(), then releases it all; Close() (on the thread about to allocate) stops the
  * warming and returns once the memory is released, so that its allocation finds those pages. After Close(),
  * WarmWhileOpen() does nothing. Every WarmWhileOpen() must be matched by a Close() from another thread (the
- * destructor closes too), or it waits forever. The
- * warming only changes where page faults are paid, never a result. Elsewhere (bare metal, Linux or not) a fault
- * costs little and the idle thread's work is wasted but harmless; on systems without mmap it does nothing. */
+ * destructor closes too), or it waits forever. The warming only changes where page faults are paid, never a
+ * result. Elsewhere (bare metal) a fault costs little and the idle thread's work is wasted but harmless; on
+ * systems without mmap it does nothing. */
 class BiomechanicalRegistration_EXPORT MemoryWarmUp
 {
 public:
