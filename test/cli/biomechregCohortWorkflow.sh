@@ -27,7 +27,7 @@ setsid "$bin" cohort --cohort "$work/data/cohort.csv" --out "$work/study" --core
 leader=$!
 # Killed once Snakemake has finished a register job, not when a report.json appears: a job killed after its
 # register wrote the report but before Snakemake recorded it as finished is incomplete, and the re-run rightly
-# runs it again (that race made this test fail once in about ten runs).
+# runs it again (that race failed this test in one of session 40's three full ctest runs).
 for _ in $(seq 1 600); do
   if grep -q '^Finished job' "$work/run1.log" 2> /dev/null; then break; fi
   sleep 0.2
