@@ -73,6 +73,11 @@ public:
   virtual void
   PrepareSolves()
   {}
+  /** The threads the solves may use (e.g. 2 while a core is otherwise idle); results are the same bit for bit
+   * whatever the number. The default ignores it. */
+  virtual void
+  SetNumberOfSolveThreads(unsigned)
+  {}
   /** Modulus [kPa] of every element of \a label. */
   virtual void
   SetYoungsModulus(std::int32_t label, double youngsModulus) = 0;
@@ -158,6 +163,9 @@ public:
   /** LinearElasticModel::Factorize() at the current moduli. */
   void
   PrepareSolves() override;
+  /** LinearElasticModel::SetNumberOfSolveThreads(). */
+  void
+  SetNumberOfSolveThreads(unsigned threads) override;
   void
   SetYoungsModulus(std::int32_t label, double youngsModulus) override;
   double

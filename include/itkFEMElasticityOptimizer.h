@@ -161,6 +161,12 @@ public:
   itkSetMacro(LimitElementInversion, bool);
   itkGetConstMacro(LimitElementInversion, bool);
   itkBooleanMacro(LimitElementInversion);
+  /** Threads for the fine model's triangular solves (default 2; never more than
+   * MultiThreaderBase::GetGlobalDefaultNumberOfThreads()). The fine stage is otherwise serial, so a second core
+   * is idle unless other work runs beside the optimizer (then set 1). The estimate is the same bit for bit
+   * whatever the number (bmr::LinearElasticModel::SetNumberOfSolveThreads()). */
+  itkSetClampMacro(NumberOfFineSolveThreads, unsigned int, 1, 2);
+  itkGetConstMacro(NumberOfFineSolveThreads, unsigned int);
   /** Trial points rejected by LimitElementInversion over the last Update(). */
   itkGetConstMacro(NumberOfRejectedSteps, SizeValueType);
   /** Elements turned inside out by the estimated displacement (deformed volume <= 0). */
@@ -296,6 +302,7 @@ private:
   double                        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
   bool                          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
   bool                          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
+  unsigned int                  m_NumberOfFineSolveThreads{ 2 };
   double                        m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
   double                        m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
   double                        m_WallRegularization{ bmr::WallLoadSettings{}.regularization };

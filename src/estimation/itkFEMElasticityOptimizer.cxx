@@ -317,6 +317,8 @@ FEMElasticityOptimizer::GenerateData()
         }
         fineObjective = fineInMaking.get();
       }
+      fineObjective->GetForwardModel().SetNumberOfSolveThreads(
+        std::min<unsigned int>(m_NumberOfFineSolveThreads, MultiThreaderBase::GetGlobalDefaultNumberOfThreads()));
       return *fineObjective;
     },
     coarseObjective.get(),
@@ -359,6 +361,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
      << m_WarmStartRelativeCurvature << std::endl;
   os << indent << "MeshSource: " << (m_MeshSource ? "set" : "none (input Mesh)") << std::endl;
   os << indent << "LimitElementInversion: " << (m_LimitElementInversion ? "On" : "Off") << std::endl;
+  os << indent << "NumberOfFineSolveThreads: " << m_NumberOfFineSolveThreads << std::endl;
   os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
   os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
   os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;

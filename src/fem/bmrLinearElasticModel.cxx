@@ -22,6 +22,7 @@
 #include "bmrError.h"
 #include "bmrFemAssembly.h"
 #include "bmrStopwatch.h"
+#include "bmrSupernodalSolve.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
@@ -38,6 +39,19 @@ namespace bmr {
 using Clock = SteadyClock;
 using fem::ElementGradients;
 using fem::LameParameters;
+
+namespace {
+/** CHOLMOD's supernodal LL^T through Eigen, with its factor readable (for fem::SupernodalSolver). */
+class SupernodalLLT : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>
+{
+public:
+  const cholmod_factor *
+  Factor() const
+  {
+    return this->m_cholmodFactor;
+  }
+};
+} // namespace
 
 struct LinearElasticModel::Impl
 {
@@ -56,10 +70,13 @@ struct LinearElasticModel::Impl
   bool                                        freeBlockCurrent{ false }; // Kff holds the current values
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
-  bool                                                                   analyzed{ false };
-  bool                                                                   factorized{ false };
-  SolverTimings                                                          timings;
+  SupernodalLLT                               solver;
+  fem::SupernodalSolver                       triangular; // solves with solver's factor
+  bool                                        triangularReady{ false };
+  unsigned                                    solveThreads{ 1 };
+  bool                                        analyzed{ false };
+  bool                                        factorized{ false };
+  SolverTimings                               timings;
   // The factorization of K_ff at factorModuli, kept when the moduli change by less than refactorizeAbove:
   // Solve() then iterates with it as the preconditioner (PreconditionedSolve) instead of refactorizing.
   bool                           hasFactor{ false };
@@ -129,6 +146,19 @@ struct LinearElasticModel::Impl
   }
   bool
   PreconditionedSolve(const Eigen::VectorXd & b, Eigen::VectorXd & x);
+  /** K_ff^-1 b with the current factorization: fem::SupernodalSolver on solveThreads threads (the same result on
+   * any number), or CHOLMOD's own solve for a factor it does not take. */
+  Eigen::VectorXd
+  TriangularSolve(const Eigen::VectorXd & b)
+  {
+    if (!triangularReady)
+    {
+      return solver.solve(b);
+    }
+    Eigen::VectorXd x(b.size());
+    triangular.Solve(b.data(), x.data(), solveThreads);
+    return x;
+  }
   /** K_fc x_c at the free dofs (\a constrainedRows false) or K_cf x_f at the constrained ones (true). */
   void
   CouplingProduct(const std::vector<double> & x, bool constrainedRows, std::vector<double> & y)
@@ -158,9 +188,9 @@ LinearElasticModel::Impl::PreconditionedSolve(const Eigen::VectorXd & b, Eigen::
   const auto       K = Kff.selfadjointView<Eigen::Lower>();
   constexpr int    maximumIterations = 8;
   constexpr double tolerance = 1e-13;
-  x = solver.solve(b);
+  x = TriangularSolve(b);
   Eigen::VectorXd r = b - K * x;
-  Eigen::VectorXd z = solver.solve(r);
+  Eigen::VectorXd z = TriangularSolve(r);
   Eigen::VectorXd p = z;
   double          rz = r.dot(z);
   for (int k = 0; k < maximumIterations; ++k)
@@ -173,7 +203,7 @@ LinearElasticModel::Impl::PreconditionedSolve(const Eigen::VectorXd & b, Eigen::
     const double          alpha = rz / p.dot(q);
     x += alpha * p;
     r -= alpha * q;
-    z = solver.solve(r);
+    z = TriangularSolve(r);
     const double next = r.dot(z);
     p = z + (next / rz) * p;
     rz = next;
@@ -502,6 +532,12 @@ LinearElasticModel::SetRefactorizationThreshold(double fraction)
   m_Impl->refactorizeAbove = fraction;
 }
 
+void
+LinearElasticModel::SetNumberOfSolveThreads(unsigned threads)
+{
+  m_Impl->solveThreads = std::max(1U, threads);
+}
+
 double
 LinearElasticModel::GetYoungsModulus(std::int32_t label) const
 {
@@ -569,6 +605,7 @@ LinearElasticModel::Factorize()
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
   d.hasFactor = false;
+  d.triangularReady = false;
   d.solver.factorize(d.Kff);
   d.timings.factorize = SecondsSince(t0);
   if (d.solver.info() != Eigen::Success)
@@ -579,6 +616,7 @@ LinearElasticModel::Factorize()
   }
   d.factorized = true;
   d.hasFactor = true;
+  d.triangularReady = d.triangular.SetFactor(d.solver.Factor());
   for (const auto & [label, material] : d.materials)
   {
     d.factorModuli[label] = material.youngsModulus;
@@ -658,7 +696,7 @@ LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<
     if (!iterate || !d.PreconditionedSolve(b, x))
     {
       Factorize();
-      x = d.solver.solve(b);
+      x = d.TriangularSolve(b);
     }
     if (d.solver.info() != Eigen::Success || !x.allFinite())
     {

@@ -66,6 +66,12 @@ LinearForwardModel::PrepareSolves()
   m_Model->Factorize();
 }
 
+void
+LinearForwardModel::SetNumberOfSolveThreads(unsigned threads)
+{
+  m_Model->SetNumberOfSolveThreads(threads);
+}
+
 double
 LinearForwardModel::GetYoungsModulus(std::int32_t label) const
 {

@@ -213,6 +213,8 @@ struct EstimationSetup
   const std::vector<bmr::TetrahedralMesh> * resampleMeshes{ nullptr };
   /** The rescans' distance maps, made while the fit runs (may be null: each rescan makes its own). */
   RescanMapsPrefetch * rescanMaps{ nullptr };
+  /** FEMElasticityOptimizer::SetNumberOfFineSolveThreads(): 2 only when no other work runs beside the fit. */
+  unsigned int fineSolveThreads{ 1 };
 };
 
 /** The objective organs' distance maps by name. */

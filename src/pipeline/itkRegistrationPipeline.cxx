@@ -396,6 +396,7 @@ RunEstimation(const EstimationSetup &                                 setup,
   optimizer->SetEstimateUncertainty(curvature && e.estimateUncertainty);
   optimizer->SetUncertaintyStep(e.uncertaintyStep);
   optimizer->SetLimitElementInversion(e.limitElementInversion);
+  optimizer->SetNumberOfFineSolveThreads(setup.fineSolveThreads);
   const bmr::WallLoadSettings & walls = setup.settings->walls;
   optimizer->SetWallControlSpacing(walls.controlSpacing);
   optimizer->SetWallRegularization(walls.regularization);
@@ -488,6 +489,10 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     nullptr, {}, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans, &fixedProbabilities
   };
   setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
+  // The fine solves take the second core unless the interval's prefetches (below) may run on it.
+  const UncertaintyMethodEnum method = settings.uncertainty.method;
+  setup.fineSolveThreads =
+    method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan ? 1 : 2;
   // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
   // the estimation's thread that takes the mesh when it is finished during the sweep.
   std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch;

@@ -1,0 +1,95 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrSupernodalSolve_h
+#define bmrSupernodalSolve_h
+
+// The triangular solves of a CHOLMOD supernodal Cholesky factor on two threads (private to src/fem).
+#include <cholmod.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace bmr {
+namespace fem {
+
+/** \brief Solves A x = b with a supernodal CHOLMOD factor L L^T = P A P^T, splitting its elimination tree between
+ * two threads, with the same result bit for bit on one thread or two.
+ *
+ * The forward solve L y = P b visits the supernodes children first; supernode s solves its diagonal block,
+ * \f$ y_s \leftarrow L_{ss}^{-1} y_s \f$, and subtracts \f$ L_{rs} y_s \f$ from the rows r below it, which are
+ * its ancestors in the elimination tree. The backward solve \f$ L^T z = y \f$ visits them parents first,
+ * \f$ z_s = L_{ss}^{-T} (y_s - L_{rs}^T z_r) \f$, and x = P^T z. Disjoint subtrees touch disjoint rows except their
+ * common ancestors', so the tree is cut once (SetFactor()): the "top" supernodes, ancestors of everything else,
+ * and below them subtrees dealt to two bins of about equal size (the two halves of the nested-dissection order,
+ * split further where that balances them). Each bin's forward solve adds what it subtracts from the top's rows
+ * into its own accumulator; the top then takes bin 0's and bin 1's in that order and is solved alone; the
+ * backward solve does the top first, then the bins, which only read the top's rows. Every value is computed by
+ * the same operations in the same order whether the bins run one after the other or on two threads at once: the
+ * result does not depend on the thread count (and differs from CHOLMOD's own solve only by rounding).
+ *
+ * Bandwidth-bound: each solve reads the factor twice. The block operations are plain loops (no BLAS, whose
+ * threading would change the order of sums); the dot products keep four partial sums in a fixed order. */
+class SupernodalSolver
+{
+public:
+  /** Reads the supernodal structure of \a factor (LL^T, real, int indices; false otherwise, and Solve() must not be
+   * called) and cuts its tree. The factor must stay alive; its values may change (a refactorization on the same
+   * analysis) but not its structure: call again after a new analysis. */
+  bool
+  SetFactor(const cholmod_factor * factor);
+
+  /** x = A^{-1} b (n values each; \a x may alias \a b) on \a threads threads (2 used at most). */
+  void
+  Solve(const double * b, double * x, unsigned threads);
+
+  /** The fraction of the factor's entries in the two bins, which run in parallel. */
+  double
+  GetParallelShare() const
+  {
+    return m_ParallelShare;
+  }
+
+private:
+  void
+  CutTree();
+  void
+  ForwardBin(int bin);
+  void
+  BackwardBin(int bin);
+  void
+  RunBins(void (SupernodalSolver::*pass)(int), unsigned threads);
+  void
+  ForwardSupernode(std::int32_t s, double * shared, std::vector<double> & work);
+  void
+  BackwardSupernode(std::int32_t s, std::vector<double> & work);
+
+  const cholmod_factor *    m_Factor{ nullptr };
+  std::vector<std::int32_t> m_Bin[2]; // supernodes of each bin, ascending (children before parents)
+  std::vector<std::int32_t> m_Top;    // ancestors of both bins, ascending
+  std::vector<std::int32_t> m_TopColumns;
+  std::vector<char>         m_ColumnInTop;
+  double                    m_ParallelShare{ 0.0 };
+  std::vector<double>       m_Y;         // the permuted right-hand side, then the solution, in place
+  std::vector<double>       m_Shared[2]; // each bin's updates of the top's rows
+  std::vector<double>       m_Work[2];   // each bin's block workspace
+};
+
+} // namespace fem
+} // namespace bmr
+
+#endif
