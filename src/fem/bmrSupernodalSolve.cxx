@@ -236,8 +236,9 @@ SupernodalSolver::SetFactor(const cholmod_factor * factor)
   return true;
 }
 
-/** Moves the largest candidate subtree's root into the top while that lowers the estimated critical path, the
- * top's size plus the heavier bin's (64 moves at most: a few levels of nested dissection). */
+/** Starting from the roots as candidate subtrees, moves the largest candidate's root into the top, one at a time
+ * (64 moves at most: a few levels of nested dissection), deals the candidates to the bins after each move, and
+ * keeps the cut with the least estimated critical path: the top's size plus the heavier bin's. */
 void
 SupernodalSolver::CutTree()
 {

@@ -42,8 +42,10 @@ namespace fem {
  * the same operations in the same order whether the bins run one after the other or on two threads at once: the
  * result does not depend on the thread count (and differs from CHOLMOD's own solve only by rounding).
  *
- * Bandwidth-bound: each solve reads the factor twice. The block operations are plain loops (no BLAS, whose
- * threading would change the order of sums); the dot products keep four partial sums in a fixed order. */
+ * Bandwidth-bound: each solve reads the factor twice (on this project's 2-core machine two threads reach about
+ * the bandwidth one thread reaches on long columns; the bins' short columns need both). The block operations are
+ * plain loops over four columns at a time (no BLAS, whose threading would change the order of sums); the dot
+ * products sum their even and odd terms apart, in a fixed order. */
 class SupernodalSolver
 {
 public:
