@@ -55,6 +55,29 @@ struct Supernodes
   }
 };
 
+/** One supernode's block: nsrow x nscol, column-major (leading dimension ld), its first nscol rows the diagonal
+ * block (the columns first, first + 1, ...), then the rows below it (rowsBelow, ascending). */
+struct SupernodeBlock
+{
+  int            nscol;
+  int            nsrow;
+  std::size_t    ld;
+  const double * block;
+  int            first;
+  const int *    rowsBelow;
+
+  SupernodeBlock(const cholmod_factor & L, std::int32_t s)
+  {
+    const Supernodes S(L);
+    nscol = S.Columns(s);
+    nsrow = S.Rows(s);
+    ld = static_cast<std::size_t>(nsrow);
+    block = S.values + S.valuesAt[s];
+    first = S.first[s];
+    rowsBelow = S.rows + S.rowsAt[s] + nscol;
+  }
+};
+
 // The block kernels work on groups of four columns of a column-major block (leading dimension ld) at once, so that
 // the vector they update or read is loaded once per group instead of once per column. The order of every sum is
 // written out here (GCC's vector extension for pairs of doubles, no BLAS): the same on any thread and any x86-64.
@@ -325,12 +348,8 @@ SupernodalSolver::CutTree()
 void
 SupernodalSolver::ForwardSupernode(std::int32_t s, double * shared, std::vector<double> & work)
 {
-  const Supernodes  S(*m_Factor);
-  const int         nscol = S.Columns(s);
-  const int         nsrow = S.Rows(s);
-  const std::size_t ld = static_cast<std::size_t>(nsrow);
-  const double *    block = S.values + S.valuesAt[s];
-  double *          y = m_Y.data() + S.first[s];
+  const auto & [nscol, nsrow, ld, block, first, rowsBelow] = SupernodeBlock(*m_Factor, s);
+  double * y = m_Y.data() + first;
   work.assign(nsrow, 0.0);
   double * v = work.data();
   std::copy(y, y + nscol, v);
@@ -355,10 +374,9 @@ SupernodalSolver::ForwardSupernode(std::int32_t s, double * shared, std::vector<
     }
   }
   std::copy(v, v + nscol, y);
-  const int * rows = S.rows + S.rowsAt[s] + nscol;
   for (int i = 0; i < nsrow - nscol; ++i)
   {
-    const int r = rows[i];
+    const int r = rowsBelow[i];
     if (shared != nullptr && m_ColumnInTop[r])
     {
       shared[r] += v[nscol + i];
@@ -376,19 +394,14 @@ SupernodalSolver::ForwardSupernode(std::int32_t s, double * shared, std::vector<
 void
 SupernodalSolver::BackwardSupernode(std::int32_t s, std::vector<double> & work)
 {
-  const Supernodes  S(*m_Factor);
-  const int         nscol = S.Columns(s);
-  const int         nsrow = S.Rows(s);
-  const std::size_t ld = static_cast<std::size_t>(nsrow);
-  const double *    block = S.values + S.valuesAt[s];
-  double *          z = m_Y.data() + S.first[s];
-  const int *       rows = S.rows + S.rowsAt[s] + nscol;
+  const auto & [nscol, nsrow, ld, block, first, rowsBelow] = SupernodeBlock(*m_Factor, s);
+  double * z = m_Y.data() + first;
   work.resize(nsrow);
   double * v = work.data();
   std::copy(z, z + nscol, v);
   for (int i = 0; i < nsrow - nscol; ++i)
   {
-    v[nscol + i] = m_Y[rows[i]];
+    v[nscol + i] = m_Y[rowsBelow[i]];
   }
   for (int start = (nscol - 1) / 4 * 4; start >= 0; start -= 4)
   {
