@@ -134,6 +134,10 @@ public:
    * idle during the solves, 1 when other work runs beside them. 0 is taken as 1. */
   void
   SetNumberOfSolveThreads(unsigned threads);
+  /** The fraction of the current factor's entries in the two halves that the solve threads take side by side (the
+   * rest, the ancestors of both, is solved by one thread); 0 before the first factorization. */
+  double
+  GetParallelSolveShare() const;
 
   /** Assembles K_ff and factorizes it; checks the model first. */
   void

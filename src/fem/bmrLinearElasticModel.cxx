@@ -539,6 +539,12 @@ LinearElasticModel::SetNumberOfSolveThreads(unsigned threads)
 }
 
 double
+LinearElasticModel::GetParallelSolveShare() const
+{
+  return m_Impl->triangularReady ? m_Impl->triangular.GetParallelShare() : 0.0;
+}
+
+double
 LinearElasticModel::GetYoungsModulus(std::int32_t label) const
 {
   auto it = m_Impl->materials.find(label);
