@@ -137,12 +137,13 @@ CheckSerialOpenMP()
   return bmr::test::Expect(started == 0, "CHOLMOD's parallel regions ran on the solving thread") &&
          bmr::test::Expect(after == 2, "the thread's own OpenMP setting is restored");
 }
+
 /** The triangular solves on two threads (bmr::fem::SupernodalSolver) give the one-thread displacements bit for bit,
  * on a cube whose elimination tree has two halves below the top separator (16^3 nodes, two materials), for a
  * load spread over every node, at two moduli of the second material. The halves hold at least half of the
- * factor (0.74 measured), so the comparison is not between two serial solves. Their residual |f - K u| on the free dofs
- * is at most 1e-10 of |f|: a backward-stable Cholesky solve leaves about the unit roundoff times |K| |u| (1e-13 here),
- * so the bound fails only for a wrong solve (a missing or doubled update gives order 1). */
+ * factor (0.74 measured), so the comparison is not between two serial solves. Their residual |f - K u| on the
+ * free dofs is at most 1e-10 of |f|: a backward-stable Cholesky solve leaves about the unit roundoff times
+ * |K| |u| (1e-13 here), so the bound fails only for a wrong solve (a missing or doubled update gives order 1). */
 bool
 CheckTwoThreadSolves()
 {
