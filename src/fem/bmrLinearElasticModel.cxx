@@ -71,8 +71,9 @@ struct LinearElasticModel::Impl
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
   SupernodalLLT                               solver;
-  fem::SupernodalSolver                       triangular; // solves with solver's factor
-  bool                                        triangularReady{ false };
+  fem::SupernodalSolver                       triangular;               // solves with solver's factor
+  bool                                        triangularCut{ false };   // its tree cut for the current analysis
+  bool                                        triangularReady{ false }; // and the factor computed
   unsigned                                    solveThreads{ 1 };
   bool                                        analyzed{ false };
   bool                                        factorized{ false };
@@ -587,6 +588,7 @@ LinearElasticModel::Analyze()
   t0 = Clock::now();
   fem::OrderAsNumbered(d.solver.cholmod());
   d.solver.analyzePattern(d.Kff);
+  d.triangularCut = false;
   d.analyzed = true;
   d.timings.analyze = ordering + SecondsSince(t0);
 }
@@ -622,7 +624,12 @@ LinearElasticModel::Factorize()
   }
   d.factorized = true;
   d.hasFactor = true;
-  d.triangularReady = d.triangular.SetFactor(d.solver.Factor());
+  // The tree is cut once per analysis: a refactorization keeps the factor's structure.
+  if (!d.triangularCut)
+  {
+    d.triangularCut = d.triangular.SetFactor(d.solver.Factor());
+  }
+  d.triangularReady = d.triangularCut;
   for (const auto & [label, material] : d.materials)
   {
     d.factorModuli[label] = material.youngsModulus;
