@@ -379,6 +379,7 @@ main(int argc, char * argv[])
   }
   catch (const UsageError & e)
   {
+    bmrcli::EndStageLineOnError();
     std::cerr << "biomechreg: error: " << e.what() << " (see biomechreg help)" << std::endl;
     return 2;
   }
@@ -386,11 +387,13 @@ main(int argc, char * argv[])
   {
     std::string d = e.GetDescription();
     std::replace(d.begin(), d.end(), '\n', ' ');
+    bmrcli::EndStageLineOnError();
     std::cerr << "biomechreg: error: " << d << std::endl;
     return 1;
   }
   catch (const std::exception & e)
   {
+    bmrcli::EndStageLineOnError();
     std::cerr << "biomechreg: error: " << e.what() << std::endl;
     return 1;
   }

@@ -96,6 +96,9 @@ void
 OpenStageLine(const std::string & text);
 void
 CloseStageLine(const std::string & rest);
+/** Ends an open stage line with "failed" (nothing when none is open); called before an error is printed. */
+void
+EndStageLineOnError();
 /** On a terminal, redraws the open stage line with a bar (\a fraction in [0, 1]; negative: unknown), the
  * elapsed and the remaining time; otherwise does nothing. */
 void

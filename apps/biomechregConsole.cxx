@@ -184,6 +184,20 @@ CloseStageLine(const std::string & rest)
 }
 
 void
+EndStageLineOnError()
+{
+  bool open = false;
+  {
+    const std::lock_guard<std::mutex> lock(g_Console);
+    open = g_StageOpen;
+  }
+  if (open)
+  {
+    CloseStageLine("failed"); // so that the error message that follows starts its own line
+  }
+}
+
+void
 ShowProgress(double fraction, double elapsed, const std::string & detail)
 {
   const std::lock_guard<std::mutex> lock(g_Console);

@@ -21,6 +21,7 @@
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
 #include "itkDefaultConvertPixelTraits.h"
+#include "itkDicomStructureCheck.h"
 #include "itkGDCMImageIO.h"
 #include "itkGDCMSeriesFileNames.h"
 #include "itkGridGeometryConversion.h"
@@ -100,6 +101,7 @@ template<typename TImage>
 typename TImage::Pointer
 ReadDicomSeries(const std::string & path, const std::string & what)
 {
+  CheckDicomDirectoryStructure(path, what); // GDCM's scanner parses every file; a corrupt one can abort it
   auto names = GDCMSeriesFileNames::New();
   names->SetUseSeriesDetails(true);
   names->SetDirectory(path);
@@ -119,6 +121,7 @@ template<typename TImage>
 typename TImage::Pointer
 ReadImageFile(const std::string & path, const std::string & what)
 {
+  CheckDicomFileStructure(path, what); // GDCMImageIO's probe would parse a corrupt DICOM file and can abort
   auto reader = ImageFileReader<TImage>::New();
   reader->SetFileName(path);
   reader->UpdateOutputInformation();

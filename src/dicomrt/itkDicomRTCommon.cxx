@@ -22,6 +22,7 @@
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
 #include "bmrHash.h"
+#include "itkDicomStructureCheck.h"
 #include "itkGDCMSeriesFileNames.h"
 
 #include "gdcmItem.h"
@@ -61,6 +62,7 @@ const gdcm::Tag PixelDataTag(0x7fe0, 0x0010);
 gdcm::DataSet
 ReadHeader(const std::string & file, const char * where)
 {
+  CheckDicomFileStructure(file, "reference series file");
   gdcm::Reader reader;
   reader.SetFileName(file.c_str());
   if (!reader.ReadUpToTag(PixelDataTag, std::set<gdcm::Tag>()))
@@ -95,6 +97,7 @@ ImageSeriesFiles(const std::string & directory, const char * where)
   {
     bmr::Fail(where, "reference series \"" + directory + "\" holds 0 DICOM image series (no DICOM file)");
   }
+  CheckDicomDirectoryStructure(directory, "reference series"); // GDCM's scanner parses every file
   auto names = GDCMSeriesFileNames::New();
   names->SetUseSeriesDetails(false);
   names->SetDirectory(directory);
@@ -182,6 +185,13 @@ Trim(const std::string & text)
   }
   const auto last = text.find_last_not_of(" \t\r\n");
   return text.substr(first, last - first + 1);
+}
+
+std::string
+Upper(std::string text)
+{
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::toupper(c); });
+  return text;
 }
 
 std::string

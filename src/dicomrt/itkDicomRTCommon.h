@@ -44,6 +44,20 @@ NameKey(const std::string & name);
 std::string
 StringValue(const gdcm::DataSet & ds, const gdcm::Tag & tag);
 
+/** \a text in upper case (ASCII). */
+std::string
+Upper(std::string text);
+
+/** What is wrong with the structure of the DICOM Part 10 file held in \a bytes (elements, sequences and items
+ * ending inside the file and their parents; see itkDicomStructureCheck.cxx); empty when it is complete. */
+std::string
+DicomStructureProblem(std::vector<unsigned char> bytes);
+
+/** The Modality (0008,0060) of a DICOM Part 10 file from a \a prefix of its bytes, upper case without padding;
+ * empty when there is none or the prefix is corrupt up to it. */
+std::string
+DicomModalityOfPrefix(std::vector<unsigned char> prefix);
+
 /** True when \a path starts with the DICOM part 10 preamble (128 bytes, then "DICM"). */
 bool
 HasPart10Preamble(const std::string & path);

@@ -16,6 +16,9 @@ function(expect_error name expected)
     message(SEND_ERROR "${name}: stderr does not start with 'biomechreg: error:': ${err}")
   elseif(extra_lines GREATER 0)
     message(SEND_ERROR "${name}: error message spans several lines: ${err}")
+  elseif(out AND NOT out MATCHES "\n$")
+    # A stage line ("  read inputs ...") left open would run into the error on a shared terminal.
+    message(SEND_ERROR "${name}: stdout ends inside a line: ${out}")
   elseif(NOT err_stripped MATCHES "${expected}")
     message(SEND_ERROR "${name}: message does not mention '${expected}': ${err}")
   else()
@@ -132,8 +135,15 @@ file(WRITE ${TEMP}/far_labels.nrrd "NRRD0004\ntype: int\ndimension: 3\nsizes: 4 
 expect_error(no_overlap "the moving and fixed label images do not overlap in physical space"
   register ${ok_register} --fixed-labels ${TEMP}/far_labels.nrrd --scene ${TEMP}/ok/scene.json --out ${TEMP}/r4)
 
+# A DICOM file (preamble, "DICM") without its File Meta Information: refused by the structure check before
+# GDCM parses it (Debian's GDCM aborts on some such files), while the "read inputs" stage is open.
+string(REPEAT "x" 128 preamble)
+file(WRITE ${TEMP}/corrupt_dose.dcm "${preamble}DICMabcdefghijklmnop")
+expect_error(corrupt_dicom_dose "dose image .*corrupt_dose.dcm\" is corrupt: no File Meta Information"
+  dose --scene ${TEMP}/ok/scene.json --labels ${labels} --dose ${TEMP}/corrupt_dose.dcm --out ${TEMP}/s13)
+
 # No partial outputs: none of the failed runs may have left a directory or temporary file.
-foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 s11 s12 r1 r2 r3 r4 x)
+foreach(dir s1 s2 s3 s4 s5 s6 s7 s8 s9 s10 s11 s12 s13 r1 r2 r3 r4 x)
   if(EXISTS ${TEMP}/${dir})
     file(GLOB leftovers ${TEMP}/${dir}/*)
     if(leftovers)

@@ -31,6 +31,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -457,56 +458,132 @@ CheckDose(const std::string & dir, const std::string & rtdose, const std::string
   return ok;
 }
 
-/** Seeded random corruptions (1-6 bytes overwritten after the preamble; one in five also truncated) of the
- * RTSTRUCT and the RTDOSE: each must be read or refused with an itk::ExceptionObject, never crash the process
- * (Debian's GDCM asserts on some malformed files; the readers check the structure before GDCM sees it). */
+std::vector<char>
+ReadFileBytes(const std::string & path)
+{
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/** Where the File Meta Information (group 0002, explicit VR little endian after the 132-byte preamble) of the
+ * Part 10 file \a bytes ends. */
+std::size_t
+MetaInformationEnd(const std::vector<char> & bytes)
+{
+  const auto  u8 = [&](std::size_t i) { return static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i])); };
+  std::size_t pos = 132;
+  while (pos + 8 <= bytes.size() && (u8(pos) | u8(pos + 1) << 8) == 0x0002)
+  {
+    const std::string vr(bytes.data() + pos + 4, 2);
+    const bool        longHeader = vr == "OB" || vr == "OW" || vr == "UN" || vr == "UT" || vr == "SQ";
+    pos += longHeader ? 12 + (u8(pos + 8) | u8(pos + 9) << 8 | u8(pos + 10) << 16 | u8(pos + 11) << 24)
+                      : 8 + (u8(pos + 6) | u8(pos + 7) << 8);
+  }
+  return pos;
+}
+
+/** \a trials seeded random corruptions of \a source (1-6 bytes overwritten in [132, \a end); one in five also
+ * truncated), each given to \a read: each must be read or refused with an itk::ExceptionObject naming the file,
+ * never crash the process. */
+bool
+CheckCorruptCopies(const std::string &                              dir,
+                   const std::string &                              source,
+                   const std::string &                              what,
+                   std::size_t                                      end,
+                   const std::function<void(const std::string &)> & read,
+                   std::mt19937 &                                   random)
+{
+  const std::vector<char> original = ReadFileBytes(source);
+  end = std::min(end, original.size());
+  std::size_t read_ = 0, refused = 0;
+  bool        ok = true;
+  for (int trial = 0; trial < 150; ++trial)
+  {
+    std::vector<char> bytes = original;
+    const int         changes = 1 + static_cast<int>(random() % 6);
+    for (int c = 0; c < changes; ++c)
+    {
+      bytes[132 + random() % (end - 132)] = static_cast<char>(random() % 256);
+    }
+    if (random() % 5 == 0)
+    {
+      bytes.resize(132 + random() % (bytes.size() - 132));
+    }
+    const std::string corrupt = dir + "/corrupt.dcm";
+    std::ofstream(corrupt, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    try
+    {
+      read(corrupt);
+      ++read_;
+    }
+    catch (const itk::ExceptionObject & e)
+    {
+      ok &= Expect(std::string(e.GetDescription()).find(corrupt) != std::string::npos,
+                   "a corrupt file's refusal names it: " + std::string(e.GetDescription()));
+      ++refused;
+    }
+  }
+  std::cout << "  150 copies of " << what << ": " << read_ << " read, " << refused << " refused, none crashed"
+            << std::endl;
+  return ok;
+}
+
+/** Corrupt copies of the RTSTRUCT and the RTDOSE, anywhere and in the File Meta Information only, read as
+ * RT objects and (the meta-corrupted ones, whose Modality cannot be found) through the generic image reader:
+ * Debian's GDCM asserts on some malformed files (a truncated or overwritten meta group: before the structure
+ * check, 1 in 10 such copies aborted the process), so the readers check the structure before GDCM sees it. */
 bool
 CheckCorruptFiles(const std::string & dir, const std::string & rtstruct, const std::string & rtdose)
 {
   const auto   ct = itk::ReadBiomechanicalImage<CTImageType>(dir + "/ct.nrrd", "CT");
   std::mt19937 random(17);
-  bool         ok = true;
-  for (const std::string & source : { rtstruct, rtdose })
+  const auto   readStructure = [&](const std::string & path) { itk::ReadRTStructAsLabelImage(path, ct, OrganMap()); };
+  const auto   readDose = [](const std::string & path) { itk::ReadDoseImage(path); };
+  const auto readLabels = [](const std::string & path) { itk::ReadBiomechanicalImage<LabelImageType>(path, "labels"); };
+  const std::size_t anywhere = std::numeric_limits<std::size_t>::max();
+  bool              ok = CheckCorruptCopies(dir, rtstruct, "the RTSTRUCT", anywhere, readStructure, random);
+  ok &= CheckCorruptCopies(dir, rtdose, "the RTDOSE", anywhere, readDose, random);
+  const std::size_t structMeta = MetaInformationEnd(ReadFileBytes(rtstruct)) + 64;
+  const std::size_t doseMeta = MetaInformationEnd(ReadFileBytes(rtdose)) + 64;
+  ok &= CheckCorruptCopies(dir, rtstruct, "the RTSTRUCT (meta group)", structMeta, readStructure, random);
+  ok &= CheckCorruptCopies(dir, rtstruct, "the RTSTRUCT as labels (meta group)", structMeta, readLabels, random);
+  ok &= CheckCorruptCopies(dir, rtdose, "the RTDOSE (meta group)", doseMeta, readDose, random);
+  return ok;
+}
+
+/** A CT series directory with one slice whose Transfer Syntax UID has an invalid VR (the single byte that made
+ * GDCM's series scanner abort): refused naming the directory and the file. */
+bool
+CheckCorruptSeries(const std::string & dir, const std::string & rtstruct)
+{
+  const std::filesystem::path series = std::filesystem::path(dir) / "corrupt_series";
+  std::filesystem::remove_all(series);
+  std::filesystem::create_directories(series);
+  std::string slice;
+  for (const auto & entry : std::filesystem::directory_iterator(std::filesystem::path(rtstruct).parent_path()))
   {
-    std::ifstream           in(source, std::ios::binary);
-    const std::vector<char> original((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::size_t             read = 0, refused = 0;
-    for (int trial = 0; trial < 150; ++trial)
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("image", 0) == 0)
     {
-      std::vector<char> bytes = original;
-      const int         changes = 1 + static_cast<int>(random() % 6);
-      for (int c = 0; c < changes; ++c)
-      {
-        bytes[132 + random() % (bytes.size() - 132)] = static_cast<char>(random() % 256);
-      }
-      if (random() % 5 == 0)
-      {
-        bytes.resize(132 + random() % (bytes.size() - 132));
-      }
-      const std::string corrupt = dir + "/corrupt.dcm";
-      std::ofstream(corrupt, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-      try
-      {
-        if (source == rtstruct)
-        {
-          itk::ReadRTStructAsLabelImage(corrupt, ct, OrganMap());
-        }
-        else
-        {
-          itk::ReadDoseImage(corrupt);
-        }
-        ++read;
-      }
-      catch (const itk::ExceptionObject & e)
-      {
-        ok &= Expect(std::string(e.GetDescription()).find(corrupt) != std::string::npos,
-                     "a corrupt file's refusal names it: " + std::string(e.GetDescription()));
-        ++refused;
-      }
+      std::filesystem::copy_file(entry.path(), series / name);
+      slice = slice.empty() || name < slice ? name : slice;
     }
-    std::cout << "  150 corrupted copies of " << (source == rtstruct ? "the RTSTRUCT" : "the RTDOSE") << ": " << read
-              << " read, " << refused << " refused, none crashed" << std::endl;
   }
+  const auto        intact = itk::ReadBiomechanicalImage<CTImageType>(series.string(), "CT");
+  bool              ok = Expect(intact->GetLargestPossibleRegion().GetSize()[2] == Size[2], "the copied series reads");
+  std::vector<char> bytes = ReadFileBytes((series / slice).string());
+  std::size_t       pos = 132;
+  while (pos + 8 <= bytes.size() &&
+         !(bytes[pos] == 0x02 && bytes[pos + 1] == 0 && bytes[pos + 2] == 0x10 && bytes[pos + 3] == 0))
+  {
+    ++pos;
+  }
+  bytes[pos + 4] = 'J'; // (0002,0010) UI -> JI
+  std::ofstream((series / slice).string(), std::ios::binary)
+    .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  ok &= Refuses("a CT series with a corrupt slice",
+                [&] { itk::ReadBiomechanicalImage<CTImageType>(series.string(), "CT"); },
+                { series.string(), slice, "corrupt", "(0002,0010)" });
   return ok;
 }
 
@@ -536,6 +613,7 @@ itkDicomRTTest(int argc, char * argv[])
     ok &= CheckStructures(argv[2], argv[3]);
     ok &= CheckDose(argv[2], argv[4], argv[3]);
     ok &= CheckCorruptFiles(argv[2], argv[3], argv[4]);
+    ok &= CheckCorruptSeries(argv[2], argv[3]);
   }
   catch (const std::exception & e)
   {
