@@ -127,17 +127,23 @@ public:
   void
   SetRefactorizationThreshold(double fraction);
 
-  /** The triangular solves of every Solve() on up to \a threads threads (2 used at most; default 1): the
-   * factor's elimination tree is cut into the ancestors of everything and two halves of about equal size below
-   * them, solved side by side. The displacements are the same bit for bit whatever the number (each value is
-   * computed by the same operations in the same order); only the time changes. Use 2 when a core is otherwise
-   * idle during the solves, 1 when other work runs beside them. 0 is taken as 1. */
+  /** The factorizations and triangular solves of every Solve() on up to \a threads threads (2 used at most;
+   * default 1): the factor's elimination tree is cut into the ancestors of everything and two halves of about
+   * equal size below them, factorized and solved side by side, and the dense root separator is factorized in tiles
+   * shared by the threads. The displacements are the same bit for bit whatever the number (each value is computed
+   * by the same operations in the same order); only the time changes. Use 2 when a core is otherwise idle during
+   * the solves, 1 when other work runs beside them. 0 is taken as 1. */
   void
   SetNumberOfSolveThreads(unsigned threads);
   /** The fraction of the current factor's entries in the two halves that the solve threads take side by side (the
    * rest, the ancestors of both, is solved by one thread); 0 before the first factorization. */
   double
   GetParallelSolveShare() const;
+  /** Whether the current analysis is factorized by the project's tree-cut supernodal factorization (the default
+   * for every factor CHOLMOD lays out as supernodal LL^T) rather than by CHOLMOD's own (one thread); false before
+   * the first factorization. */
+  bool
+  UsesTreeCutFactorization() const;
 
   /** Assembles K_ff and factorizes it; checks the model first. */
   void

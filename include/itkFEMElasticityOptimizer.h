@@ -282,6 +282,9 @@ private:
   /** The estimator's settings from this object's. */
   bmr::EstimatorSettings
   Settings() const;
+  /** NumberOfFineSolveThreads, at most ITK's global default number of threads. */
+  unsigned int
+  FineSolveThreads() const;
   /** The scene's objective on \a mesh with this object's wall settings. */
   std::unique_ptr<bmr::SurfaceMatchingObjective>
   MakeObjective(const bmr::TetrahedralMesh &                                                      mesh,

@@ -152,6 +152,12 @@ FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
   }
 }
 
+unsigned int
+FEMElasticityOptimizer::FineSolveThreads() const
+{
+  return std::min<unsigned int>(m_NumberOfFineSolveThreads, MultiThreaderBase::GetGlobalDefaultNumberOfThreads());
+}
+
 bmr::EstimatorSettings
 FEMElasticityOptimizer::Settings() const
 {
@@ -278,6 +284,8 @@ FEMElasticityOptimizer::GenerateData()
     factorWarmUp.Close(); // its memory released just before the factorization allocates
     if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
     {
+      // The sweep is ending: its core joins the factorization (the same factor on any number of threads).
+      objective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
       objective->SetYoungsModuli(moduli);
       objective->GetForwardModel().PrepareSolves();
     }
@@ -317,8 +325,7 @@ FEMElasticityOptimizer::GenerateData()
         }
         fineObjective = fineInMaking.get();
       }
-      fineObjective->GetForwardModel().SetNumberOfSolveThreads(
-        std::min<unsigned int>(m_NumberOfFineSolveThreads, MultiThreaderBase::GetGlobalDefaultNumberOfThreads()));
+      fineObjective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
       return *fineObjective;
     },
     coarseObjective.get(),

@@ -22,6 +22,7 @@
 #include "bmrError.h"
 #include "bmrFemAssembly.h"
 #include "bmrStopwatch.h"
+#include "bmrSupernodalFactorize.h"
 #include "bmrSupernodalSolve.h"
 
 #include <Eigen/CholmodSupport>
@@ -45,8 +46,8 @@ namespace {
 class SupernodalLLT : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>
 {
 public:
-  const cholmod_factor *
-  Factor() const
+  cholmod_factor *
+  Factor()
   {
     return this->m_cholmodFactor;
   }
@@ -71,9 +72,11 @@ struct LinearElasticModel::Impl
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
   SupernodalLLT                               solver;
-  fem::SupernodalSolver                       triangular;               // solves with solver's factor
-  bool                                        triangularCut{ false };   // its tree cut for the current analysis
-  bool                                        triangularReady{ false }; // and the factor computed
+  fem::SupernodalSolver                       triangular;                // solves with solver's factor
+  fem::SupernodalFactorizer                   factorizer;                // computes solver's factor
+  bool                                        triangularCut{ false };    // its tree cut for the current analysis
+  bool                                        ownFactorization{ false }; // factorizer set for the current analysis
+  bool                                        triangularReady{ false };  // and the factor computed
   unsigned                                    solveThreads{ 1 };
   bool                                        analyzed{ false };
   bool                                        factorized{ false };
@@ -144,6 +147,26 @@ struct LinearElasticModel::Impl
       }
     }
     return true;
+  }
+  /** After an analysis: the factor's values allocated, its elimination tree cut (fem::SupernodalSolver) and
+   * K_ff's entries placed in it (fem::SupernodalFactorizer); CHOLMOD's own factorization and solves stay for a
+   * factor these do not take. */
+  void
+  CutTree()
+  {
+    cholmod_factor * factor = solver.Factor();
+    if (factor != nullptr && factor->is_super && factor->xtype == CHOLMOD_PATTERN)
+    {
+      cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, factor, &solver.cholmod());
+    }
+    triangularCut = triangular.SetFactor(factor);
+    Kff.makeCompressed();
+    ownFactorization = triangularCut && factorizer.SetStructure(factor,
+                                                                solver.cholmod(),
+                                                                static_cast<int>(nfree),
+                                                                Kff.outerIndexPtr(),
+                                                                Kff.innerIndexPtr(),
+                                                                triangular.GetBins());
   }
   bool
   PreconditionedSolve(const Eigen::VectorXd & b, Eigen::VectorXd & x);
@@ -539,6 +562,12 @@ LinearElasticModel::SetNumberOfSolveThreads(unsigned threads)
   m_Impl->solveThreads = std::max(1U, threads);
 }
 
+bool
+LinearElasticModel::UsesTreeCutFactorization() const
+{
+  return m_Impl->triangularReady && m_Impl->ownFactorization;
+}
+
 double
 LinearElasticModel::GetParallelSolveShare() const
 {
@@ -589,6 +618,7 @@ LinearElasticModel::Analyze()
   fem::OrderAsNumbered(d.solver.cholmod());
   d.solver.analyzePattern(d.Kff);
   d.triangularCut = false;
+  d.ownFactorization = false;
   d.analyzed = true;
   d.timings.analyze = ordering + SecondsSince(t0);
 }
@@ -614,21 +644,30 @@ LinearElasticModel::Factorize()
   t0 = Clock::now();
   d.hasFactor = false;
   d.triangularReady = false;
-  d.solver.factorize(d.Kff);
+  // The tree is cut once per analysis: a refactorization keeps the factor's structure.
+  if (!d.triangularCut || (d.ownFactorization && d.factorizer.GetNumberOfEntries() != d.Kff.nonZeros()))
+  {
+    d.CutTree();
+  }
+  bool positiveDefinite = true;
+  if (d.ownFactorization)
+  {
+    positiveDefinite = d.factorizer.Factorize(d.Kff.valuePtr(), d.solveThreads) == static_cast<int>(d.nfree);
+  }
+  else
+  {
+    d.solver.factorize(d.Kff);
+    positiveDefinite = d.solver.info() == Eigen::Success;
+  }
   d.timings.factorize = SecondsSince(t0);
-  if (d.solver.info() != Eigen::Success)
+  if (!positiveDefinite)
   {
     Fail("LinearElasticModel::Factorize",
-         "the stiffness matrix is not positive definite (CHOLMOD failed): the model is singular or ill-conditioned; "
-         "check the fixed labels and the element quality");
+         "the stiffness matrix is not positive definite (the Cholesky factorization failed): the model is singular "
+         "or ill-conditioned; check the fixed labels and the element quality");
   }
   d.factorized = true;
   d.hasFactor = true;
-  // The tree is cut once per analysis: a refactorization keeps the factor's structure.
-  if (!d.triangularCut)
-  {
-    d.triangularCut = d.triangular.SetFactor(d.solver.Factor());
-  }
   d.triangularReady = d.triangularCut;
   for (const auto & [label, material] : d.materials)
   {

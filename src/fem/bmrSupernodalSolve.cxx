@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "bmrSupernodalSolve.h"
 
+#include "bmrSupernodes.h"
+
 #include <algorithm>
 #include <cstring>
 #include <limits>
@@ -27,33 +29,6 @@ namespace bmr {
 namespace fem {
 namespace {
 
-/** The supernodal arrays of a CHOLMOD factor with int indices. */
-struct Supernodes
-{
-  const int *    first;    // first column of each supernode (nsuper + 1)
-  const int *    rowsAt;   // start of each supernode's row indices in rows (nsuper + 1)
-  const int *    valuesAt; // start of each supernode's nsrow x nscol column-major block in values (nsuper + 1)
-  const int *    rows;
-  const double * values;
-
-  explicit Supernodes(const cholmod_factor & L)
-    : first(static_cast<const int *>(L.super))
-    , rowsAt(static_cast<const int *>(L.pi))
-    , valuesAt(static_cast<const int *>(L.px))
-    , rows(static_cast<const int *>(L.s))
-    , values(static_cast<const double *>(L.x))
-  {}
-  int
-  Columns(std::int32_t s) const
-  {
-    return first[s + 1] - first[s];
-  }
-  int
-  Rows(std::int32_t s) const
-  {
-    return rowsAt[s + 1] - rowsAt[s];
-  }
-};
 
 /** One supernode's block: nsrow x nscol, column-major (leading dimension ld), its first nscol rows the diagonal
  * block (the columns first, first + 1, ...), then the rows below it (rowsBelow, ascending). */

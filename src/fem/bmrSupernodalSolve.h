@@ -59,6 +59,13 @@ public:
   void
   Solve(const double * b, double * x, unsigned threads);
 
+  /** The two bins of the cut: their supernodes, ascending (children before parents). */
+  const std::vector<std::int32_t> *
+  GetBins() const
+  {
+    return m_Bin;
+  }
+
   /** The fraction of the factor's entries in the two bins, which run in parallel. */
   double
   GetParallelShare() const

@@ -138,12 +138,14 @@ CheckSerialOpenMP()
          bmr::test::Expect(after == 2, "the thread's own OpenMP setting is restored");
 }
 
-/** The triangular solves on two threads (bmr::fem::SupernodalSolver) give the one-thread displacements bit for bit,
- * on a cube whose elimination tree has two halves below the top separator (16^3 nodes, two materials), for a
- * load spread over every node, at two moduli of the second material. The halves hold at least half of the
- * factor (0.74 measured), so the comparison is not between two serial solves. Their residual |f - K u| on the
- * free dofs is at most 1e-10 of |f|: a backward-stable Cholesky solve leaves about the unit roundoff times
- * |K| |u| (1e-13 here), so the bound fails only for a wrong solve (a missing or doubled update gives order 1). */
+/** The factorization (bmr::fem::SupernodalFactorizer) and the triangular solves (bmr::fem::SupernodalSolver) on two
+ * threads give the one-thread displacements bit for bit, on a cube whose elimination tree has two halves below the
+ * top separator (16^3 nodes, two materials; the root supernode, 1113 columns, is factorized in six tiles),
+ * for a load spread over every node, at two moduli of the second material: the second is a refactorization on the
+ * same analysis. The halves hold at least half of the factor (0.74 measured), so the comparison is not between
+ * two serial runs. The residual |f - K u| on the free dofs is at most 1e-10 of |f|: a backward-stable Cholesky
+ * factorization and solve leave about the unit roundoff times |K| |u| (1e-13 here), so the bound fails only for a
+ * wrong factor or solve (a missing or doubled update gives order 1). */
 bool
 CheckTwoThreadSolves()
 {
@@ -163,16 +165,19 @@ CheckTwoThreadSolves()
   }
   const std::map<std::int32_t, bmr::MaterialParameters> materials{ { 1, { 10.0, 0.35 } }, { 2, { 50.0, 0.45 } } };
   bool                                                  ok = true;
+  bmr::LinearElasticModel                               one(mesh, materials), two(mesh, materials);
+  for (bmr::LinearElasticModel * m : { &one, &two })
+  {
+    m->SetDirichletConditions(bottom, {});
+  }
+  one.SetNumberOfSolveThreads(1);
+  two.SetNumberOfSolveThreads(2);
   for (const double modulus : { 50.0, 80.0 })
   {
-    bmr::LinearElasticModel one(mesh, materials), two(mesh, materials);
     for (bmr::LinearElasticModel * m : { &one, &two })
     {
-      m->SetDirichletConditions(bottom, {});
       m->SetYoungsModulus(2, modulus);
     }
-    one.SetNumberOfSolveThreads(1);
-    two.SetNumberOfSolveThreads(2);
     const std::vector<double> u1 = one.Solve(forces), u2 = two.Solve(forces);
     const std::vector<double> Ku = one.ComputeInternalForces(u1);
     const std::vector<char> & held = one.GetConstrainedDegreesOfFreedom();
@@ -190,6 +195,8 @@ CheckTwoThreadSolves()
     std::cout << "E2 = " << modulus << " kPa: two-thread solve equal bit for bit: " << (u1 == u2)
               << "; relative residual " << relative << "; share of the factor solved side by side " << share
               << std::endl;
+    ok &= bmr::test::Expect(one.UsesTreeCutFactorization() && two.UsesTreeCutFactorization(),
+                            "the tree-cut factorization factorizes (not CHOLMOD's own)");
     ok &= bmr::test::Expect(share >= 0.5,
                             "the two halves hold at least half of the factor (got " + bmr::test::ToString(share) + ")");
     ok &= bmr::test::Expect(u1 == u2, "two solve threads give the one-thread displacements bit for bit");

@@ -1,0 +1,110 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef bmrSupernodalFactorize_h
+#define bmrSupernodalFactorize_h
+
+// The numeric supernodal Cholesky factorization into a CHOLMOD factor on two threads (private to src/fem).
+#include <cholmod.h>
+
+#include <cstdint>
+#include <memory>
+#include <memory>
+#include <vector>
+
+namespace bmr {
+namespace fem {
+
+/** \brief A = L L^T into the supernodal factor CHOLMOD's analysis laid out, on one or two threads with the same bits.
+ *
+ * CHOLMOD's numeric factorization runs on one thread here (its BLAS pinned to one: a multithreaded BLAS rounds
+ * differently for different thread counts). This one takes the supernodal elimination tree cut of
+ * SupernodalSolver: two bins of subtrees, independent of each other, and a top (the ancestors of both).
+ * - The bins run side by side. Each supernode s of a bin is factorized right-looking: its block, which holds
+ *   (A - the updates of its descendants) by then, is factorized, L_ss = chol(B_ss) and L_rs = B_rs L_ss^-T (LAPACK
+ *   dpotrf, BLAS dtrsm), and its update C = L_rs L_rs^T (dsyrk) is subtracted from its ancestors' blocks. Bin 0
+ *   subtracts its updates of the top from the top's blocks directly, bin 1 adds them into an accumulator that is
+ *   subtracted once both bins are done: the same operations in the same order on one thread and on two.
+ * - The top's supernodes follow in order; the dense root separator (no rows below its diagonal block) is
+ *   factorized in tiles (right-looking: dpotrf of a diagonal tile, dtrsm of the tiles below it, dsyrk/dgemm of the
+ *   trailing tiles), each tile operation one single-threaded BLAS call, whichever thread runs it.
+ * So the factor does not depend on the thread count. It differs from CHOLMOD's own in the last bits (other
+ * blockings of the same sums); both are backward stable.
+ */
+class SupernodalFactorizer
+{
+public:
+  /** Once per analysis: \a factor (supernodal LL^T with int indices, symbolic or numeric; made numeric here),
+   * \a common its CHOLMOD workspace, the lower triangle of A in CSC form in the original numbering (\a n columns,
+   * \a columnStarts, \a rowIndices), and the tree cut (\a bins, \a top: SupernodalSolver). False when the factor is
+   * not of that kind or A's pattern not the one analyzed: factorize with CHOLMOD then. The top is every
+   * supernode in neither bin. */
+  bool
+  SetStructure(cholmod_factor *                  factor,
+               cholmod_common &                  common,
+               int                               n,
+               const int *                       columnStarts,
+               const int *                       rowIndices,
+               const std::vector<std::int32_t> * bins);
+
+  /** L from the values \a values of A (on the pattern given to SetStructure) on \a threads threads (2 used at
+   * most). Returns n on success, else the (permuted) column at which A is not positive definite. */
+  int
+  Factorize(const double * values, unsigned threads);
+
+  /** The number of entries of A the structure was set for (a changed pattern needs SetStructure again). */
+  std::size_t
+  GetNumberOfEntries() const
+  {
+    return m_Entries;
+  }
+
+private:
+  bool
+  PlaceEntries(int n, const int * columnStarts, const int * rowIndices, const std::vector<int> & owner);
+  bool
+  UpdatesFit() const;
+  void
+  PlaceValues(int part, const double * values);
+  int
+  FactorizeBin(int bin, const double * values);
+  int
+  FactorizeSupernode(std::int32_t s, int bin);
+  void
+  Scatter(std::int32_t s, const double * update, int bin);
+  int
+  FactorizeDenseRoot(std::int32_t s, unsigned threads);
+
+  cholmod_factor *          m_Factor{ nullptr };
+  std::size_t               m_Entries{ 0 };
+  std::vector<std::int32_t> m_Bin[2];
+  std::vector<std::int32_t> m_Top;
+  std::vector<std::int32_t> m_SupernodeOf;   // of each column
+  std::vector<char>         m_InTop;         // of each supernode
+  std::vector<std::int64_t> m_AccumulatorAt; // of each top supernode's block in m_Accumulator
+  std::vector<int>          m_Position;      // of each entry of A in L's values
+  std::vector<char>         m_Owner;         // of each entry of A: bin 0, bin 1, the top (2)
+  std::unique_ptr<double[]> m_Accumulator;   // bin 1's updates of the top's blocks
+  std::size_t               m_AccumulatorSize{ 0 };
+  std::vector<double>       m_Update[2];   // each bin's dsyrk workspace (the top uses bin 0's)
+  std::vector<int>          m_Relative[2]; // each bin's row map
+};
+
+} // namespace fem
+} // namespace bmr
+
+#endif
