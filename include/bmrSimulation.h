@@ -122,9 +122,11 @@ SetElementMaterials(const TetrahedralMesh &                            mesh,
                     const std::map<std::int32_t, MaterialParameters> & materials,
                     ForwardSimulation &                                simulation);
 
-/** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels) with the scene's model. */
+/** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels) with the scene's model; the linear
+ * model factorizes and solves on \a threads threads (2 used at most: LinearElasticModel::SetNumberOfSolveThreads;
+ * the displacements are the same bit for bit whatever the number). */
 BiomechanicalRegistration_EXPORT ForwardSimulation
-SimulateScene(const Scene & scene, const TetrahedralMesh & mesh);
+SimulateScene(const Scene & scene, const TetrahedralMesh & mesh, unsigned threads = 1);
 
 } // namespace bmr
 

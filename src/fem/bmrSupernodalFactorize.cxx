@@ -203,7 +203,20 @@ SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
     m_Factor = nullptr;
     return false;
   }
-  // Not written here: bin 1 zeroes it in every factorization, beside bin 0 (first writes cost page faults).
+  // Not written here: bin 1 zeroes the accumulator in every factorization, beside bin 0, and the dsyrk overwrites
+  // the update workspaces (first writes cost page faults). Each workspace holds its part's largest update, so that
+  // it is allocated once per analysis (the top uses bin 0's).
+  std::size_t largest[2] = { 0, 0 }; // rows below the diagonal block
+  for (std::int32_t s = 0; s < nsuper; ++s)
+  {
+    std::size_t & part = largest[owner[s] == 1 ? 1 : 0];
+    part = std::max(part, static_cast<std::size_t>(L.Rows(s) - L.Columns(s)));
+  }
+  for (int b = 0; b < 2; ++b)
+  {
+    m_Update[b].reset(new double[std::max<std::size_t>(largest[b] * largest[b], 1)]);
+    m_Relative[b].assign(largest[b], 0);
+  }
   m_Accumulator.reset(new double[static_cast<std::size_t>(accumulated)]);
   m_AccumulatorSize = static_cast<std::size_t>(accumulated);
   m_Entries = static_cast<std::size_t>(columnStarts[n]);
@@ -403,10 +416,9 @@ SupernodalFactorizer::FactorizeSupernode(std::int32_t s, int bin)
   if (b > 0)
   {
     SolveBelow(b, k, block, m, block + k, m);
-    std::vector<double> & update = m_Update[bin];
-    update.resize(static_cast<std::size_t>(b) * b);
-    SymmetricUpdate(b, k, 1.0, block + k, m, 0.0, update.data(), b);
-    Scatter(s, update.data(), bin);
+    double * update = m_Update[bin].get(); // b x b fits: SetStructure()
+    SymmetricUpdate(b, k, 1.0, block + k, m, 0.0, update, b);
+    Scatter(s, update, bin);
   }
   return static_cast<int>(m_Factor->n);
 }
@@ -417,11 +429,10 @@ SupernodalFactorizer::FactorizeSupernode(std::int32_t s, int bin)
 void
 SupernodalFactorizer::Scatter(std::int32_t s, const double * update, int bin)
 {
-  const Supernodes   L(*m_Factor);
-  const int          b = L.Rows(s) - L.Columns(s);
-  const int *        below = L.rows + L.rowsAt[s] + L.Columns(s);
-  std::vector<int> & relative = m_Relative[bin];
-  relative.resize(static_cast<std::size_t>(b));
+  const Supernodes L(*m_Factor);
+  const int        b = L.Rows(s) - L.Columns(s);
+  const int *      below = L.rows + L.rowsAt[s] + L.Columns(s);
+  int *            relative = m_Relative[bin].data(); // b fit: SetStructure()
   for (int j = 0; j < b;)
   {
     const std::int32_t t = m_SupernodeOf[below[j]];

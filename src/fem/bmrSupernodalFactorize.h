@@ -100,7 +100,7 @@ private:
   std::vector<char>         m_Owner;         // of each entry of A: bin 0, bin 1, the top (2)
   std::unique_ptr<double[]> m_Accumulator;   // bin 1's updates of the top's blocks
   std::size_t               m_AccumulatorSize{ 0 };
-  std::vector<double>       m_Update[2];   // each bin's dsyrk workspace (the top uses bin 0's)
+  std::unique_ptr<double[]> m_Update[2];   // each bin's dsyrk workspace (the top uses bin 0's)
   std::vector<int>          m_Relative[2]; // each bin's row map
 };
 

@@ -233,7 +233,7 @@ SimulateMesh(bmr::TetrahedralMesh mesh,
   clock.Warn(out.warnings, bmr::MeshResolutionWarnings(scene, out.mesh));
 
   clock.Begin("FEM (assemble, factorize, solve)");
-  out.simulation = bmr::SimulateScene(scene, out.mesh);
+  out.simulation = bmr::SimulateScene(scene, out.mesh, MultiThreaderBase::GetGlobalDefaultNumberOfThreads());
   out.mesh.displacement = out.simulation.displacement;
   out.mesh.force = out.simulation.force;
   double umax = 0.0;

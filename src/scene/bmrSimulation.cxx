@@ -478,7 +478,7 @@ SimulateNeoHookean(const Scene & scene, const TetrahedralMesh & mesh, const Boun
 } // namespace
 
 ForwardSimulation
-SimulateScene(const Scene & scene, const TetrahedralMesh & mesh)
+SimulateScene(const Scene & scene, const TetrahedralMesh & mesh, unsigned threads)
 {
   const BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
   ForwardSimulation        out;
@@ -489,6 +489,7 @@ SimulateScene(const Scene & scene, const TetrahedralMesh & mesh)
   else
   {
     LinearElasticModel model(mesh, SceneMaterials(scene));
+    model.SetNumberOfSolveThreads(threads);
     model.SetDirichletConditions(bc.dirichletNodes, bc.dirichletValues);
     out.displacement = model.Solve(bc.forces);
     out.force = model.ComputeInternalForces(out.displacement);
