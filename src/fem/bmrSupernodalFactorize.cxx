@@ -179,7 +179,6 @@ SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
     }
   }
   m_Top.clear();
-  m_InTop.assign(nsuper, 0);
   m_AccumulatorAt.assign(nsuper, -1);
   std::int64_t accumulated = 0;
   for (std::int32_t s = 0; s < nsuper; ++s)
@@ -187,9 +186,8 @@ SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
     if (owner[s] == 2)
     {
       m_Top.push_back(s);
-      m_InTop[s] = 1;
       m_AccumulatorAt[s] = accumulated;
-      accumulated += static_cast<std::int64_t>(L.Columns(s)) * L.Rows(s);
+      accumulated += static_cast<std::int64_t>(L.BlockSize(s));
     }
   }
   m_SupernodeOf.assign(n, 0);
@@ -446,7 +444,7 @@ SupernodalFactorizer::Scatter(std::int32_t s, const double * update, int bin)
       }
       relative[i] = q;
     }
-    const bool accumulate = bin == 1 && m_InTop[t];
+    const bool accumulate = bin == 1 && m_AccumulatorAt[t] >= 0; // bin 1 and a top supernode
     double *   target = accumulate ? m_Accumulator.get() + m_AccumulatorAt[t] : L.Block(t);
     for (; j < b && below[j] < L.first[t + 1]; ++j)
     {

@@ -94,8 +94,7 @@ private:
   std::vector<std::int32_t> m_Bin[2];
   std::vector<std::int32_t> m_Top;
   std::vector<std::int32_t> m_SupernodeOf;   // of each column
-  std::vector<char>         m_InTop;         // of each supernode
-  std::vector<std::int64_t> m_AccumulatorAt; // of each top supernode's block in m_Accumulator
+  std::vector<std::int64_t> m_AccumulatorAt; // of each top supernode's block in m_Accumulator, -1 elsewhere
   std::vector<int>          m_Position;      // of each entry of A in L's values
   std::vector<char>         m_Owner;         // of each entry of A: bin 0, bin 1, the top (2)
   std::unique_ptr<double[]> m_Accumulator;   // bin 1's updates of the top's blocks

@@ -47,7 +47,7 @@ struct SupernodeBlock
     nscol = S.Columns(s);
     nsrow = S.Rows(s);
     ld = static_cast<std::size_t>(nsrow);
-    block = S.values + S.valuesAt[s];
+    block = S.Block(s);
     first = S.first[s];
     rowsBelow = S.rows + S.rowsAt[s] + nscol;
   }
