@@ -164,6 +164,16 @@ public:
   {
     m_SweepPrediction = std::move(prediction);
   }
+  /** The fine stage's start loads, given the fine objective: by default its EstimateInitialParameters(). A caller
+   * that has computed them ahead (e.g. on the core that waits for the fine objective's factorization) hands them over
+   * here; it must return what EstimateInitialParameters() returns, so that the results are the same. */
+  using FineStartLoads = std::function<std::vector<double>(EstimationObjective & fine)>;
+  void
+  SetFineStartLoads(FineStartLoads source)
+  {
+    m_FineStartLoads = std::move(source);
+  }
+
   EstimationResult
   Run();
 
@@ -179,6 +189,7 @@ private:
   EstimatorSettings                      m_Settings;
   Observer                               m_Observer;
   SweepPrediction                        m_SweepPrediction;
+  FineStartLoads                         m_FineStartLoads;
 };
 
 } // namespace bmr

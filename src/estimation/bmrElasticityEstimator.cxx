@@ -641,7 +641,7 @@ ElasticityEstimator::Run()
   run.result.timings["sweep"] = SecondsSince(t0);
 
   t0 = Clock::now();
-  run.loads = Fine().EstimateInitialParameters();
+  run.loads = m_FineStartLoads ? m_FineStartLoads(Fine()) : Fine().EstimateInitialParameters();
   run.result.timings["initial loads"] = SecondsSince(t0);
 
   t0 = Clock::now();

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <future>
+#include <optional>
 
 namespace itk {
 namespace {
@@ -264,21 +265,39 @@ FEMElasticityOptimizer::GenerateData()
       fineStart.set_value(moduli);
     }
   };
-  // The main thread, when it has to wait for the fine objective, faults in the memory of the fine factor (see
-  // bmr::MemoryWarmUp: on this project's test machine 0.75-0.81 s instead of 1.07-1.13 s for that factorization).
-  bmr::MemoryWarmUp factorWarmUp(FineFactorWarmUpBytes);
-  const auto makeFine = [this, &fine, &sourced, &samplers, &fineStartKnown, &factorWarmUp](bool factorizeAtFineStart) {
-    struct CloseOnExit // the waiting thread's warm-up ends, whatever happens here
+  // The main thread, when it has to wait for the fine objective, computes the fine stage's start loads as soon as
+  // the objective exists, while this thread analyzes its sparse matrix (one core each), then faults in the memory of
+  // the fine factor (see bmr::MemoryWarmUp: on this project's test machine 0.75-0.81 s instead of 1.07-1.13 s for
+  // that factorization).
+  bmr::MemoryWarmUp                                   factorWarmUp(FineFactorWarmUpBytes);
+  std::promise<const bmr::SurfaceMatchingObjective *> fineMade;
+  std::future<const bmr::SurfaceMatchingObjective *>  fineMadeKnown = fineMade.get_future();
+  const auto makeFine = [this, &fine, &sourced, &samplers, &fineStartKnown, &factorWarmUp, &fineMade](
+                          bool factorizeAtFineStart) {
+    struct CloseOnExit // the waiting thread's warm-up ends, and it learns that the objective will not come
     {
-      bmr::MemoryWarmUp & warmUp;
-      ~CloseOnExit() { warmUp.Close(); }
-    } const closeOnExit{ factorWarmUp };
+      bmr::MemoryWarmUp &                                   warmUp;
+      std::promise<const bmr::SurfaceMatchingObjective *> & made;
+      bool                                                  told{ false };
+      ~CloseOnExit()
+      {
+        warmUp.Close();
+        if (!told)
+        {
+          made.set_value(nullptr);
+        }
+      }
+    } closeOnExit{ factorWarmUp, fineMade };
     if (fine == nullptr)
     {
       sourced = m_MeshSource();
       fine = &sourced;
     }
     std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
+    // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
+    // terms, none of which the analysis and factorization below write.
+    fineMade.set_value(objective.get());
+    closeOnExit.told = true;
     objective->GetForwardModel().Prepare();
     const std::vector<double> moduli = factorizeAtFineStart ? fineStartKnown.get() : std::vector<double>();
     factorWarmUp.Close(); // its memory released just before the factorization allocates
@@ -314,13 +333,18 @@ FEMElasticityOptimizer::GenerateData()
   {
     coarseObjective = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
   }
-  bmr::ElasticityEstimator estimator(
+  std::optional<std::vector<double>> fineStartLoads; // computed while the fine objective is being factorized
+  bmr::ElasticityEstimator           estimator(
     [&]() -> bmr::EstimationObjective & {
       if (!fineObjective)
       {
         tellFineStart({}); // a sweep without a bracket has told nothing
         if (fineInMaking.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
         {
+          if (const bmr::SurfaceMatchingObjective * made = fineMadeKnown.get())
+          {
+            fineStartLoads = made->EstimateInitialParameters();
+          }
           factorWarmUp.WarmWhileOpen();
         }
         fineObjective = fineInMaking.get();
@@ -334,6 +358,9 @@ FEMElasticityOptimizer::GenerateData()
   if (alongside)
   {
     estimator.SetSweepPrediction(tellFineStart);
+    estimator.SetFineStartLoads([&fineStartLoads](bmr::EstimationObjective & objective) {
+      return fineStartLoads ? *fineStartLoads : objective.EstimateInitialParameters();
+    });
   }
   estimator.SetObserver([this](const IterationRecord & record, double progress) {
     m_CurrentRecord = record;
