@@ -272,44 +272,44 @@ FEMElasticityOptimizer::GenerateData()
   bmr::MemoryWarmUp                                   factorWarmUp(FineFactorWarmUpBytes);
   std::promise<const bmr::SurfaceMatchingObjective *> fineMade;
   std::future<const bmr::SurfaceMatchingObjective *>  fineMadeKnown = fineMade.get_future();
-  const auto makeFine = [this, &fine, &sourced, &samplers, &fineStartKnown, &factorWarmUp, &fineMade](
-                          bool factorizeAtFineStart) {
-    struct CloseOnExit // the waiting thread's warm-up ends, and it learns that the objective will not come
-    {
-      bmr::MemoryWarmUp &                                   warmUp;
-      std::promise<const bmr::SurfaceMatchingObjective *> & made;
-      bool                                                  told{ false };
-      ~CloseOnExit()
+  const auto                                          makeFine =
+    [this, &fine, &sourced, &samplers, &fineStartKnown, &factorWarmUp, &fineMade](bool factorizeAtFineStart) {
+      struct CloseOnExit // the waiting thread's warm-up ends, and it learns that the objective will not come
       {
-        warmUp.Close();
-        if (!told)
+        bmr::MemoryWarmUp &                                   warmUp;
+        std::promise<const bmr::SurfaceMatchingObjective *> & made;
+        bool                                                  told{ false };
+        ~CloseOnExit()
         {
-          made.set_value(nullptr);
+          warmUp.Close();
+          if (!told)
+          {
+            made.set_value(nullptr);
+          }
         }
+      } closeOnExit{ factorWarmUp, fineMade };
+      if (fine == nullptr)
+      {
+        sourced = m_MeshSource();
+        fine = &sourced;
       }
-    } closeOnExit{ factorWarmUp, fineMade };
-    if (fine == nullptr)
-    {
-      sourced = m_MeshSource();
-      fine = &sourced;
-    }
-    std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
-    // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
-    // terms, none of which the analysis and factorization below write.
-    fineMade.set_value(objective.get());
-    closeOnExit.told = true;
-    objective->GetForwardModel().Prepare();
-    const std::vector<double> moduli = factorizeAtFineStart ? fineStartKnown.get() : std::vector<double>();
-    factorWarmUp.Close(); // its memory released just before the factorization allocates
-    if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
-    {
-      // The sweep is ending: its core joins the factorization (the same factor on any number of threads).
-      objective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
-      objective->SetYoungsModuli(moduli);
-      objective->GetForwardModel().PrepareSolves();
-    }
-    return objective;
-  };
+      std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
+      // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
+      // terms, none of which the analysis and factorization below write.
+      fineMade.set_value(objective.get());
+      closeOnExit.told = true;
+      objective->GetForwardModel().Prepare();
+      const std::vector<double> moduli = factorizeAtFineStart ? fineStartKnown.get() : std::vector<double>();
+      factorWarmUp.Close(); // its memory released just before the factorization allocates
+      if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
+      {
+        // The sweep is ending: its core joins the factorization (the same factor on any number of threads).
+        objective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
+        objective->SetYoungsModuli(moduli);
+        objective->GetForwardModel().PrepareSolves();
+      }
+      return objective;
+    };
   std::future<std::unique_ptr<bmr::SurfaceMatchingObjective>> fineInMaking;
   std::unique_ptr<bmr::SurfaceMatchingObjective>              fineObjective;
   const bool alongside = sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
@@ -335,7 +335,7 @@ FEMElasticityOptimizer::GenerateData()
   }
   std::optional<std::vector<double>> fineStartLoads; // computed while the fine objective is being factorized
   bmr::ElasticityEstimator           estimator(
-    [&]() -> bmr::EstimationObjective & {
+              [&]() -> bmr::EstimationObjective & {
       if (!fineObjective)
       {
         tellFineStart({}); // a sweep without a bracket has told nothing
@@ -351,10 +351,10 @@ FEMElasticityOptimizer::GenerateData()
       }
       fineObjective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
       return *fineObjective;
-    },
-    coarseObjective.get(),
-    unknowns,
-    this->Settings());
+              },
+              coarseObjective.get(),
+              unknowns,
+              this->Settings());
   if (alongside)
   {
     estimator.SetSweepPrediction(tellFineStart);
