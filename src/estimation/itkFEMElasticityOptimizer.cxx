@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <future>
 #include <optional>
 
@@ -30,6 +31,112 @@ ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string
   const std::string  what = "distance map of \"" + name + "\"";
   return std::make_shared<bmr::SignedDistanceSampler>(GridGeometryOf(map), std::move(values), what.c_str());
 }
+
+/** \brief The fine objective in the making on a second thread while the sweep runs on the coarse one (one core each):
+ * its mesh (when a source makes it), the objective, its sparse analysis and, at the moduli the fine stage starts
+ * from, its factorization. The sweep tells those moduli (TellStartModuli) as soon as it brackets the minimum, so the
+ * factorization overlaps its last samples: the same objective and factor, sooner.
+ *
+ * The thread that then asks for the objective (Take) and would otherwise wait computes the fine stage's start loads
+ * as soon as the objective exists, while the second thread analyzes its matrix (StartLoads hands them over), and
+ * then faults in the memory of the fine factor (bmr::MemoryWarmUp: on this project's test machine the first fine
+ * factorization took 0.75-0.81 s instead of 1.07-1.13 s with it). */
+class FineObjectiveInMaking
+{
+public:
+  using Maker = std::function<std::unique_ptr<bmr::SurfaceMatchingObjective>()>;
+
+  FineObjectiveInMaking(Maker make, unsigned int solveThreads)
+    : m_WarmUp(FineFactorWarmUpBytes)
+    , m_StartModuliKnown(m_StartModuli.get_future())
+    , m_ObjectiveKnown(m_Objective.get_future())
+  {
+    m_Made = std::async(std::launch::async,
+                        [this, make = std::move(make), solveThreads]() { return this->Make(make, solveThreads); });
+  }
+  /** Should the sweep throw, the second thread learns there is nothing to factorize; m_Made then joins it. */
+  ~FineObjectiveInMaking() { TellStartModuli({}); }
+  ITK_DISALLOW_COPY_AND_MOVE(FineObjectiveInMaking);
+
+  /** The moduli to factorize at (empty: none); the first call counts. */
+  void
+  TellStartModuli(const std::vector<double> & moduli)
+  {
+    if (!m_StartModuliTold)
+    {
+      m_StartModuliTold = true;
+      m_StartModuli.set_value(moduli);
+    }
+  }
+
+  /** Waits for the objective (rethrowing what making it threw), computing the start loads meanwhile. */
+  std::unique_ptr<bmr::SurfaceMatchingObjective>
+  Take()
+  {
+    TellStartModuli({}); // a sweep without a bracket has told nothing
+    if (m_Made.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+    {
+      if (const bmr::SurfaceMatchingObjective * made = m_ObjectiveKnown.get())
+      {
+        m_StartLoads = made->EstimateInitialParameters();
+      }
+      m_WarmUp.WarmWhileOpen();
+    }
+    return m_Made.get();
+  }
+
+  /** The start loads computed in Take(), or computed now: the same values either way. */
+  std::vector<double>
+  StartLoads(bmr::EstimationObjective & objective) const
+  {
+    return m_StartLoads ? *m_StartLoads : objective.EstimateInitialParameters();
+  }
+
+private:
+  std::unique_ptr<bmr::SurfaceMatchingObjective>
+  Make(const Maker & make, unsigned int solveThreads)
+  {
+    struct OnExit // the waiting thread's warm-up ends, and it learns when the objective will not come
+    {
+      FineObjectiveInMaking & self;
+      bool                    told{ false };
+      ~OnExit()
+      {
+        self.m_WarmUp.Close();
+        if (!told)
+        {
+          self.m_Objective.set_value(nullptr);
+        }
+      }
+    } onExit{ *this };
+    std::unique_ptr<bmr::SurfaceMatchingObjective> objective = make();
+    // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
+    // terms, none of which the analysis and the factorization below write.
+    m_Objective.set_value(objective.get());
+    onExit.told = true;
+    objective->GetForwardModel().Prepare();
+    const std::vector<double> moduli = m_StartModuliKnown.get();
+    m_WarmUp.Close(); // its memory released just before the factorization allocates
+    if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
+    {
+      // The sweep is ending: its core joins the factorization (the same factor on any number of threads).
+      objective->GetForwardModel().SetNumberOfSolveThreads(solveThreads);
+      objective->SetYoungsModuli(moduli);
+      objective->GetForwardModel().PrepareSolves();
+    }
+    return objective;
+  }
+
+  bmr::MemoryWarmUp                                   m_WarmUp;
+  std::promise<std::vector<double>>                   m_StartModuli;
+  bool                                                m_StartModuliTold{ false };
+  std::future<std::vector<double>>                    m_StartModuliKnown;
+  std::promise<const bmr::SurfaceMatchingObjective *> m_Objective;
+  std::future<const bmr::SurfaceMatchingObjective *>  m_ObjectiveKnown;
+  std::optional<std::vector<double>>                  m_StartLoads;
+  // Last: destroyed first, which waits for the thread while everything it uses still exists.
+  std::future<std::unique_ptr<bmr::SurfaceMatchingObjective>> m_Made;
+};
 } // namespace
 
 FEMElasticityOptimizer::FEMElasticityOptimizer()
@@ -252,115 +359,50 @@ FEMElasticityOptimizer::GenerateData()
   // The fine mesh: input "Mesh", or the source's, which is asked for only when the fine objective is made.
   bmr::TetrahedralMesh         sourced;
   const bmr::TetrahedralMesh * fine = m_MeshSource ? nullptr : &this->GetMesh()->Get();
-  // While the sweep runs on the coarse objective (one core), a second thread finishes the fine mesh (with a source)
-  // and builds the fine objective and its sparse analysis, then factorizes it at the moduli the fine stage starts
-  // from, which the sweep tells (fineStart) before its last samples: the same objective and factor, sooner.
-  std::promise<std::vector<double>> fineStart; // empty: nothing to factorize ahead
-  std::future<std::vector<double>>  fineStartKnown = fineStart.get_future();
-  bool                              fineStartTold = false;
-  const auto                        tellFineStart = [&fineStart, &fineStartTold](const std::vector<double> & moduli) {
-    if (!fineStartTold)
+  const auto                   makeFineObjective = [this, &fine, &sourced, &samplers]() {
+    if (fine == nullptr)
     {
-      fineStartTold = true;
-      fineStart.set_value(moduli);
+      sourced = m_MeshSource();
+      fine = &sourced;
     }
+    return this->MakeObjective(*fine, samplers);
   };
-  // The main thread, when it has to wait for the fine objective, computes the fine stage's start loads as soon as
-  // the objective exists, while this thread analyzes its sparse matrix (one core each), then faults in the memory of
-  // the fine factor (see bmr::MemoryWarmUp: on this project's test machine 0.75-0.81 s instead of 1.07-1.13 s for
-  // that factorization).
-  bmr::MemoryWarmUp                                   factorWarmUp(FineFactorWarmUpBytes);
-  std::promise<const bmr::SurfaceMatchingObjective *> fineMade;
-  std::future<const bmr::SurfaceMatchingObjective *>  fineMadeKnown = fineMade.get_future();
-  const auto                                          makeFine =
-    [this, &fine, &sourced, &samplers, &fineStartKnown, &factorWarmUp, &fineMade](bool factorizeAtFineStart) {
-      struct CloseOnExit // the waiting thread's warm-up ends, and it learns that the objective will not come
-      {
-        bmr::MemoryWarmUp &                                   warmUp;
-        std::promise<const bmr::SurfaceMatchingObjective *> & made;
-        bool                                                  told{ false };
-        ~CloseOnExit()
-        {
-          warmUp.Close();
-          if (!told)
-          {
-            made.set_value(nullptr);
-          }
-        }
-      } closeOnExit{ factorWarmUp, fineMade };
-      if (fine == nullptr)
-      {
-        sourced = m_MeshSource();
-        fine = &sourced;
-      }
-      std::unique_ptr<bmr::SurfaceMatchingObjective> objective = this->MakeObjective(*fine, samplers);
-      // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
-      // terms, none of which the analysis and factorization below write.
-      fineMade.set_value(objective.get());
-      closeOnExit.told = true;
-      objective->GetForwardModel().Prepare();
-      const std::vector<double> moduli = factorizeAtFineStart ? fineStartKnown.get() : std::vector<double>();
-      factorWarmUp.Close(); // its memory released just before the factorization allocates
-      if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
-      {
-        // The sweep is ending: its core joins the factorization (the same factor on any number of threads).
-        objective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
-        objective->SetYoungsModuli(moduli);
-        objective->GetForwardModel().PrepareSolves();
-      }
-      return objective;
-    };
-  std::future<std::unique_ptr<bmr::SurfaceMatchingObjective>> fineInMaking;
-  std::unique_ptr<bmr::SurfaceMatchingObjective>              fineObjective;
+  // Declared after what the second thread reads (fine, sourced, samplers), so destroyed (joined) before it.
+  std::unique_ptr<FineObjectiveInMaking>         inMaking;
+  std::unique_ptr<bmr::SurfaceMatchingObjective> fineObjective;
   const bool alongside = sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
   if (alongside)
   {
-    fineInMaking = std::async(std::launch::async, makeFine, true);
+    inMaking = std::make_unique<FineObjectiveInMaking>(makeFineObjective, this->FineSolveThreads());
   }
   else
   {
-    fineObjective = makeFine(false);
+    fineObjective = makeFineObjective();
+    fineObjective->GetForwardModel().Prepare();
   }
-  // Declared after fineInMaking, so destroyed before it: should the sweep throw, the second thread is told that
-  // there is nothing to factorize instead of waiting for the sweep forever.
-  struct TellOnExit
-  {
-    std::function<void()> tell;
-    ~TellOnExit() { tell(); }
-  } const tellOnExit{ [&tellFineStart]() { tellFineStart({}); } };
   std::unique_ptr<bmr::SurfaceMatchingObjective> coarseObjective;
   if (sweeps)
   {
     coarseObjective = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
   }
-  std::optional<std::vector<double>> fineStartLoads; // computed while the fine objective is being factorized
-  bmr::ElasticityEstimator           estimator(
-              [&]() -> bmr::EstimationObjective & {
+  bmr::ElasticityEstimator estimator(
+    [&]() -> bmr::EstimationObjective & {
       if (!fineObjective)
       {
-        tellFineStart({}); // a sweep without a bracket has told nothing
-        if (fineInMaking.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-        {
-          if (const bmr::SurfaceMatchingObjective * made = fineMadeKnown.get())
-          {
-            fineStartLoads = made->EstimateInitialParameters();
-          }
-          factorWarmUp.WarmWhileOpen();
-        }
-        fineObjective = fineInMaking.get();
+        fineObjective = inMaking->Take();
       }
       fineObjective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
       return *fineObjective;
-              },
-              coarseObjective.get(),
-              unknowns,
-              this->Settings());
+    },
+    coarseObjective.get(),
+    unknowns,
+    this->Settings());
   if (alongside)
   {
-    estimator.SetSweepPrediction(tellFineStart);
-    estimator.SetFineStartLoads([&fineStartLoads](bmr::EstimationObjective & objective) {
-      return fineStartLoads ? *fineStartLoads : objective.EstimateInitialParameters();
-    });
+    estimator.SetSweepPrediction(
+      [&inMaking](const std::vector<double> & moduli) { inMaking->TellStartModuli(moduli); });
+    estimator.SetFineStartLoads(
+      [&inMaking](bmr::EstimationObjective & objective) { return inMaking->StartLoads(objective); });
   }
   estimator.SetObserver([this](const IterationRecord & record, double progress) {
     m_CurrentRecord = record;
