@@ -8,10 +8,12 @@
 #   - uniform-fine: --mesh-scale 0.58 ... 0.72 (the reference: the mean over its six runs);
 #   - prostate-6-1.5: the scene with mesh.refine_near {prostate, 6 mm, 1.5 mm};
 #   - prostate-6-2: the same at 2 mm;
-#   - walls-4-2.5: refined within 4 mm of the prostate, the bladder and the rectum at 2.5 mm.
+#   - walls-4-2.5: refined within 4 mm of the prostate, the bladder and the rectum at 2.5 mm;
+#   - facets-0.85: the surface criteria only (facet size and facet distance) scaled by 0.85, the cells as default;
+#   - cells-0.85: the cell sizes only (global and per label) scaled by 0.85, the surfaces as default.
 # A configuration's realizations are runs at --mesh-scale jittered by x0.97, 0.985, 1, 1.015, 1.03: other meshes of
 # nearly the same sizes, whose spread is the estimate's noise from the mesh alone.
-# Usage: benchmarks/run_mesh_convergence.sh   (about 40 minutes on 2 cores)
+# Usage: benchmarks/run_mesh_convergence.sh   (about 50 minutes on 2 cores)
 # Writes benchmarks/results/mesh_convergence_runs.csv, mesh_convergence.csv, mesh_convergence.png and prints the
 # table (benchmarks/summarize_mesh_convergence.py).
 set -euo pipefail
@@ -32,6 +34,24 @@ refine, source, target = sys.argv[1:4]
 scene = json.load(open(source))
 if refine:
     scene["mesh"]["refine_near"] = json.loads(refine)
+json.dump(scene, open(target, "w"), indent=1)
+PY
+}
+
+# scene_scaled WHAT FACTOR IN OUT: the scene with its surface criteria (WHAT = facets: facet size and distance) or
+# its cell sizes (WHAT = cells: global and per label) multiplied by FACTOR.
+scene_scaled() {
+  /usr/bin/python3 - "$1" "$2" "$3" "$4" <<'PY'
+import json, sys
+what, factor, source, target = sys.argv[1], float(sys.argv[2]), sys.argv[3], sys.argv[4]
+scene = json.load(open(source))
+mesh = scene["mesh"]
+if what == "facets":
+    mesh["facet_size_mm"] *= factor
+    mesh["facet_distance_mm"] *= factor
+else:
+    mesh["cell_size_mm"] *= factor
+    mesh["cell_size_per_label_mm"] = {k: v * factor for k, v in mesh.get("cell_size_per_label_mm", {}).items()}
 json.dump(scene, open(target, "w"), indent=1)
 PY
 }
@@ -58,8 +78,10 @@ for E in ${MODULI:-60 150}; do
   scene_with '{"labels": ["prostate"], "distance_mm": 6, "size_mm": 2}' "$p/scene.json" "$work/prostate-6-2-$E.json"
   scene_with '{"labels": ["prostate", "bladder", "rectum"], "distance_mm": 4, "size_mm": 2.5}' "$p/scene.json" \
     "$work/walls-4-2.5-$E.json"
+  scene_scaled facets 0.85 "$p/scene.json" "$work/facets-0.85-$E.json"
+  scene_scaled cells 0.85 "$p/scene.json" "$work/cells-0.85-$E.json"
   for j in $jitter; do
-    for config in default prostate-6-1.5 prostate-6-2 walls-4-2.5; do
+    for config in default prostate-6-1.5 prostate-6-2 walls-4-2.5 facets-0.85 cells-0.85; do
       estimate "$config" "$E" "$work/$config-$E.json" "$j"
     done
     estimate uniform-0.85 "$E" "$work/default-$E.json" "$(/usr/bin/python3 -c "print(round(0.85 * $j, 5))")"
