@@ -70,13 +70,14 @@ public:
   }
 
   /** Waits for the objective (rethrowing what making it threw), computing the start loads meanwhile. */
-  std::unique_ptr<bmr::SurfaceMatchingObjective>
+  std::shared_ptr<bmr::SurfaceMatchingObjective>
   Take()
   {
     TellStartModuli({}); // a sweep without a bracket has told nothing
     if (m_Made.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
     {
-      if (const bmr::SurfaceMatchingObjective * made = m_ObjectiveKnown.get())
+      // Shared: should the analysis throw, the objective outlives the other thread's unwinding until this is done.
+      if (const std::shared_ptr<const bmr::SurfaceMatchingObjective> made = m_ObjectiveKnown.get())
       {
         m_StartLoads = made->EstimateInitialParameters();
       }
@@ -93,7 +94,7 @@ public:
   }
 
 private:
-  std::unique_ptr<bmr::SurfaceMatchingObjective>
+  std::shared_ptr<bmr::SurfaceMatchingObjective>
   Make(const Maker & make, unsigned int solveThreads)
   {
     struct OnExit // the waiting thread's warm-up ends, and it learns when the objective will not come
@@ -109,10 +110,10 @@ private:
         }
       }
     } onExit{ *this };
-    std::unique_ptr<bmr::SurfaceMatchingObjective> objective = make();
+    const std::shared_ptr<bmr::SurfaceMatchingObjective> objective = make();
     // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
     // terms, none of which the analysis and the factorization below write.
-    m_Objective.set_value(objective.get());
+    m_Objective.set_value(objective);
     onExit.told = true;
     objective->GetForwardModel().Prepare();
     const std::vector<double> moduli = m_StartModuliKnown.get();
@@ -127,15 +128,15 @@ private:
     return objective;
   }
 
-  bmr::MemoryWarmUp                                   m_WarmUp;
-  std::promise<std::vector<double>>                   m_StartModuli;
-  bool                                                m_StartModuliTold{ false };
-  std::future<std::vector<double>>                    m_StartModuliKnown;
-  std::promise<const bmr::SurfaceMatchingObjective *> m_Objective;
-  std::future<const bmr::SurfaceMatchingObjective *>  m_ObjectiveKnown;
-  std::optional<std::vector<double>>                  m_StartLoads;
+  bmr::MemoryWarmUp                                                  m_WarmUp;
+  std::promise<std::vector<double>>                                  m_StartModuli;
+  bool                                                               m_StartModuliTold{ false };
+  std::future<std::vector<double>>                                   m_StartModuliKnown;
+  std::promise<std::shared_ptr<const bmr::SurfaceMatchingObjective>> m_Objective;
+  std::future<std::shared_ptr<const bmr::SurfaceMatchingObjective>>  m_ObjectiveKnown;
+  std::optional<std::vector<double>>                                 m_StartLoads;
   // Last: destroyed first, which waits for the thread while everything it uses still exists.
-  std::future<std::unique_ptr<bmr::SurfaceMatchingObjective>> m_Made;
+  std::future<std::shared_ptr<bmr::SurfaceMatchingObjective>> m_Made;
 };
 } // namespace
 
@@ -369,7 +370,7 @@ FEMElasticityOptimizer::GenerateData()
   };
   // Declared after what the second thread reads (fine, sourced, samplers), so destroyed (joined) before it.
   std::unique_ptr<FineObjectiveInMaking>         inMaking;
-  std::unique_ptr<bmr::SurfaceMatchingObjective> fineObjective;
+  std::shared_ptr<bmr::SurfaceMatchingObjective> fineObjective;
   const bool alongside = sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
   if (alongside)
   {
