@@ -57,6 +57,12 @@ namespace itk {
  * (\f$ \mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1} \f$). The estimator's documentation gives the
  * stopping rules, the sweep and the uncertainty; docs/estimation.md the choices and why.
  *
+ * Threads: with a coarse mesh to sweep on and more than one thread, a second thread makes the fine objective while
+ * the sweep runs on the coarse one (the fine mesh when a source makes it, the objective, its sparse analysis and its
+ * factorization at the moduli the sweep brackets), and the thread that then waits for it computes the fine stage's
+ * start loads meanwhile (bmr::ElasticityEstimator::SetFineStartLoads()). The results are the same bit for bit as on
+ * one thread.
+ *
  * Gauge: only ratios of moduli are identifiable without measured forces; the scene's gauge label keeps its
  * modulus (GetGaugeLabel()). Step limit (LimitElementInversion, default off, one parameter per wall node
  * only): inner trial points that invert more elements than the start are rejected.
