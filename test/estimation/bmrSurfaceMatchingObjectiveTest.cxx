@@ -20,6 +20,7 @@
 // finite differences must shrink as h^2 (slope in [1.9, 2.1] over four halvings)
 // for the wall displacements, for normal wall tractions and for log E; the signed distance sampler must
 // reproduce an affine function exactly; bad set-ups are named.
+#include "bmrElasticityEstimator.h"
 #include "bmrMesher.h"
 #include "bmrSurfaceMatchingObjective.h"
 #include "bmrTestUtilities.h"
@@ -360,7 +361,50 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
       "tractions with nothing held", [&] { o.SetWallMotion(bmr::WallMotionEnum::NormalTraction); }, "in place");
   }
 
-  // 7. Bad set-ups are named.
+  // 7. The estimator starts its fine stage from the loads it is handed (ElasticityEstimator::SetFineStartLoads):
+  // asked once, of the fine objective; the objective's own start gives the default's result bit for bit, and
+  // another start (zero loads) changes the first inner solve's iterations, which shows the handed loads are used.
+  {
+    bmr::EstimatorSettings settings;
+    settings.startModuli = { 40.0 }; // no sweep: the fine stage alone
+    settings.maximumOuterIterations = 3;
+    settings.estimateUncertainty = false;
+    const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(scene);
+    const auto                             run = [&](const bmr::ElasticityEstimator::FineStartLoads & start) {
+      bmr::SurfaceMatchingObjective o(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
+      bmr::ElasticityEstimator      estimator(o, nullptr, unknowns, settings);
+      if (start)
+      {
+        estimator.SetFineStartLoads([&](bmr::EstimationObjective & fine) {
+          ok &= bmr::test::Expect(&fine == &o, "the start loads are asked of the fine objective");
+          return start(fine);
+        });
+      }
+      return estimator.Run();
+    };
+    unsigned int calls = 0;
+    const auto   byDefault = run(nullptr);
+    const auto   handedOwn = run([&calls](bmr::EstimationObjective & fine) {
+      ++calls;
+      return fine.EstimateInitialParameters();
+    });
+    const auto   handedZero =
+      run([](bmr::EstimationObjective & fine) { return std::vector<double>(fine.GetNumberOfParameters(), 0.0); });
+    const unsigned first[3] = { byDefault.history.front().innerIterations,
+                                handedOwn.history.front().innerIterations,
+                                handedZero.history.front().innerIterations };
+    std::cout << "fine start loads: E " << byDefault.youngsModuli[0] << " / " << handedOwn.youngsModuli[0] << " / "
+              << handedZero.youngsModuli[0] << " kPa, first inner solve " << first[0] << " / " << first[1] << " / "
+              << first[2] << " iterations (default / handed its own / handed zero)" << std::endl;
+    ok &=
+      bmr::test::Expect(calls == 1, "the handed start loads are asked once (got " + bmr::test::ToString(calls) + ")");
+    ok &= bmr::test::Expect(handedOwn.youngsModuli == byDefault.youngsModuli &&
+                              handedOwn.displacement == byDefault.displacement,
+                            "handing the objective's own start loads gives the default's estimate bit for bit");
+    ok &= bmr::test::Expect(first[2] != first[0], "a zero start changes the first inner solve's iterations");
+  }
+
+  // 8. Bad set-ups are named.
   ok &= bmr::test::ExpectException(
     "missing map",
     [&] {
