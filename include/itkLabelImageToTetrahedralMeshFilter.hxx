@@ -173,13 +173,21 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::PrintSelf(std::ostream & os, Ind
   os << indent << "FacetDistance [mm]: " << p.facetDistance << std::endl;
   os << indent << "FacetAngle [deg]: " << p.facetAngle << std::endl;
   os << indent << "CellRadiusEdgeRatio: " << p.cellRadiusEdgeRatio << std::endl;
-  os << indent << "CellSizePerLabel:";
-  for (const auto & kv : p.cellSizePerLabel)
+  const std::pair<const char *, const std::map<std::int32_t, double> *> perLabel[] = {
+    { "CellSizePerLabel [mm]:", &p.cellSizePerLabel },
+    { "FacetSizePerLabel [mm]:", &p.facetSizePerLabel },
+    { "FacetDistancePerLabel [mm]:", &p.facetDistancePerLabel }
+  };
+  for (const auto & nameAndSizes : perLabel)
   {
-    os << ' ' << kv.first << ':' << kv.second;
+    os << indent << nameAndSizes.first;
+    for (const auto & kv : *nameAndSizes.second)
+    {
+      os << ' ' << kv.first << ':' << kv.second;
+    }
+    os << std::endl;
   }
-  os << std::endl;
-  os << indent << "Optimize: " << p.optimize << std::endl;
+  os << indent << "Optimize: " << p.optimize << " (sliver bound " << p.sliverBound << " deg)" << std::endl;
   os << indent << "RandomSeed: " << p.randomSeed << std::endl;
   os << indent << "ExcludedLabels:";
   for (auto l : m_ExcludedLabels)

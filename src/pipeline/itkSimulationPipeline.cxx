@@ -192,9 +192,13 @@ ScaledMeshSizes(bmr::Scene scene, double factor)
   scene.mesh.facetSize *= factor;
   scene.mesh.facetDistance *= factor;
   scene.mesh.refineSize *= factor; // a size; its distance is the anatomy's, not scaled
-  for (auto & kv : scene.mesh.cellSizePerLabel)
+  for (auto * sizes :
+       { &scene.mesh.cellSizePerLabel, &scene.mesh.facetSizePerLabel, &scene.mesh.facetDistancePerLabel })
   {
-    kv.second *= factor;
+    for (auto & kv : *sizes)
+    {
+      kv.second *= factor;
+    }
   }
   return scene;
 }

@@ -410,12 +410,24 @@ CheckMeshingParameters(const MeshingParameters & m, const std::string & src)
       SceneError(src, std::string("mesh.") + s.first, "must be > 0");
     }
   }
-  for (const auto & kv : m.cellSizePerLabel)
+  const std::pair<const char *, const std::map<std::int32_t, double> *> perLabel[] = {
+    { "cell_size_per_label_mm", &m.cellSizePerLabel },
+    { "facet_size_per_label_mm", &m.facetSizePerLabel },
+    { "facet_distance_per_label_mm", &m.facetDistancePerLabel }
+  };
+  for (const auto & keyAndMap : perLabel)
   {
-    if (!(kv.second > 0.0))
+    for (const auto & kv : *keyAndMap.second)
     {
-      SceneError(src, "mesh.cell_size_per_label_mm", "sizes must be > 0");
+      if (!(kv.second > 0.0))
+      {
+        SceneError(src, std::string("mesh.") + keyAndMap.first, "sizes must be > 0");
+      }
     }
+  }
+  if (!(m.sliverBound > 0.0 && m.sliverBound < 60.0))
+  {
+    SceneError(src, "mesh.sliver_bound_deg", "must lie in (0, 60) degrees");
   }
   if (!(m.refineDistance >= 0.0) || !(m.refineSize >= 0.0) || (m.Refines() && !(m.refineSize > 0.0)))
   {
@@ -780,7 +792,21 @@ ParseRegionOfInterest(const Json & j, const std::string & source, Scene & scene)
   }
 }
 
-// All mesh keys but the values of cell_size_per_label_mm, which need the labels (ParseCellSizePerLabel).
+// The per-label mesh keys, whose values need the labels (ParseSizesPerLabel).
+const char * const SizesPerLabelKeys[] = { "cell_size_per_label_mm",
+                                           "facet_size_per_label_mm",
+                                           "facet_distance_per_label_mm" };
+
+template<typename TMeshingParameters> // const or not
+auto &
+SizesPerLabel(TMeshingParameters & m, const std::string & key)
+{
+  return key == "cell_size_per_label_mm"    ? m.cellSizePerLabel
+         : key == "facet_size_per_label_mm" ? m.facetSizePerLabel
+                                            : m.facetDistancePerLabel;
+}
+
+// All mesh keys but the values of the per-label sizes.
 void
 ParseMeshingParameters(const Json & j, const std::string & source, MeshingParameters & m)
 {
@@ -791,8 +817,11 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
               "facet_angle_deg",
               "cell_radius_edge_ratio",
               "cell_size_per_label_mm",
+              "facet_size_per_label_mm",
+              "facet_distance_per_label_mm",
               "optimize",
               "exude",
+              "sliver_bound_deg",
               "random_seed",
               "minimum_dihedral_angle_deg",
               "refine_near" },
@@ -812,6 +841,8 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
     m.optimize = GetBool(j, "optimize", source, "mesh");
   if (j.contains("exude"))
     m.exude = GetBool(j, "exude", source, "mesh");
+  if (j.contains("sliver_bound_deg"))
+    m.sliverBound = GetNumber(j, "sliver_bound_deg", source, "mesh");
   if (j.contains("minimum_dihedral_angle_deg"))
     m.minimumDihedralAngle = GetNumber(j, "minimum_dihedral_angle_deg", source, "mesh");
   if (j.contains("random_seed"))
@@ -822,9 +853,12 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
     }
     m.randomSeed = j["random_seed"].get<unsigned int>();
   }
-  if (j.contains("cell_size_per_label_mm") && !j["cell_size_per_label_mm"].is_object())
+  for (const char * key : SizesPerLabelKeys)
   {
-    SceneError(source, "mesh.cell_size_per_label_mm", "must be an object {label name: size in mm}");
+    if (j.contains(key) && !j[key].is_object())
+    {
+      SceneError(source, std::string("mesh.") + key, "must be an object {label name: size in mm}");
+    }
   }
 }
 
@@ -854,22 +888,22 @@ ParseRefineNear(const Json & j, const std::string & source, Scene & scene)
   scene.mesh.refineSize = GetNumber(j, "size_mm", source, "mesh.refine_near");
 }
 
-// Per-label sizes refer to label names, resolved once the labels are known.
+// Per-label sizes (mesh.KEY) refer to label names, resolved once the labels are known.
 void
-ParseCellSizePerLabel(const Json & perLabel, const std::string & source, Scene & scene)
+ParseSizesPerLabel(const Json & perLabel, const std::string & key, const std::string & source, Scene & scene)
 {
   for (auto it = perLabel.begin(); it != perLabel.end(); ++it)
   {
     const SceneLabel * l = scene.FindLabel(it.key());
     if (!l)
     {
-      SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "is not a label of the scene");
+      SceneError(source, "mesh." + key + "." + it.key(), "is not a label of the scene");
     }
     if (!it.value().is_number())
     {
-      SceneError(source, "mesh.cell_size_per_label_mm." + it.key(), "must be a number [mm]");
+      SceneError(source, "mesh." + key + "." + it.key(), "must be a number [mm]");
     }
-    scene.mesh.cellSizePerLabel[l->value] = it.value().get<double>();
+    SizesPerLabel(scene.mesh, key)[l->value] = it.value().get<double>();
   }
 }
 } // namespace
@@ -941,9 +975,12 @@ ParseScene(const std::string & text, const std::string & source)
   {
     ParseMeshingParameters(root["mesh"], source, scene.mesh);
   }
-  if (root.contains("mesh") && root["mesh"].contains("cell_size_per_label_mm"))
+  for (const char * key : SizesPerLabelKeys)
   {
-    ParseCellSizePerLabel(root["mesh"]["cell_size_per_label_mm"], source, scene);
+    if (root.contains("mesh") && root["mesh"].contains(key))
+    {
+      ParseSizesPerLabel(root["mesh"][key], key, source, scene);
+    }
   }
   if (root.contains("mesh") && root["mesh"].contains("refine_near"))
   {
@@ -1045,17 +1082,22 @@ SceneToJson(const Scene & scene)
                 { "cell_radius_edge_ratio", scene.mesh.cellRadiusEdgeRatio },
                 { "optimize", scene.mesh.optimize },
                 { "exude", scene.mesh.exude },
+                { "sliver_bound_deg", scene.mesh.sliverBound },
                 { "minimum_dihedral_angle_deg", scene.mesh.minimumDihedralAngle },
                 { "random_seed", scene.mesh.randomSeed } };
-  if (!scene.mesh.cellSizePerLabel.empty())
+  for (const char * key : SizesPerLabelKeys)
   {
-    Json per = Json::object();
-    for (const auto & kv : scene.mesh.cellSizePerLabel)
+    const std::map<std::int32_t, double> & sizes = SizesPerLabel(scene.mesh, key);
+    if (!sizes.empty())
     {
-      const SceneLabel * l = scene.FindLabelValue(kv.first);
-      per[l ? l->name : std::to_string(kv.first)] = kv.second;
+      Json per = Json::object();
+      for (const auto & kv : sizes)
+      {
+        const SceneLabel * l = scene.FindLabelValue(kv.first);
+        per[l ? l->name : std::to_string(kv.first)] = kv.second;
+      }
+      mesh[key] = per;
     }
-    mesh["cell_size_per_label_mm"] = per;
   }
   if (scene.mesh.Refines())
   {

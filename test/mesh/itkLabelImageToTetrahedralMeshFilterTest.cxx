@@ -253,6 +253,93 @@ CheckLocalRefinement()
   return ok;
 }
 
+/** Per interface between two labels (key: the pair, smaller first), the number of faces and their longest edge. */
+std::map<std::pair<std::int32_t, std::int32_t>, std::pair<std::size_t, double>>
+InterfaceFaces(const bmr::TetrahedralMesh & mesh)
+{
+  std::map<std::array<std::int32_t, 3>, std::int32_t>                             firstLabel;
+  std::map<std::pair<std::int32_t, std::int32_t>, std::pair<std::size_t, double>> faces;
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    for (int skip = 0; skip < 4; ++skip)
+    {
+      std::array<std::int32_t, 3> face;
+      for (int a = 0, k = 0; a < 4; ++a)
+      {
+        if (a != skip)
+        {
+          face[k++] = mesh.tetrahedra[4 * e + a];
+        }
+      }
+      std::sort(face.begin(), face.end());
+      const auto [seen, isNew] = firstLabel.emplace(face, mesh.labels[e]);
+      if (isNew || seen->second == mesh.labels[e])
+      {
+        continue;
+      }
+      auto & entry = faces[{ std::min(seen->second, mesh.labels[e]), std::max(seen->second, mesh.labels[e]) }];
+      ++entry.first;
+      for (int a = 0; a < 3; ++a)
+      {
+        const double * xa = &mesh.points[3 * std::size_t(face[a])];
+        const double * xb = &mesh.points[3 * std::size_t(face[(a + 1) % 3])];
+        entry.second = std::max(entry.second, std::hypot(xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]));
+      }
+    }
+  }
+  return faces;
+}
+
+/** Facet bounds per label (MeshingParameters::facetSizePerLabel, facetDistancePerLabel): two balls of radius 6 mm,
+ * labels 2 and 3, in a 48 mm cube of label 1; global facet size 6 mm and distance 0.5 mm. With a facet size of
+ * 1.5 mm for label 2, the faces between labels 1 and 2 have no edge longer than 3 mm (the surface Delaunay ball's
+ * radius bounds the triangle's circumradius, and an edge is at most twice that), while those of ball 3 keep an edge
+ * longer than 3 mm. A facet distance of 0.2 mm for label 3 adds faces on ball 3 and leaves ball 2's number within
+ * 10 % (refinement elsewhere may move a few of its vertices). */
+bool
+CheckFacetBoundsPerLabel()
+{
+  using bmr::test::Expect;
+  using bmr::test::ToString;
+  bmr::GridGeometry grid;
+  grid.size = { { 48, 48, 48 } };
+  std::vector<std::int32_t> labels(grid.GetNumberOfVoxels());
+  for (std::size_t v = 0; v < labels.size(); ++v)
+  {
+    const double x = double(v % 48), y = double((v / 48) % 48), z = double(v / (48 * 48));
+    labels[v] = std::hypot(x - 14.5, y - 23.5, z - 23.5) < 6.0   ? 2
+                : std::hypot(x - 33.5, y - 23.5, z - 23.5) < 6.0 ? 3
+                                                                 : 1;
+  }
+  bmr::MeshingParameters p;
+  p.cellSize = p.facetSize = 6.0;
+  p.facetDistance = 0.5;
+  const auto global = InterfaceFaces(bmr::MeshLabelVolume(labels.data(), grid, p));
+  p.facetSizePerLabel[2] = 1.5;
+  const auto sized = InterfaceFaces(bmr::MeshLabelVolume(labels.data(), grid, p));
+  p.facetDistancePerLabel[3] = 0.2;
+  const auto                                  both = InterfaceFaces(bmr::MeshLabelVolume(labels.data(), grid, p));
+  const std::pair<std::int32_t, std::int32_t> ball2{ 1, 2 }, ball3{ 1, 3 };
+  std::cout << "facet bounds per label: ball 2 " << global.at(ball2).first << " -> " << sized.at(ball2).first
+            << " faces, longest edge " << global.at(ball2).second << " -> " << sized.at(ball2).second << " mm; ball 3 "
+            << global.at(ball3).first << " -> " << sized.at(ball3).first << " -> " << both.at(ball3).first
+            << " faces, longest edge " << sized.at(ball3).second << " mm" << std::endl;
+  bool ok = Expect(sized.at(ball2).second <= 3.0,
+                   "facet size 1.5 mm on label 2: its faces' edges at most 3 mm (got " +
+                     ToString(sized.at(ball2).second) + ")");
+  ok &= Expect(sized.at(ball3).second > 3.0,
+               "label 3's faces keep the global size (longest edge " + ToString(sized.at(ball3).second) + " mm)");
+  ok &= Expect(sized.at(ball2).first > 2 * global.at(ball2).first,
+               "label 2's faces more than double (" + ToString(global.at(ball2).first) + " -> " +
+                 ToString(sized.at(ball2).first) + ")");
+  ok &= Expect(both.at(ball3).first > 2 * sized.at(ball3).first &&
+                 std::abs(double(both.at(ball2).first) / double(sized.at(ball2).first) - 1.0) <= 0.1,
+               "facet distance 0.2 mm on label 3 doubles the faces on ball 3, not on ball 2 (" +
+                 ToString(sized.at(ball3).first) + " -> " + ToString(both.at(ball3).first) + "; ball 2 " +
+                 ToString(both.at(ball2).first) + ")");
+  return ok;
+}
+
 int
 itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
 {
@@ -376,5 +463,6 @@ itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
     "spacing");
   ok &= CheckImplicitLabelsOnGrid();
   ok &= CheckLocalRefinement();
+  ok &= CheckFacetBoundsPerLabel();
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 
 namespace {
 const char * const ValidScene = R"({
@@ -113,6 +114,38 @@ bmrSceneTest(int, char *[])
     "refine_near with an unknown label",
     [&] { bmr::ParseScene(Replace(refined, "[\"prostate\"]", "[\"liver\"]"), "bad.json"); },
     "mesh.refine_near.labels");
+  // Surface bounds per label and the sliver bound: read, written, and refused when unknown, not numbers or <= 0.
+  const std::string facets =
+    Replace(ValidScene,
+            "\"cell_size_per_label_mm\"",
+            "\"facet_size_per_label_mm\": {\"prostate\": 3.5}, \"facet_distance_per_label_mm\": "
+            "{\"prostate\": 0.3, \"bladder\": 0.4}, \"sliver_bound_deg\": 4, \"cell_size_per_label_mm\"");
+  const bmr::Scene f = bmr::ParseScene(facets, "facets.json");
+  ok &= Expect(f.mesh.facetSizePerLabel == std::map<std::int32_t, double>{ { 2, 3.5 } } &&
+                 f.mesh.facetDistancePerLabel == std::map<std::int32_t, double>{ { 2, 0.3 }, { 3, 0.4 } } &&
+                 f.mesh.sliverBound == 4.0,
+               "facet bounds per label: prostate 3.5 / 0.3 mm, bladder 0.4 mm; sliver bound 4 deg");
+  ok &= Expect(bmr::SceneToJson(bmr::ParseScene(bmr::SceneToJson(f), "roundtrip")) == bmr::SceneToJson(f) &&
+                 bmr::SceneToJson(f).find("facet_distance_per_label_mm") != std::string::npos,
+               "facet bounds per label survive the round trip");
+  ok &= Expect(s.mesh.sliverBound == 3.0 && s.mesh.facetSizePerLabel.empty(),
+               "without the keys: sliver bound 3 deg, no facet bound per label");
+  ok &= ExpectException(
+    "facet_size_per_label_mm with an unknown label",
+    [&] { bmr::ParseScene(Replace(facets, "{\"prostate\": 3.5}", "{\"liver\": 3.5}"), "bad.json"); },
+    "mesh.facet_size_per_label_mm.liver");
+  ok &= ExpectException(
+    "facet_distance_per_label_mm not a number",
+    [&] { bmr::ParseScene(Replace(facets, "\"bladder\": 0.4", "\"bladder\": \"fine\""), "bad.json"); },
+    "mesh.facet_distance_per_label_mm.bladder");
+  ok &= ExpectException(
+    "facet_size_per_label_mm = 0",
+    [&] { bmr::ParseScene(Replace(facets, "{\"prostate\": 3.5}", "{\"prostate\": 0}"), "bad.json"); },
+    "mesh.facet_size_per_label_mm");
+  ok &= ExpectException(
+    "sliver_bound_deg = 0",
+    [&] { bmr::ParseScene(Replace(facets, "\"sliver_bound_deg\": 4", "\"sliver_bound_deg\": 0"), "bad.json"); },
+    "mesh.sliver_bound_deg");
   std::cout << "parse and round trip: " << (ok ? "ok" : "FAIL") << std::endl;
   // A tube load: the axis is normalized on reading and survives the round trip.
   const std::string tube = Replace(ValidScene, "\"magnitude_mm\": 6", "\"axis\": [0, 0, 2], \"magnitude_mm\": 6");
