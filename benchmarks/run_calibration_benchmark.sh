@@ -17,7 +17,8 @@
 #        shift from the moving one, as two real scans are); TAG names the run (default "rescan-shifted");
 #        RUNS_NAME names the rows' file (default calibration_runs: benchmarks/results/RUNS_NAME.csv);
 #        APPEND=1 adds rows to it instead of starting it afresh; START=K skips the
-#        draws before pair K (to resume a run).
+#        draws before pair K (to resume a run). FACET_SCALE=F multiplies the estimation scene's facet size and
+#        facet distance by F (the surface refinement of the mesh-convergence study, run_mesh_convergence.sh).
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
 set -euo pipefail
@@ -69,6 +70,11 @@ while read -r E bladder rectum s; do
   # shellcheck disable=SC2086
   "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" "${walls[@]}" \
     --seed "$s" $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
+  if [ -n "${FACET_SCALE:-}" ]; then
+    /usr/bin/python3 -c "import json, sys; p = sys.argv[1]; s = json.load(open(p)); m = s['mesh']
+m['facet_size_mm'] *= float(sys.argv[2]); m['facet_distance_mm'] *= float(sys.argv[2]); json.dump(s, open(p, 'w'), indent=1)" \
+      "$ph/scene.json" "$FACET_SCALE"
+  fi
   t1=$(date +%s.%N)
   # shellcheck disable=SC2086
   "$bin" register --moving-ct "$ph/moving_ct.nrrd" --moving-labels "$ph/moving_labels.nrrd" \

@@ -7,7 +7,7 @@ RUNS.csv (benchmarks/run_mesh_convergence.sh): config,true_E_kPa,mesh_scale,tetr
 point estimate; a configuration's realizations are its runs at slightly jittered --mesh-scale (other meshes of the
 same sizes). Per configuration and modulus: the mean and SD of E over the realizations, the median tetrahedra and
 wall time, and the mean's offset from the reference configuration's mean (the finest uniform mesh, config
-"uniform-fine") and from the truth. Prints a markdown table; writes OUT_PREFIX.csv and OUT_PREFIX.png (E against
+"uniform-fine"; with its standard error from both means' spreads) and from the truth. Prints a markdown table; writes OUT_PREFIX.csv and OUT_PREFIX.png (E against
 tetrahedra with one-SD bars, the reference mean as a band).
 """
 import csv
@@ -28,6 +28,9 @@ def main(argv):
         groups[(r["config"], float(r["true_E_kPa"]))].append(r)
     reference = {E: statistics.mean(float(r["E_kPa"]) for r in g)
                  for (config, E), g in groups.items() if config == REFERENCE}
+    # The reference mean's own variance (SD^2 / n): part of every offset's standard error.
+    reference_var = {E: statistics.variance([float(r["E_kPa"]) for r in g]) / len(g)
+                     for (config, E), g in groups.items() if config == REFERENCE and len(g) > 1}
     summary = []
     for (config, E), g in sorted(groups.items(), key=lambda kv: (kv[0][1], statistics.median(
             float(r["tetrahedra"]) for r in kv[1]))):
@@ -40,13 +43,17 @@ def main(argv):
                         "wall_s": statistics.median(float(r["wall_s"]) for r in g),
                         "mean_E_kPa": mean, "sd_E_kPa": sd,
                         "vs_reference_pct": 100 * (mean / ref - 1) if ref else float("nan"),
+                        "se_vs_reference_pct": 100 * ((sd * sd / len(values) if len(values) > 1 else 0.0) +
+                                                      reference_var.get(E, 0.0)) ** 0.5 / ref
+                        if ref else float("nan"),
                         "vs_truth_pct": 100 * (mean / E - 1)})
-    print("| true E [kPa] | configuration | runs | tetrahedra | wall [s] | E mean ± SD [kPa] | vs finest mean | vs truth |")
+    print("| true E [kPa] | configuration | runs | tetrahedra | wall [s] | E mean ± SD [kPa] | vs finest mean "
+          "(± SE) | vs truth |")
     print("|---:|---|---:|---:|---:|---:|---:|---:|")
     for s in summary:
-        print(f"| {s['true_E_kPa']:.0f} | {s['config']} | {s['runs']} | {s['tetrahedra']} | {s['wall_s']:.0f} | "
-              f"{s['mean_E_kPa']:.1f} ± {s['sd_E_kPa']:.1f} | {s['vs_reference_pct']:+.1f} % | "
-              f"{s['vs_truth_pct']:+.1f} % |")
+        print(f"| {s['true_E_kPa']:.0f} | {s['config']} | {s['runs']} | {s['tetrahedra']} | {s['wall_s']:.1f} | "
+              f"{s['mean_E_kPa']:.1f} ± {s['sd_E_kPa']:.1f} | {s['vs_reference_pct']:+.1f} ± "
+              f"{s['se_vs_reference_pct']:.1f} % | {s['vs_truth_pct']:+.1f} % |")
     if not prefix:
         return
     with open(prefix + ".csv", "w", newline="") as f:
