@@ -10,10 +10,13 @@
 #   - prostate-6-2: the same at 2 mm;
 #   - walls-4-2.5: refined within 4 mm of the prostate, the bladder and the rectum at 2.5 mm;
 #   - facets-0.85: the surface criteria only (facet size and facet distance) scaled by 0.85, the cells as default;
-#   - cells-0.85: the cell sizes only (global and per label) scaled by 0.85, the surfaces as default.
+#   - cells-0.85: the cell sizes only (global and per label) scaled by 0.85, the surfaces as default;
+#   - prostate-facets-0.85, prostate-facets-0.75: the prostate's surfaces only (mesh.facet_size_per_label_mm and
+#     facet_distance_per_label_mm) at 0.85 / 0.75 of the scene's facet criteria;
+#   - default-sliver5, facets-0.85-sliver5: with mesh.sliver_bound_deg 5 (the default before session 44).
 # A configuration's realizations are runs at --mesh-scale jittered by x0.97, 0.985, 1, 1.015, 1.03: other meshes of
 # nearly the same sizes, whose spread is the estimate's noise from the mesh alone.
-# Usage: benchmarks/run_mesh_convergence.sh   (about 50 minutes on 2 cores)
+# Usage: benchmarks/run_mesh_convergence.sh   (about 70 minutes on 2 cores)
 # Writes benchmarks/results/mesh_convergence_runs.csv, mesh_convergence.csv, mesh_convergence.png and prints the
 # table (benchmarks/summarize_mesh_convergence.py).
 set -euo pipefail
@@ -38,7 +41,8 @@ json.dump(scene, open(target, "w"), indent=1)
 PY
 }
 
-# scene_scaled WHAT FACTOR IN OUT: the scene with its surface criteria (WHAT = facets: facet size and distance) or
+# scene_scaled WHAT FACTOR IN OUT: the scene with its surface criteria (WHAT = facets: facet size and distance), the
+# prostate's surface criteria alone (prostate-facets), the sliver bound set to FACTOR degrees (sliver) or
 # its cell sizes (WHAT = cells: global and per label) multiplied by FACTOR.
 scene_scaled() {
   /usr/bin/python3 - "$1" "$2" "$3" "$4" <<'PY'
@@ -46,7 +50,12 @@ import json, sys
 what, factor, source, target = sys.argv[1], float(sys.argv[2]), sys.argv[3], sys.argv[4]
 scene = json.load(open(source))
 mesh = scene["mesh"]
-if what == "facets":
+if what == "sliver":
+    mesh["sliver_bound_deg"] = factor
+elif what == "prostate-facets":
+    mesh["facet_size_per_label_mm"] = {"prostate": mesh["facet_size_mm"] * factor}
+    mesh["facet_distance_per_label_mm"] = {"prostate": mesh["facet_distance_mm"] * factor}
+elif what == "facets":
     mesh["facet_size_mm"] *= factor
     mesh["facet_distance_mm"] *= factor
 else:
@@ -80,8 +89,13 @@ for E in ${MODULI:-60 150}; do
     "$work/walls-4-2.5-$E.json"
   scene_scaled facets 0.85 "$p/scene.json" "$work/facets-0.85-$E.json"
   scene_scaled cells 0.85 "$p/scene.json" "$work/cells-0.85-$E.json"
+  scene_scaled prostate-facets 0.85 "$p/scene.json" "$work/prostate-facets-0.85-$E.json"
+  scene_scaled prostate-facets 0.75 "$p/scene.json" "$work/prostate-facets-0.75-$E.json"
+  scene_scaled sliver 5 "$p/scene.json" "$work/default-sliver5-$E.json"
+  scene_scaled sliver 5 "$work/facets-0.85-$E.json" "$work/facets-0.85-sliver5-$E.json"
   for j in $jitter; do
-    for config in default prostate-6-1.5 prostate-6-2 walls-4-2.5 facets-0.85 cells-0.85; do
+    for config in default prostate-6-1.5 prostate-6-2 walls-4-2.5 facets-0.85 cells-0.85 prostate-facets-0.85 \
+      prostate-facets-0.75 default-sliver5 facets-0.85-sliver5; do
       estimate "$config" "$E" "$work/$config-$E.json" "$j"
     done
     estimate uniform-0.85 "$E" "$work/default-$E.json" "$(/usr/bin/python3 -c "print(round(0.85 * $j, 5))")"
