@@ -79,8 +79,10 @@ def conformal_half_widths(rows, n):
     |log fit - log E| / s, s from the first n rescans."""
     scores = []
     for r in rows:
+        if r["tag"] not in CONFORMAL_TAGS or not r.get("resamples_kPa"):  # older runs have no such column
+            continue
         resamples = [float(x) for x in r["resamples_kPa"].split(";")][:n]
-        if r["tag"] not in CONFORMAL_TAGS or len(resamples) < n:
+        if len(resamples) < n:
             continue
         if max(resamples) >= 599.4 or min(resamples) <= 20.02:
             continue
