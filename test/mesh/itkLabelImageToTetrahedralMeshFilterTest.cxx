@@ -23,6 +23,7 @@
 #include "itkTestingMacros.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 
@@ -189,6 +190,33 @@ CheckImplicitLabelsOnGrid()
   return ok;
 }
 
+/** A cube of \a n voxels of 1 mm per side, label 1, holding balls (centre [mm, voxel indices], radius [mm], label);
+ * a voxel takes the label of the first ball whose open interior holds its centre. */
+struct Ball
+{
+  std::array<double, 3> centre;
+  double                radius;
+  std::int32_t          label;
+};
+std::vector<std::int32_t>
+BallsInCube(std::size_t n, const std::vector<Ball> & balls)
+{
+  std::vector<std::int32_t> labels(n * n * n, 1);
+  for (std::size_t v = 0; v < labels.size(); ++v)
+  {
+    const double x = double(v % n), y = double((v / n) % n), z = double(v / (n * n));
+    for (const Ball & b : balls)
+    {
+      if (std::hypot(x - b.centre[0], y - b.centre[1], z - b.centre[2]) < b.radius)
+      {
+        labels[v] = b.label;
+        break;
+      }
+    }
+  }
+  return labels;
+}
+
 /** Local refinement (MeshingParameters::refineNearLabels): a ball of label 2 (radius 5 mm) in a 40 mm cube of label
  * 1, sizes 6 mm, refined to 1.5 mm within 4 mm of the ball. Elements whose centroid lies within 1 mm of the ball's
  * surface (3 mm inside the refined shell, which leaves room for the circumcentre, where Mesh_3 reads the size) have
@@ -201,14 +229,9 @@ CheckLocalRefinement()
   using bmr::test::ToString;
   bmr::GridGeometry grid;
   grid.size = { { 40, 40, 40 } };
-  const double              c = 19.5, radius = 5.0;
-  std::vector<std::int32_t> labels(grid.GetNumberOfVoxels());
-  for (std::size_t v = 0; v < labels.size(); ++v)
-  {
-    const double x = double(v % 40), y = double((v / 40) % 40), z = double(v / 1600);
-    labels[v] = std::hypot(x - c, y - c, z - c) < radius ? 2 : 1;
-  }
-  bmr::MeshingParameters p;
+  const double                    c = 19.5, radius = 5.0;
+  const std::vector<std::int32_t> labels = BallsInCube(40, { { { { c, c, c } }, radius, 2 } });
+  bmr::MeshingParameters          p;
   p.cellSize = p.facetSize = 6.0;
   p.facetDistance = 0.5;
   const std::size_t uniform = bmr::MeshLabelVolume(labels.data(), grid, p).GetNumberOfTetrahedra();
@@ -303,14 +326,8 @@ CheckFacetBoundsPerLabel()
   using bmr::test::ToString;
   bmr::GridGeometry grid;
   grid.size = { { 48, 48, 48 } };
-  std::vector<std::int32_t> labels(grid.GetNumberOfVoxels());
-  for (std::size_t v = 0; v < labels.size(); ++v)
-  {
-    const double x = double(v % 48), y = double((v / 48) % 48), z = double(v / (48 * 48));
-    labels[v] = std::hypot(x - 14.5, y - 23.5, z - 23.5) < 6.0   ? 2
-                : std::hypot(x - 33.5, y - 23.5, z - 23.5) < 6.0 ? 3
-                                                                 : 1;
-  }
+  const std::vector<std::int32_t> labels =
+    BallsInCube(48, { { { { 14.5, 23.5, 23.5 } }, 6.0, 2 }, { { { 33.5, 23.5, 23.5 } }, 6.0, 3 } });
   bmr::MeshingParameters p;
   p.cellSize = p.facetSize = 6.0;
   p.facetDistance = 0.5;
