@@ -21,8 +21,10 @@
 #include "bmrGridGeometry.h"
 #include "bmrTetrahedralMesh.h"
 
+#include <array>
 #include <functional>
 #include <map>
+#include <utility>
 #include <vector>
 
 namespace bmr {
@@ -80,6 +82,23 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
   HasFacetBoundsPerLabel() const
   {
     return !facetSizePerLabel.empty() || !facetDistancePerLabel.empty();
+  }
+  /** The per-label sizes [mm], each with its scene key (mesh.KEY), for code that treats them alike. */
+  template<typename TSizes>
+  using NamedSizes = std::array<std::pair<const char *, TSizes *>, 3>;
+  NamedSizes<const std::map<std::int32_t, double>>
+  SizesPerLabel() const
+  {
+    return { { { "cell_size_per_label_mm", &cellSizePerLabel },
+               { "facet_size_per_label_mm", &facetSizePerLabel },
+               { "facet_distance_per_label_mm", &facetDistancePerLabel } } };
+  }
+  NamedSizes<std::map<std::int32_t, double>>
+  SizesPerLabel()
+  {
+    return { { { "cell_size_per_label_mm", &cellSizePerLabel },
+               { "facet_size_per_label_mm", &facetSizePerLabel },
+               { "facet_distance_per_label_mm", &facetDistancePerLabel } } };
   }
 };
 

@@ -173,14 +173,9 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::PrintSelf(std::ostream & os, Ind
   os << indent << "FacetDistance [mm]: " << p.facetDistance << std::endl;
   os << indent << "FacetAngle [deg]: " << p.facetAngle << std::endl;
   os << indent << "CellRadiusEdgeRatio: " << p.cellRadiusEdgeRatio << std::endl;
-  const std::pair<const char *, const std::map<std::int32_t, double> *> perLabel[] = {
-    { "CellSizePerLabel [mm]:", &p.cellSizePerLabel },
-    { "FacetSizePerLabel [mm]:", &p.facetSizePerLabel },
-    { "FacetDistancePerLabel [mm]:", &p.facetDistancePerLabel }
-  };
-  for (const auto & nameAndSizes : perLabel)
+  for (const auto & nameAndSizes : p.SizesPerLabel())
   {
-    os << indent << nameAndSizes.first;
+    os << indent << nameAndSizes.first << ':';
     for (const auto & kv : *nameAndSizes.second)
     {
       os << ' ' << kv.first << ':' << kv.second;

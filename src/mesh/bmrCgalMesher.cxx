@@ -165,19 +165,14 @@ CheckParameters(const char * where, const MeshingParameters & parameters)
   {
     Fail(where, "MeshingParameters::refineSize and refineDistance must be finite and >= 0");
   }
-  const std::pair<const char *, const std::map<std::int32_t, double> *> perLabel[] = {
-    { "cellSizePerLabel", &parameters.cellSizePerLabel },
-    { "facetSizePerLabel", &parameters.facetSizePerLabel },
-    { "facetDistancePerLabel", &parameters.facetDistancePerLabel }
-  };
-  for (const auto & nameAndMap : perLabel)
+  for (const auto & keyAndSizes : parameters.SizesPerLabel())
   {
-    for (const auto & labelAndSize : *nameAndMap.second)
+    for (const auto & labelAndSize : *keyAndSizes.second)
     {
       if (!std::isfinite(labelAndSize.second) || !(labelAndSize.second > 0.0))
       {
         std::ostringstream message;
-        message << "MeshingParameters::" << nameAndMap.first << '[' << labelAndSize.first
+        message << "MeshingParameters: " << keyAndSizes.first << '[' << labelAndSize.first
                 << "] must be positive and finite, got " << labelAndSize.second;
         Fail(where, message.str());
       }

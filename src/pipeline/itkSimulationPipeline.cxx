@@ -192,10 +192,9 @@ ScaledMeshSizes(bmr::Scene scene, double factor)
   scene.mesh.facetSize *= factor;
   scene.mesh.facetDistance *= factor;
   scene.mesh.refineSize *= factor; // a size; its distance is the anatomy's, not scaled
-  for (auto * sizes :
-       { &scene.mesh.cellSizePerLabel, &scene.mesh.facetSizePerLabel, &scene.mesh.facetDistancePerLabel })
+  for (const auto & keyAndSizes : scene.mesh.SizesPerLabel())
   {
-    for (auto & kv : *sizes)
+    for (auto & kv : *keyAndSizes.second)
     {
       kv.second *= factor;
     }

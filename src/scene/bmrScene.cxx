@@ -410,12 +410,7 @@ CheckMeshingParameters(const MeshingParameters & m, const std::string & src)
       SceneError(src, std::string("mesh.") + s.first, "must be > 0");
     }
   }
-  const std::pair<const char *, const std::map<std::int32_t, double> *> perLabel[] = {
-    { "cell_size_per_label_mm", &m.cellSizePerLabel },
-    { "facet_size_per_label_mm", &m.facetSizePerLabel },
-    { "facet_distance_per_label_mm", &m.facetDistancePerLabel }
-  };
-  for (const auto & keyAndMap : perLabel)
+  for (const auto & keyAndMap : m.SizesPerLabel())
   {
     for (const auto & kv : *keyAndMap.second)
     {
@@ -792,21 +787,8 @@ ParseRegionOfInterest(const Json & j, const std::string & source, Scene & scene)
   }
 }
 
-// The per-label mesh keys, whose values need the labels (ParseSizesPerLabel).
-const char * const SizesPerLabelKeys[] = { "cell_size_per_label_mm",
-                                           "facet_size_per_label_mm",
-                                           "facet_distance_per_label_mm" };
-
-template<typename TMeshingParameters> // const or not
-auto &
-SizesPerLabel(TMeshingParameters & m, const std::string & key)
-{
-  return key == "cell_size_per_label_mm"    ? m.cellSizePerLabel
-         : key == "facet_size_per_label_mm" ? m.facetSizePerLabel
-                                            : m.facetDistancePerLabel;
-}
-
-// All mesh keys but the values of the per-label sizes.
+// All mesh keys but the values of the per-label sizes (MeshingParameters::SizesPerLabel), which need the labels
+// (ParseSizesPerLabel).
 void
 ParseMeshingParameters(const Json & j, const std::string & source, MeshingParameters & m)
 {
@@ -853,11 +835,11 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
     }
     m.randomSeed = j["random_seed"].get<unsigned int>();
   }
-  for (const char * key : SizesPerLabelKeys)
+  for (const auto & keyAndSizes : m.SizesPerLabel())
   {
-    if (j.contains(key) && !j[key].is_object())
+    if (j.contains(keyAndSizes.first) && !j[keyAndSizes.first].is_object())
     {
-      SceneError(source, std::string("mesh.") + key, "must be an object {label name: size in mm}");
+      SceneError(source, std::string("mesh.") + keyAndSizes.first, "must be an object {label name: size in mm}");
     }
   }
 }
@@ -888,9 +870,13 @@ ParseRefineNear(const Json & j, const std::string & source, Scene & scene)
   scene.mesh.refineSize = GetNumber(j, "size_mm", source, "mesh.refine_near");
 }
 
-// Per-label sizes (mesh.KEY) refer to label names, resolved once the labels are known.
+// Per-label sizes (mesh.KEY) refer to label names, resolved once the labels are known; \a sizes receives them.
 void
-ParseSizesPerLabel(const Json & perLabel, const std::string & key, const std::string & source, Scene & scene)
+ParseSizesPerLabel(const Json &                     perLabel,
+                   const std::string &              key,
+                   const std::string &              source,
+                   const Scene &                    scene,
+                   std::map<std::int32_t, double> & sizes)
 {
   for (auto it = perLabel.begin(); it != perLabel.end(); ++it)
   {
@@ -903,7 +889,7 @@ ParseSizesPerLabel(const Json & perLabel, const std::string & key, const std::st
     {
       SceneError(source, "mesh." + key + "." + it.key(), "must be a number [mm]");
     }
-    SizesPerLabel(scene.mesh, key)[l->value] = it.value().get<double>();
+    sizes[l->value] = it.value().get<double>();
   }
 }
 } // namespace
@@ -975,11 +961,11 @@ ParseScene(const std::string & text, const std::string & source)
   {
     ParseMeshingParameters(root["mesh"], source, scene.mesh);
   }
-  for (const char * key : SizesPerLabelKeys)
+  for (const auto & keyAndSizes : scene.mesh.SizesPerLabel())
   {
-    if (root.contains("mesh") && root["mesh"].contains(key))
+    if (root.contains("mesh") && root["mesh"].contains(keyAndSizes.first))
     {
-      ParseSizesPerLabel(root["mesh"][key], key, source, scene);
+      ParseSizesPerLabel(root["mesh"][keyAndSizes.first], keyAndSizes.first, source, scene, *keyAndSizes.second);
     }
   }
   if (root.contains("mesh") && root["mesh"].contains("refine_near"))
@@ -1085,18 +1071,17 @@ SceneToJson(const Scene & scene)
                 { "sliver_bound_deg", scene.mesh.sliverBound },
                 { "minimum_dihedral_angle_deg", scene.mesh.minimumDihedralAngle },
                 { "random_seed", scene.mesh.randomSeed } };
-  for (const char * key : SizesPerLabelKeys)
+  for (const auto & keyAndSizes : scene.mesh.SizesPerLabel())
   {
-    const std::map<std::int32_t, double> & sizes = SizesPerLabel(scene.mesh, key);
-    if (!sizes.empty())
+    if (!keyAndSizes.second->empty())
     {
       Json per = Json::object();
-      for (const auto & kv : sizes)
+      for (const auto & kv : *keyAndSizes.second)
       {
         const SceneLabel * l = scene.FindLabelValue(kv.first);
         per[l ? l->name : std::to_string(kv.first)] = kv.second;
       }
-      mesh[key] = per;
+      mesh[keyAndSizes.first] = per;
     }
   }
   if (scene.mesh.Refines())
