@@ -5,7 +5,8 @@ that and the censored normal fit's sigma x sqrt(n / (n - 1)) (itk::FitCensoredNo
 from itk::RescanCalibrations (the largest calibrated count not above N, scaled by Student's ratio), and the ends the images
 do not determine set to the search bounds. A rescan's random numbers depend only on the seed and its index, so the
 first N rescans of a run are those a run with N rescans makes: the rows are what the current binary would report.
-Usage: restate_intervals.py RUNS.csv OUT.csv [N (default 4)] [TAG_SUFFIX (default -restatedN)]
+Usage: restate_intervals.py RUNS.csv OUT.csv [N (default 4)] [TAG_SUFFIX (default -restatedN)] [K68,K95]
+K68,K95: half-widths for N rescans other than RescanCalibrations' (to check constants fixed on another run).
 The search bounds are the pelvis scene's, 20 and 600 kPa."""
 import csv
 import math
@@ -103,6 +104,9 @@ def main():
     runs_csv, out_csv = sys.argv[1:3]
     n = int(sys.argv[3]) if len(sys.argv) > 3 else 4
     suffix = sys.argv[4] if len(sys.argv) > 4 else f"-restated{n}"
+    if len(sys.argv) > 5:  # other constants for n rescans
+        global CALIBRATIONS
+        CALIBRATIONS = ((n, *map(float, sys.argv[5].split(","))),)
     rows = [r for r in csv.DictReader(open(runs_csv)) if r.get("resamples_kPa")]
     with open(out_csv + ".tmp", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
