@@ -70,7 +70,7 @@ def fit_centred(r):
 
 # The calibration set of the conformal half-widths (itkBiomechanicalPipelines.h, RescanCalibrations): the rescan
 # run on the default, converged truths, pairs with no resample on a bound, s from each pair's first n rescans.
-CONFORMAL_TAGS = ("converged",)
+CONFORMAL_TAGS = ("facets-0.85", "facets-0.85-fresh")
 CONFORMAL_RESAMPLES = (4, 8)
 
 

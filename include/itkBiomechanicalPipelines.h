@@ -133,11 +133,12 @@ enum class IntervalQuantilesEnum : std::uint8_t
 /** Half-widths {k68, k95} of the rescans' intervals in units of their spread s, calibrated for a number of rescans:
  * the ceil(0.68 (m + 1))-th and ceil(0.95 (m + 1))-th smallest of m calibration scores |log Ehat - log E_true| / s
  * (split-conformal prediction: coverage >= 68 % and 95 % for a pair exchangeable with the calibration set). The
- * scores are the pelvis phantom pairs of the calibration run on the default, converged truths
- * (benchmarks/results/calibration_runs_converged.csv, seed 2043; 1 mm voxels, moduli log-uniform in 30-500 kPa),
- * the pairs with no rescan on a search bound, s from each pair's first n rescans (a rescan's random numbers depend
- * only on the seed and its index: these are the rescans an n-rescan run makes). Checked on pairs not used here:
- * Table 3.1's 70 and the 20 anatomy-truth pairs (docs/benchmarks.md).
+ * scores are the pelvis phantom pairs of two calibration runs on the default, converged truths, registered with the
+ * default estimation mesh (surfaces refined: facet size and distance 0.85 x; benchmarks/results/
+ * calibration_runs_facets085.csv and calibration_runs_facets085_fresh.csv, seeds 2044 and 2045; 1 mm voxels, moduli
+ * log-uniform in 30-500 kPa), the pairs with no rescan on a search bound, s from each pair's 4 rescans. Checked on
+ * 30 pairs not used here, drawn after the constants were committed (seed 2046,
+ * calibration_runs_facets085_check2046.csv): 68 % coverage 0.73, 95 % 0.97 (docs/benchmarks.md).
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct RescanCalibration
 {
@@ -145,9 +146,9 @@ struct RescanCalibration
   double       halfWidth68;
   double       halfWidth95;
 };
-/** 4 rescans (the default; 23 scores): Student's t_3 sqrt(5/4) would be 1.33 and 3.56. 8 rescans (22 scores): the
- * 95 % one is the largest score; Student's would be 1.14 and 2.51. */
-constexpr RescanCalibration RescanCalibrations[] = { { 4, 1.134, 3.384 }, { 8, 0.880, 1.708 } };
+/** 4 rescans (the default; 52 scores): Student's t_3 sqrt(5/4) would be 1.33 and 3.56. Other counts scale these by
+ * Student's ratio (IntervalHalfWidths()); 8 rescans were not calibrated on this mesh. */
+constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
 
 /** Whether \a method states its intervals with the calibrated half-widths under \a quantiles (rescans only). */
 BiomechanicalRegistration_EXPORT bool

@@ -85,7 +85,7 @@ struct LinearElasticModel::Impl
   // Solve() then iterates with it as the preconditioner (PreconditionedSolve) instead of refactorizing.
   bool                           hasFactor{ false };
   std::map<std::int32_t, double> factorModuli;
-  double                         refactorizeAbove{ 0.01 };
+  double                         refactorizeAbove{ 0.003 };
 
   explicit Impl(const TetrahedralMesh & m)
     : mesh(m)
