@@ -123,7 +123,7 @@ public:
    * the direct solve's accuracy (1e-13 of |u|) in about four iterations, each a pair of triangular solves and a
    * product with K_ff: cheaper than a factorization for the few solves an estimator's last, small steps in E need
    * (on the demo's 105k-tetrahedron mesh, 57k free dofs, the fit's last step of 0.2 % in E took 0.24 s instead of
-   * 0.98 s). Above about 0.3 % each solve needs five or more iterations, and a step of 0.8 % on the 140k mesh
+   * 0.98 s). Above 0.3 % each solve needs about five iterations or more, and a step of 0.8 % on the 140k mesh
    * (79k free dofs) took 0.99 s for seven solves against 0.55 s for the refactorization. It refactorizes when 8
    * iterations do not converge. 0 refactorizes on every change. Default 0.003. */
   void

@@ -48,7 +48,8 @@ RelativeDifference(const std::vector<double> & a, const std::vector<double> & b)
 /** Moduli changed by 0.2 % (one up, one down) are solved without refactorizing (IsFactorized() stays false), by
  * conjugate gradients preconditioned with the kept factorization: equal to a refactorized model's solution to a
  * relative 1e-10 (the iteration stops at 1e-13 of |u|; the rest is the two solves' rounding), while the change moves
- * u by far more, so the stale factorization alone would fail. A 0.7 % change, above the 0.3 % threshold, refactorizes. */
+ * u by far more, so the stale factorization alone would fail. A 0.7 % change, above the 0.3 % threshold, refactorizes.
+ */
 bool
 CheckRefactorizationThreshold(const bmr::TetrahedralMesh &      mesh,
                               const std::vector<std::int32_t> & held,
@@ -76,7 +77,7 @@ CheckRefactorizationThreshold(const bmr::TetrahedralMesh &      mesh,
   ok &=
     Expect(difference <= 1e-10,
            "the iterated solution equals the refactorized one to a relative 1e-10 (got " + ToString(difference) + ")");
-  ok &= Expect(change >= 1e-4, "the change moves u by a relative 1e-4 or more (got " + ToString(change) + ")");
+  ok &= Expect(change >= 1e-3, "the change moves u by a relative 1e-3 or more (got " + ToString(change) + ")");
   iterated.SetYoungsModulus(2, 50.0 * 1.007);
   iterated.Solve(forces);
   ok &= Expect(iterated.IsFactorized(), "a 0.7 % change (above the 0.3 % threshold) refactorizes");
