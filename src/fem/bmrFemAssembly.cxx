@@ -391,18 +391,24 @@ FreeBlock(const LowerPattern &              pattern,
   block.makeCompressed();
   if (positions)
   {
-    std::int64_t next = 0;
+    // Looked up: a numbering that turns entries around places them out of the pattern's order.
+    const auto * starts = block.outerIndexPtr();
+    const auto * rows = block.innerIndexPtr();
     for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
     {
-      if (freeIndex[col] < 0)
+      const std::int32_t fc = freeIndex[col];
+      if (fc < 0)
       {
         continue;
       }
       for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
       {
-        if (freeIndex[pattern.rowIndex[k]] >= 0)
+        const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
+        if (fr >= 0)
         {
-          (*positions)[k] = next++;
+          const auto   column = std::min(fr, fc);
+          const auto * at = std::lower_bound(rows + starts[column], rows + starts[column + 1], std::max(fr, fc));
+          (*positions)[k] = at - rows;
         }
       }
     }

@@ -173,10 +173,10 @@ NumberFreeDofsByNestedDissection(const LowerPattern &        pattern,
 void
 OrderAsNumbered(cholmod_common & common);
 
-/** The free block of the matrix (lower triangle \a values on \a pattern) as a compressed Eigen matrix;
- * \a positions (if not null; only for a monotone numbering, NumberFreeDofs()) receives, for every pattern entry,
- * its index in the result's value array or -1, so that later values can be copied in place without rebuilding
- * the matrix. Any free numbering is accepted otherwise: each entry goes to the lower triangle in that numbering. */
+/** The free block of the matrix (lower triangle \a values on \a pattern) as a compressed Eigen matrix, each entry
+ * in the lower triangle of the free numbering (any numbering); \a positions (if not null) receives, for every
+ * pattern entry, its index in the result's value array or -1, so that later values can be copied in place without
+ * rebuilding the matrix. */
 Eigen::SparseMatrix<double>
 FreeBlock(const LowerPattern &              pattern,
           const std::vector<double> &       values,

@@ -68,7 +68,9 @@ struct LinearElasticModel::Impl
   std::vector<std::int32_t>                   freeIndex;  // dof -> free index or -1
   fem::CouplingRows                           coupling;   // the free-constrained block, by row
   bool                                        couplingCurrent{ false };
-  bool                                        freeBlockCurrent{ false }; // Kff holds the current values
+  bool                                        freeBlockCurrent{ false };   // Kff holds the current values
+  bool                                        freePatternCurrent{ false }; // Kff and freePositions: this analysis
+  std::vector<std::int64_t>                   freePositions; // of each pattern entry in Kff's values, or -1
   std::size_t                                 nfree{ 0 };
   Eigen::SparseMatrix<double>                 Kff;
   SupernodalLLT                               solver;
@@ -82,10 +84,17 @@ struct LinearElasticModel::Impl
   bool                                        factorized{ false };
   SolverTimings                               timings;
   // The factorization of K_ff at factorModuli, kept when the moduli change by less than refactorizeAbove:
-  // Solve() then iterates with it as the preconditioner (PreconditionedSolve) instead of refactorizing.
+  // Solve() then iterates with it as the preconditioner (PreconditionedSolve) instead of refactorizing. Before the
+  // first factorization factorModuli holds the moduli the model was built with.
   bool                           hasFactor{ false };
   std::map<std::int32_t, double> factorModuli;
   double                         refactorizeAbove{ 0.003 };
+  // The labels whose moduli the factorizer's kept fixed part leaves out (fem::SupernodalFactorizer::
+  // FactorizeVarying), the other labels' moduli it was computed with, and the two parts' values on K_ff.
+  std::set<std::int32_t>         varyingLabels;
+  std::map<std::int32_t, double> fixedPartModuli;
+  std::vector<double>            fixedFree, varyingFree;
+  double                         refactorizedShare{ 0.0 }; // of the last factorization's work
 
   explicit Impl(const TetrahedralMesh & m)
     : mesh(m)
@@ -125,12 +134,34 @@ struct LinearElasticModel::Impl
   UpdateFreeBlock()
   {
     UpdateValues();
-    if (!freeBlockCurrent)
+    if (freeBlockCurrent)
     {
-      Kff = fem::FreeBlock(pattern, values, freeIndex, nfree);
-      freeBlockCurrent = true;
+      return;
     }
+    if (freePatternCurrent)
+    {
+      double * entries = Kff.valuePtr();
+      for (std::size_t k = 0; k < values.size(); ++k)
+      {
+        if (freePositions[k] >= 0)
+        {
+          entries[freePositions[k]] = values[k];
+        }
+      }
+    }
+    else
+    {
+      Kff = fem::FreeBlock(pattern, values, freeIndex, nfree, &freePositions);
+      freePatternCurrent = true;
+    }
+    freeBlockCurrent = true;
   }
+  int
+  FactorizeOwn();
+  void
+  SplitFreeValues(bool varyingOnly);
+  std::vector<char>
+  VaryingEntries() const;
   /** Whether every modulus lies within refactorizeAbove (relative) of the kept factorization's. */
   bool
   FactorStillPreconditions() const
@@ -233,6 +264,109 @@ LinearElasticModel::Impl::PreconditionedSolve(const Eigen::VectorXd & b, Eigen::
     rz = next;
   }
   return !(z.norm() > tolerance * x.norm()) && x.allFinite();
+}
+
+/** K_ff = L L^T by fem::SupernodalFactorizer. When only the moduli of varyingLabels changed since its kept fixed part
+ * was computed, only the supernodes they reach are refactorized (on the 140k pelvis, 43 % of the work for the
+ * prostate). Otherwise the labels whose moduli changed since the last factorization (before the first: since the
+ * model was built, as an estimator sets its start moduli) become varyingLabels, as an estimator changes the same
+ * unknown moduli again and again, and the whole factor is computed, keeping the new fixed part; with no change to
+ * learn from, it is the plain factorization. */
+int
+LinearElasticModel::Impl::FactorizeOwn()
+{
+  bool fixedPartHolds = factorizer.HasFixedPart() && !varyingLabels.empty();
+  for (const auto & [label, material] : materials)
+  {
+    const auto kept = fixedPartModuli.find(label);
+    fixedPartHolds = fixedPartHolds && (varyingLabels.count(label) > 0 ||
+                                        (kept != fixedPartModuli.end() && kept->second == material.youngsModulus));
+  }
+  if (fixedPartHolds)
+  {
+    SplitFreeValues(true);
+    refactorizedShare = factorizer.GetVaryingShare();
+    return factorizer.FactorizeVarying(varyingFree.data(), solveThreads);
+  }
+  refactorizedShare = 1.0;
+  varyingLabels.clear();
+  for (const auto & [label, material] : materials)
+  {
+    const auto factored = factorModuli.find(label);
+    if (factored != factorModuli.end() && factored->second != material.youngsModulus)
+    {
+      varyingLabels.insert(label);
+    }
+    fixedPartModuli[label] = material.youngsModulus;
+  }
+  factorizer.SetVaryingEntries(VaryingEntries());
+  if (varyingLabels.empty())
+  {
+    return factorizer.Factorize(Kff.valuePtr(), solveThreads);
+  }
+  SplitFreeValues(false);
+  const int factorized = factorizer.Factorize(fixedFree.data(), varyingFree.data(), solveThreads);
+  std::vector<double>().swap(fixedFree); // kept by the factorizer where it is needed again
+  return factorized;
+}
+
+/** K_ff's values split into varyingLabels' sum_m E_m Khat_m (varyingFree) and, unless \a varyingOnly, the other
+ * labels' (fixedFree), each summed in label order like Impl::values. */
+void
+LinearElasticModel::Impl::SplitFreeValues(bool varyingOnly)
+{
+  const auto entries = static_cast<std::size_t>(Kff.nonZeros());
+  varyingFree.assign(entries, 0.0);
+  if (!varyingOnly)
+  {
+    fixedFree.assign(entries, 0.0);
+  }
+  for (const auto & [label, unit] : unitValues)
+  {
+    const bool varies = varyingLabels.count(label) > 0;
+    if (varyingOnly && !varies)
+    {
+      continue;
+    }
+    std::vector<double> & target = varies ? varyingFree : fixedFree;
+    const double          E = materials.at(label).youngsModulus;
+    for (std::size_t k = 0; k < unit.size(); ++k)
+    {
+      if (freePositions[k] >= 0)
+      {
+        target[freePositions[k]] += E * unit[k];
+      }
+    }
+  }
+}
+
+/** Which entries of K_ff a modulus of varyingLabels enters (a nonzero unit stiffness there). */
+std::vector<char>
+LinearElasticModel::Impl::VaryingEntries() const
+{
+  std::vector<char> varies;
+  if (varyingLabels.empty())
+  {
+    return varies;
+  }
+  varies.assign(static_cast<std::size_t>(Kff.nonZeros()), 0);
+  for (const std::int32_t label : varyingLabels)
+  {
+    const auto found = unitValues.find(label);
+    if (found == unitValues.end())
+    {
+      continue;
+    }
+    const std::vector<double> & unit = found->second;
+    for (std::size_t k = 0; k < unit.size(); ++k)
+    {
+      if (unit[k] != 0.0 && freePositions[k] >= 0)
+      {
+        varies[freePositions[k]] = 1;
+      }
+    }
+  }
+  return varies;
 }
 
 void
@@ -472,6 +606,10 @@ LinearElasticModel::LinearElasticModel(const TetrahedralMesh &                  
     }
   }
   m_Impl->materials = materials;
+  for (const auto & [label, material] : materials)
+  {
+    m_Impl->factorModuli[label] = material.youngsModulus; // what the first factorization's changes are learned from
+  }
   const auto t0 = Clock::now();
   m_Impl->CheckElements();
   m_Impl->BuildPattern();
@@ -519,6 +657,7 @@ LinearElasticModel::SetDirichletConditions(const std::vector<std::int32_t> & nod
   d.hasFactor = false;
   d.couplingCurrent = false;
   d.freeBlockCurrent = false;
+  d.freePatternCurrent = false;
 }
 
 void
@@ -604,6 +743,8 @@ LinearElasticModel::Analyze()
     const auto serialized = fem::LockOrdering();
     d.nfree = fem::NumberFreeDofsByNestedDissection(d.pattern, d.constrained, d.freeIndex);
   }
+  d.freePatternCurrent = false; // K_ff in the new numbering
+  d.freeBlockCurrent = false;
   if (d.nfree == 0)
   {
     d.analyzed = true;
@@ -652,10 +793,11 @@ LinearElasticModel::Factorize()
   bool positiveDefinite = true;
   if (d.ownFactorization)
   {
-    positiveDefinite = d.factorizer.Factorize(d.Kff.valuePtr(), d.solveThreads) == static_cast<int>(d.nfree);
+    positiveDefinite = d.FactorizeOwn() == static_cast<int>(d.nfree);
   }
   else
   {
+    d.refactorizedShare = 1.0;
     d.solver.factorize(d.Kff);
     positiveDefinite = d.solver.info() == Eigen::Success;
   }
@@ -673,6 +815,12 @@ LinearElasticModel::Factorize()
   {
     d.factorModuli[label] = material.youngsModulus;
   }
+}
+
+double
+LinearElasticModel::GetRefactorizedShare() const
+{
+  return m_Impl->refactorizedShare;
 }
 
 bool

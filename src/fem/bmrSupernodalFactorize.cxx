@@ -218,7 +218,63 @@ SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
   m_Accumulator.reset(new double[static_cast<std::size_t>(accumulated)]);
   m_AccumulatorSize = static_cast<std::size_t>(accumulated);
   m_Entries = static_cast<std::size_t>(columnStarts[n]);
+  SetVaryingEntries({});
   return true;
+}
+
+void
+SupernodalFactorizer::SetVaryingEntries(const std::vector<char> & varies)
+{
+  std::vector<char> supernodeVaries(m_Factor->nsuper, 0);
+  m_VaryingEntries.clear();
+  for (std::size_t p = 0; p < std::min(varies.size(), m_EntrySupernode.size()); ++p)
+  {
+    if (varies[p])
+    {
+      supernodeVaries[m_EntrySupernode[p]] = 1;
+      m_VaryingEntries.push_back(p);
+    }
+  }
+  SplitByVariation(supernodeVaries);
+}
+
+/** Marks the ancestors of every varying supernode (its parent holds the first row below its diagonal block, and
+ * parents come after children) and splits each part's supernodes into the fixed and the varying, in order. */
+void
+SupernodalFactorizer::SplitByVariation(const std::vector<char> & supernodeVaries)
+{
+  const Supernodes  L(*m_Factor);
+  std::vector<char> varies = supernodeVaries;
+  double            all = 0.0, varying = 0.0;
+  for (std::int32_t s = 0; s < static_cast<std::int32_t>(m_Factor->nsuper); ++s)
+  {
+    const double k = L.Columns(s), b = L.Rows(s) - L.Columns(s);
+    const double multiplyAdds = k * k * k / 3.0 + b * k * k / 2.0 + b * b * k / 2.0;
+    all += multiplyAdds;
+    if (varies[s])
+    {
+      varying += multiplyAdds;
+      if (b > 0)
+      {
+        varies[m_SupernodeOf[L.rows[L.rowsAt[s] + L.Columns(s)]]] = 1;
+      }
+    }
+  }
+  m_VaryingShare = all > 0.0 ? varying / all : 0.0;
+  const auto split = [&varies](const std::vector<std::int32_t> & part,
+                               std::vector<std::int32_t> &       fixed,
+                               std::vector<std::int32_t> &       varying) {
+    fixed.clear();
+    varying.clear();
+    for (const std::int32_t s : part)
+    {
+      (varies[s] ? varying : fixed).push_back(s);
+    }
+  };
+  split(m_Bin[0], m_FixedBin[0], m_VaryingBin[0]);
+  split(m_Bin[1], m_FixedBin[1], m_VaryingBin[1]);
+  split(m_Top, m_FixedTop, m_VaryingTop);
+  m_FixedPartKept = false;
 }
 
 /** Where each entry of A goes in L: column min(i', j'), row max(i', j') of the permuted matrix, in the block of
@@ -241,6 +297,7 @@ SupernodalFactorizer::PlaceEntries(int                      n,
   const auto entries = static_cast<std::size_t>(columnStarts[n]);
   m_Position.resize(entries);
   m_Owner.resize(entries);
+  m_EntrySupernode.resize(entries);
   for (int j = 0; j < n; ++j)
   {
     for (int p = columnStarts[j]; p < columnStarts[j + 1]; ++p)
@@ -256,6 +313,7 @@ SupernodalFactorizer::PlaceEntries(int                      n,
       }
       m_Position[p] = L.valuesAt[s] + (column - L.first[s]) * L.Rows(s) + static_cast<int>(at - rows);
       m_Owner[p] = static_cast<char>(owner[s]);
+      m_EntrySupernode[p] = s;
     }
   }
   return true;
@@ -314,17 +372,101 @@ SupernodalFactorizer::UpdatesFit() const
 }
 
 int
-SupernodalFactorizer::Factorize(const double * values, unsigned threads)
+SupernodalFactorizer::Factorize(const double * fixedValues, const double * varyingValues, unsigned threads)
+{
+  m_FixedPartKept = false;
+  const int n = static_cast<int>(m_Factor->n);
+  const int column = FactorizeParts(m_FixedBin, m_FixedTop, fixedValues, threads);
+  if (column < n || (m_VaryingTop.empty() && m_VaryingBin[0].empty() && m_VaryingBin[1].empty()))
+  {
+    return column;
+  }
+  KeepVaryingBlocks(false);
+  m_FixedPartKept = true;
+  return FactorizeVarying(varyingValues, threads, false);
+}
+
+int
+SupernodalFactorizer::FactorizeVarying(const double * varyingValues, unsigned threads)
+{
+  if (!m_FixedPartKept)
+  {
+    return -1;
+  }
+  return FactorizeVarying(varyingValues, threads, true);
+}
+
+int
+SupernodalFactorizer::FactorizeVarying(const double * varyingValues, unsigned threads, bool restore)
+{
+  if (restore)
+  {
+    KeepVaryingBlocks(true);
+  }
+  if (varyingValues != nullptr)
+  {
+    const Supernodes L(*m_Factor);
+    for (const std::size_t p : m_VaryingEntries)
+    {
+      L.values[m_Position[p]] += varyingValues[p];
+    }
+  }
+  return FactorizeParts(m_VaryingBin, m_VaryingTop, nullptr, threads);
+}
+
+/** Copies the varying supernodes' blocks into m_KeptBlocks, or back (\a restore). */
+void
+SupernodalFactorizer::KeepVaryingBlocks(bool restore)
+{
+  const Supernodes L(*m_Factor);
+  std::size_t      size = 0;
+  for (const auto * part : { &m_VaryingBin[0], &m_VaryingBin[1], &m_VaryingTop })
+  {
+    for (const std::int32_t s : *part)
+    {
+      size += L.BlockSize(s);
+    }
+  }
+  m_KeptBlocks.resize(size);
+  double * kept = m_KeptBlocks.data();
+  for (const auto * part : { &m_VaryingBin[0], &m_VaryingBin[1], &m_VaryingTop })
+  {
+    for (const std::int32_t s : *part)
+    {
+      if (restore)
+      {
+        std::copy(kept, kept + L.BlockSize(s), L.Block(s));
+      }
+      else
+      {
+        std::copy(L.Block(s), L.Block(s) + L.BlockSize(s), kept);
+      }
+      kept += L.BlockSize(s);
+    }
+  }
+}
+
+/** The supernodes \a bins (each a subsequence of that bin's) side by side, then \a top in order. With \a values,
+ * every block is first set to A's entries (\a values) and the accumulated updates of bin 1 are subtracted from every
+ * top block; without, the blocks hold what they hold and only \a top's receive them. */
+int
+SupernodalFactorizer::FactorizeParts(const std::vector<std::int32_t> * bins,
+                                     const std::vector<std::int32_t> & top,
+                                     const double *                    values,
+                                     unsigned                          threads)
 {
   const Supernodes L(*m_Factor);
   const int        n = static_cast<int>(m_Factor->n);
-  for (const std::int32_t s : m_Top)
+  if (values != nullptr)
   {
-    std::fill(L.Block(s), L.Block(s) + L.BlockSize(s), 0.0);
+    for (const std::int32_t s : m_Top)
+    {
+      std::fill(L.Block(s), L.Block(s) + L.BlockSize(s), 0.0);
+    }
+    PlaceValues(2, values);
   }
-  PlaceValues(2, values);
   int         failed[2] = { n, n };
-  const auto  runBin = [this, values, &failed](int bin) { failed[bin] = FactorizeBin(bin, values); };
+  const auto  runBin = [this, bins, values, &failed](int bin) { failed[bin] = FactorizeBin(bin, bins[bin], values); };
   std::thread helper;
   if (threads >= 2 && !m_Bin[0].empty() && !m_Bin[1].empty())
   {
@@ -350,7 +492,7 @@ SupernodalFactorizer::Factorize(const double * values, unsigned threads)
   {
     return std::min(failed[0], failed[1]);
   }
-  for (const std::int32_t s : m_Top)
+  for (const std::int32_t s : values != nullptr ? m_Top : top)
   {
     double *       block = L.Block(s);
     const double * accumulated = m_Accumulator.get() + m_AccumulatorAt[s];
@@ -360,7 +502,7 @@ SupernodalFactorizer::Factorize(const double * values, unsigned threads)
       block[e] -= accumulated[e];
     }
   }
-  for (const std::int32_t s : m_Top)
+  for (const std::int32_t s : top)
   {
     const bool dense = L.Rows(s) == L.Columns(s) && L.Columns(s) > 2 * TileSize;
     const int  column = dense ? FactorizeDenseRoot(s, threads) : FactorizeSupernode(s, 0);
@@ -373,22 +515,25 @@ SupernodalFactorizer::Factorize(const double * values, unsigned threads)
   return n;
 }
 
-/** A bin's blocks from A, then its supernodes in order (children before parents). */
+/** With \a values, the bin's blocks from A; then \a supernodes (of this bin) in order (children before parents). */
 int
-SupernodalFactorizer::FactorizeBin(int bin, const double * values)
+SupernodalFactorizer::FactorizeBin(int bin, const std::vector<std::int32_t> & supernodes, const double * values)
 {
   const Supernodes L(*m_Factor);
-  for (const std::int32_t s : m_Bin[bin])
+  if (values != nullptr)
   {
-    std::fill(L.Block(s), L.Block(s) + L.BlockSize(s), 0.0);
+    for (const std::int32_t s : m_Bin[bin])
+    {
+      std::fill(L.Block(s), L.Block(s) + L.BlockSize(s), 0.0);
+    }
+    PlaceValues(bin, values);
   }
-  PlaceValues(bin, values);
   if (bin == 1)
   {
     std::fill(m_Accumulator.get(), m_Accumulator.get() + m_AccumulatorSize, 0.0);
   }
   const int n = static_cast<int>(m_Factor->n);
-  for (const std::int32_t s : m_Bin[bin])
+  for (const std::int32_t s : supernodes)
   {
     const int column = FactorizeSupernode(s, bin);
     if (column < n)
