@@ -23,7 +23,9 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
+#include <functional>
 #include <mutex>
+#include <vector>
 
 namespace bmr {
 
@@ -38,12 +40,11 @@ namespace bmr {
  * warmed by the waiting thread, that factorization took 0.75-0.81 s instead of 1.07-1.13 s.
  *
  * WarmWhileOpen() (on the idle thread) writes fresh memory chunk by chunk until Close() is called or the cap is
- * reached, holds it until Close(), then releases it all; Close() (on the thread about to allocate) stops the
- * warming and returns once the memory is released, so that its allocation finds those pages. After Close(),
- * WarmWhileOpen() does nothing. Every WarmWhileOpen() must be matched by a Close() from another thread (the
- * destructor closes too), or it waits forever. The warming only changes where page faults are paid, never a
- * result. Elsewhere (bare metal) a fault costs little and the idle thread's work is wasted but harmless; on
- * systems without mmap it does nothing. */
+ * reached and holds it until Close(); Close() (on the thread about to allocate) stops the warming and returns once
+ * the memory is released, so that its allocation finds those pages. After Close(), WarmWhileOpen() does nothing. Every
+ * WarmWhileOpen() must be matched by a Close() from another thread (the destructor closes too), or it waits forever.
+ * The warming only changes where page faults are paid, never a result. Elsewhere (bare metal) a fault costs little and
+ * the idle thread's work is wasted but harmless; on systems without mmap it does nothing. */
 class BiomechanicalRegistration_EXPORT MemoryWarmUp
 {
 public:
@@ -54,12 +55,21 @@ public:
   MemoryWarmUp &
   operator=(const MemoryWarmUp &) = delete;
 
-  /** Writes fresh memory until Close() or the cap, holds it until Close(), releases it and returns how many bytes
-   * it wrote (0 at once when already closed, when another thread is warming, or when this platform has no mmap). */
+  /** Writes fresh memory until Close() or the cap, holds it until Close() releases it and returns how many bytes
+   * are held then, counting those an earlier WarmWhile() wrote (0 at once when already closed, when another thread
+   * is warming or holding, or when this platform has no mmap). */
   std::size_t
   WarmWhileOpen();
 
-  /** Stops the warming, waits until its memory is released, and keeps any later WarmWhileOpen() from starting. */
+  /** As WarmWhileOpen(), but also stops, before each 32 MiB chunk, once \a more() is false, and returns at once
+   * with the memory still held (for a later WarmWhileOpen() to add to, and for Close() to release): a thread that
+   * waits for two things in turn warms during the first, does its own work, and warms again during the second.
+   * Returns the bytes held (0 as WarmWhileOpen()). */
+  std::size_t
+  WarmWhile(const std::function<bool()> & more);
+
+  /** Stops the warming, releases its memory (once the chunk being written is done), and keeps any later warming
+   * from starting. */
   void
   Close();
 
@@ -78,8 +88,15 @@ private:
   mutable std::mutex       m_Mutex;
   std::condition_variable  m_Changed; // closed, or the warmed memory released
   bool                     m_Closed{ false };
-  bool                     m_Warming{ false };
+  bool                     m_Warming{ false }; // a thread is writing chunks
+  bool                     m_Holding{ false }; // a WarmWhileOpen() waits for Close()
+  std::vector<void *>      m_Chunks;           // written and held until Close()
   std::atomic<std::size_t> m_Held{ 0 };
+
+  bool
+  Begin(bool holding);
+  std::size_t
+  WriteChunks(const std::function<bool()> & more);
 };
 
 } // namespace bmr

@@ -41,23 +41,54 @@ MemoryWarmUp::~MemoryWarmUp()
   Close();
 }
 
+/** Claims the warming for this thread (and, with \a holding, the wait for Close()); false when closed or taken. */
+bool
+MemoryWarmUp::Begin(bool holding)
+{
+#if defined(BMR_HAVE_MMAP)
+  const std::lock_guard<std::mutex> lock(m_Mutex);
+  if (m_Closed || m_Warming || m_Holding)
+  {
+    return false;
+  }
+  m_Warming = true;
+  m_Holding = holding;
+  return true;
+#else
+  (void)holding;
+  return false;
+#endif
+}
+
+std::size_t
+MemoryWarmUp::WarmWhile(const std::function<bool()> & more)
+{
+  return Begin(false) ? WriteChunks(more) : 0;
+}
+
 std::size_t
 MemoryWarmUp::WarmWhileOpen()
 {
-#if defined(BMR_HAVE_MMAP)
+  if (!Begin(true))
   {
-    const std::lock_guard<std::mutex> lock(m_Mutex);
-    if (m_Closed || m_Warming)
-    {
-      return 0;
-    }
-    m_Warming = true;
+    return 0;
   }
+  const std::size_t held = WriteChunks({});
+  // Held until Close() releases it: memory released long before the allocation would be handed back to the host.
+  std::unique_lock<std::mutex> lock(m_Mutex);
+  m_Changed.wait(lock, [this] { return m_Closed; });
+  m_Holding = false;
+  return held;
+}
+
+/** Writes chunks while open, under the cap and \a more() (if given) holds; ends the claim of Begin(). */
+std::size_t
+MemoryWarmUp::WriteChunks(const std::function<bool()> & more)
+{
+#if defined(BMR_HAVE_MMAP)
   // Mapped directly rather than through malloc, so that every chunk is fresh memory and is returned to the
   // system (not kept in a malloc arena) when released.
-  std::vector<void *> chunks;
-  std::size_t         held = 0;
-  while (held + ChunkBytes <= m_Cap && !IsClosed())
+  while (m_Held.load() + ChunkBytes <= m_Cap && !IsClosed() && (!more || more()))
   {
     void * chunk = mmap(nullptr, ChunkBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (chunk == MAP_FAILED)
@@ -68,29 +99,21 @@ MemoryWarmUp::WarmWhileOpen()
     madvise(chunk, ChunkBytes, MADV_HUGEPAGE); // as malloc's large blocks get them (glibc.malloc.hugetlb=1)
 #  endif
     std::memset(chunk, 0, ChunkBytes);
-    chunks.push_back(chunk);
-    held += ChunkBytes;
-    m_Held.store(held);
+    const std::lock_guard<std::mutex> lock(m_Mutex);
+    m_Chunks.push_back(chunk);
+    m_Held.store(m_Held.load() + ChunkBytes);
   }
-  {
-    // Held until Close(): memory released long before the allocation would be handed back to the host again.
-    std::unique_lock<std::mutex> lock(m_Mutex);
-    m_Changed.wait(lock, [this] { return m_Closed; });
-  }
-  for (void * chunk : chunks)
-  {
-    munmap(chunk, ChunkBytes);
-  }
-  m_Held.store(0);
+#else
+  (void)more;
+#endif
+  std::size_t held = 0;
   {
     const std::lock_guard<std::mutex> lock(m_Mutex);
+    held = m_Held.load(); // before Close(), waiting for this, releases it
     m_Warming = false;
   }
   m_Changed.notify_all();
   return held;
-#else
-  return 0;
-#endif
 }
 
 void
@@ -100,6 +123,14 @@ MemoryWarmUp::Close()
   m_Closed = true;
   m_Changed.notify_all();
   m_Changed.wait(lock, [this] { return !m_Warming; });
+#if defined(BMR_HAVE_MMAP)
+  for (void * chunk : m_Chunks)
+  {
+    munmap(chunk, ChunkBytes);
+  }
+#endif
+  m_Chunks.clear();
+  m_Held.store(0);
 }
 
 bool

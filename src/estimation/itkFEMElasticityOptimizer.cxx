@@ -13,9 +13,11 @@
 
 namespace itk {
 namespace {
-// The most memory the waiting main thread faults in for the fine factorization [bytes]: the demo pair's fine
-// factor (57k free dofs, 20.4M nonzeros in L) is about 160 MiB, its workspace and K_ff some tens more.
-constexpr std::size_t FineFactorWarmUpBytes = std::size_t{ 256 } << 20;
+// The most memory the waiting main thread faults in for the fine factorization [bytes]: on the default 140k mesh
+// of the demo pair the fine factor (79k free dofs, 31.5M entries in L) is 252 MB, the part a change of the
+// prostate's modulus refactorizes is kept at 84 MB (bmr::LinearElasticModel::Factorize), and the root's
+// accumulator, the update workspaces and K_ff's values split by label take about 100 MB more.
+constexpr std::size_t FineFactorWarmUpBytes = std::size_t{ 480 } << 20;
 
 std::shared_ptr<const bmr::SignedDistanceSampler>
 ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string & name)
@@ -37,10 +39,11 @@ ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string
  * from, its factorization. The sweep tells those moduli (TellStartModuli) as soon as it brackets the minimum, so the
  * factorization overlaps its last samples: the same objective and factor, sooner.
  *
- * The thread that then asks for the objective (Take) and would otherwise wait computes the fine stage's start loads
- * as soon as the objective exists, while the second thread analyzes its matrix (StartLoads hands them over), and
- * then faults in the memory of the fine factor (bmr::MemoryWarmUp: on this project's test machine the first fine
- * factorization took 0.75-0.81 s instead of 1.07-1.13 s with it). */
+ * The thread that then asks for the objective (Take) and would otherwise wait faults in the memory of the fine
+ * factor while the objective is made (bmr::MemoryWarmUp: on this project's test machine the first fine
+ * factorization took 0.75-0.81 s instead of 1.07-1.13 s with it), computes the fine stage's start loads as soon as
+ * the objective exists, while the second thread analyzes its matrix (StartLoads hands them over), and then warms
+ * on until the factorization starts. */
 class FineObjectiveInMaking
 {
 public:
@@ -76,6 +79,8 @@ public:
     TellStartModuli({}); // a sweep without a bracket has told nothing
     if (m_Made.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
     {
+      m_WarmUp.WarmWhile(
+        [this]() { return m_ObjectiveKnown.wait_for(std::chrono::seconds(0)) != std::future_status::ready; });
       // Shared: should the analysis throw, the objective outlives the other thread's unwinding until this is done.
       if (const std::shared_ptr<const bmr::SurfaceMatchingObjective> made = m_ObjectiveKnown.get())
       {

@@ -124,5 +124,27 @@ bmrMemoryWarmUpTest(int, char *[])
     warmUp.Close();
     check(first.get() >= 32 * MiB, "the first one returns after Close()");
   }
+
+  // 5. WarmWhile() stops once asked and keeps its memory held; WarmWhileOpen() adds to it up to the cap; Close()
+  // releases both (RSS tolerance 16 MiB as in 2).
+  {
+    bmr::MemoryWarmUp warmUp(128 * MiB);
+    const std::size_t before = ResidentBytes();
+    int               asked = 0;
+    const std::size_t first = warmUp.WarmWhile([&asked] { return asked++ < 2; });
+    check(first == 64 * MiB && warmUp.GetHeldBytes() == 64 * MiB,
+          "WarmWhile wrote the 2 chunks it was allowed and holds them (" + std::to_string(first / MiB) + " MiB)");
+    std::future<std::size_t> rest = std::async(std::launch::async, [&warmUp] { return warmUp.WarmWhileOpen(); });
+    check(WaitForHeld(warmUp, 128 * MiB), "WarmWhileOpen adds to them up to the cap of 128 MiB");
+    warmUp.Close();
+    const std::size_t after = ResidentBytes();
+    check(rest.get() == 128 * MiB && warmUp.GetHeldBytes() == 0, "WarmWhileOpen returns all 128 MiB held");
+    if (before > 0)
+    {
+      check(after <= before + 16 * MiB,
+            "both released when Close() returns: resident +" + std::to_string((after - std::min(after, before)) / MiB) +
+              " MiB");
+    }
+  }
   return failures == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }
