@@ -139,73 +139,6 @@ CheckSerialOpenMP()
          bmr::test::Expect(after == 2, "the thread's own OpenMP setting is restored");
 }
 
-/** The factorization (bmr::fem::SupernodalFactorizer) and the triangular solves (bmr::fem::SupernodalSolver) on two
- * threads give the one-thread displacements bit for bit, on a cube whose elimination tree has two halves below the
- * top separator (16^3 nodes, two materials; the root supernode, 1113 columns, is factorized in six tiles),
- * for a load spread over every node, at two moduli of the second material: the second is a refactorization on the
- * same analysis. The halves hold at least half of the factor (0.74 measured), so the comparison is not between
- * two serial runs. The residual |f - K u| on the free dofs is at most 1e-10 of |f|: a backward-stable Cholesky
- * factorization and solve leave about the unit roundoff times |K| |u| (1e-13 here), so the bound fails only for a
- * wrong factor or solve (a missing or doubled update gives order 1). */
-bool
-CheckTwoThreadSolves()
-{
-  const bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(15, 1.0, 2);
-  std::vector<std::int32_t>  bottom;
-  for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
-  {
-    if (mesh.points[3 * n + 2] == 0.0)
-    {
-      bottom.push_back(static_cast<std::int32_t>(n));
-    }
-  }
-  std::vector<double> forces(mesh.points.size());
-  for (std::size_t i = 0; i < forces.size(); ++i)
-  {
-    forces[i] = std::sin(0.37 * static_cast<double>(i)) + 0.1 * static_cast<double>(i % 3);
-  }
-  const std::map<std::int32_t, bmr::MaterialParameters> materials{ { 1, { 10.0, 0.35 } }, { 2, { 50.0, 0.45 } } };
-  bool                                                  ok = true;
-  bmr::LinearElasticModel                               one(mesh, materials), two(mesh, materials);
-  for (bmr::LinearElasticModel * m : { &one, &two })
-  {
-    m->SetDirichletConditions(bottom, {});
-  }
-  one.SetNumberOfSolveThreads(1);
-  two.SetNumberOfSolveThreads(2);
-  for (const double modulus : { 50.0, 80.0 })
-  {
-    for (bmr::LinearElasticModel * m : { &one, &two })
-    {
-      m->SetYoungsModulus(2, modulus);
-    }
-    const std::vector<double> u1 = one.Solve(forces), u2 = two.Solve(forces);
-    const std::vector<double> Ku = one.ComputeInternalForces(u1);
-    const std::vector<char> & held = one.GetConstrainedDegreesOfFreedom();
-    double                    residual = 0.0, load = 0.0;
-    for (std::size_t i = 0; i < forces.size(); ++i)
-    {
-      if (!held[i])
-      {
-        residual += (forces[i] - Ku[i]) * (forces[i] - Ku[i]);
-        load += forces[i] * forces[i];
-      }
-    }
-    const double relative = std::sqrt(residual / load);
-    const double share = two.GetParallelSolveShare();
-    std::cout << "E2 = " << modulus << " kPa: two-thread solve equal bit for bit: " << (u1 == u2)
-              << "; relative residual " << relative << "; share of the factor solved side by side " << share
-              << std::endl;
-    ok &= bmr::test::Expect(one.UsesTreeCutFactorization() && two.UsesTreeCutFactorization(),
-                            "the tree-cut factorization factorizes (not CHOLMOD's own)");
-    ok &= bmr::test::Expect(share >= 0.5,
-                            "the two halves hold at least half of the factor (got " + bmr::test::ToString(share) + ")");
-    ok &= bmr::test::Expect(u1 == u2, "two solve threads give the one-thread displacements bit for bit");
-    ok &= bmr::test::Expect(
-      relative <= 1e-10, "the solve's relative residual is at most 1e-10 (got " + bmr::test::ToString(relative) + ")");
-  }
-  return ok;
-}
 /** |f - K u| / |f| on the free dofs of \a model. */
 double
 RelativeResidual(const bmr::LinearElasticModel & model,
@@ -226,6 +159,78 @@ RelativeResidual(const bmr::LinearElasticModel & model,
   return std::sqrt(residual / load);
 }
 
+/** The nodes on the plane z = 0, held fixed in the cube tests. */
+std::vector<std::int32_t>
+BottomNodes(const bmr::TetrahedralMesh & mesh)
+{
+  std::vector<std::int32_t> bottom;
+  for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
+  {
+    if (mesh.points[3 * n + 2] == 0.0)
+    {
+      bottom.push_back(static_cast<std::int32_t>(n));
+    }
+  }
+  return bottom;
+}
+
+/** A load on every one of \a count dofs that differs from dof to dof [mN]. */
+std::vector<double>
+SpreadForces(std::size_t count)
+{
+  std::vector<double> forces(count);
+  for (std::size_t i = 0; i < count; ++i)
+  {
+    forces[i] = std::sin(0.37 * static_cast<double>(i)) + 0.1 * static_cast<double>(i % 3);
+  }
+  return forces;
+}
+
+/** The factorization (bmr::fem::SupernodalFactorizer) and the triangular solves (bmr::fem::SupernodalSolver) on two
+ * threads give the one-thread displacements bit for bit, on a cube whose elimination tree has two halves below the
+ * top separator (16^3 nodes, two materials; the root supernode, 1113 columns, is factorized in six tiles),
+ * for a load spread over every node, at two moduli of the second material: the second is a refactorization on the
+ * same analysis. The halves hold at least half of the factor (0.74 measured), so the comparison is not between
+ * two serial runs. The residual |f - K u| on the free dofs is at most 1e-10 of |f|: a backward-stable Cholesky
+ * factorization and solve leave about the unit roundoff times |K| |u| (1e-13 here), so the bound fails only for a
+ * wrong factor or solve (a missing or doubled update gives order 1). */
+bool
+CheckTwoThreadSolves()
+{
+  const bmr::TetrahedralMesh                            mesh = bmr::test::StructuredCube(15, 1.0, 2);
+  const std::vector<std::int32_t>                       bottom = BottomNodes(mesh);
+  const std::vector<double>                             forces = SpreadForces(mesh.points.size());
+  const std::map<std::int32_t, bmr::MaterialParameters> materials{ { 1, { 10.0, 0.35 } }, { 2, { 50.0, 0.45 } } };
+  bool                                                  ok = true;
+  bmr::LinearElasticModel                               one(mesh, materials), two(mesh, materials);
+  for (bmr::LinearElasticModel * m : { &one, &two })
+  {
+    m->SetDirichletConditions(bottom, {});
+  }
+  one.SetNumberOfSolveThreads(1);
+  two.SetNumberOfSolveThreads(2);
+  for (const double modulus : { 50.0, 80.0 })
+  {
+    for (bmr::LinearElasticModel * m : { &one, &two })
+    {
+      m->SetYoungsModulus(2, modulus);
+    }
+    const std::vector<double> u1 = one.Solve(forces), u2 = two.Solve(forces);
+    const double              relative = RelativeResidual(one, forces, u1);
+    const double              share = two.GetParallelSolveShare();
+    std::cout << "E2 = " << modulus << " kPa: two-thread solve equal bit for bit: " << (u1 == u2)
+              << "; relative residual " << relative << "; share of the factor solved side by side " << share
+              << std::endl;
+    ok &= bmr::test::Expect(one.UsesTreeCutFactorization() && two.UsesTreeCutFactorization(),
+                            "the tree-cut factorization factorizes (not CHOLMOD's own)");
+    ok &= bmr::test::Expect(share >= 0.5,
+                            "the two halves hold at least half of the factor (got " + bmr::test::ToString(share) + ")");
+    ok &= bmr::test::Expect(u1 == u2, "two solve threads give the one-thread displacements bit for bit");
+    ok &= bmr::test::Expect(
+      relative <= 1e-10, "the solve's relative residual is at most 1e-10 (got " + bmr::test::ToString(relative) + ")");
+  }
+  return ok;
+}
 /** Refactorizations that keep the part of the factor a changed modulus does not reach: a stiff inclusion (label 2,
  * the elements centred in [9, 14]^3 of a 15^3 cube, a corner away from the fixed bottom) whose modulus changes
  * recomputes only the supernodes holding its entries and their ancestors (GetRefactorizedShare() < 1; 1 would mean a
@@ -244,8 +249,7 @@ CheckKeptFixedPartRefactorization()
 {
   using bmr::test::Expect;
   using bmr::test::ToString;
-  bmr::TetrahedralMesh      mesh = bmr::test::StructuredCube(15, 1.0);
-  std::vector<std::int32_t> bottom;
+  bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(15, 1.0);
   for (std::size_t e = 0; e < mesh.labels.size(); ++e)
   {
     bool inside = true;
@@ -260,18 +264,8 @@ CheckKeptFixedPartRefactorization()
     }
     mesh.labels[e] = inside ? 2 : 1;
   }
-  for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
-  {
-    if (mesh.points[3 * n + 2] == 0.0)
-    {
-      bottom.push_back(static_cast<std::int32_t>(n));
-    }
-  }
-  std::vector<double> forces(mesh.points.size());
-  for (std::size_t i = 0; i < forces.size(); ++i)
-  {
-    forces[i] = std::cos(0.29 * static_cast<double>(i)) + 0.05 * static_cast<double>(i % 5);
-  }
+  const std::vector<std::int32_t>                       bottom = BottomNodes(mesh);
+  const std::vector<double>                             forces = SpreadForces(mesh.points.size());
   const std::map<std::int32_t, bmr::MaterialParameters> materials{ { 1, { 10.0, 0.35 } }, { 2, { 50.0, 0.45 } } };
   bmr::LinearElasticModel                               one(mesh, materials), two(mesh, materials);
   for (bmr::LinearElasticModel * m : { &one, &two })
