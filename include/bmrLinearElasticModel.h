@@ -154,8 +154,8 @@ public:
    * the elimination tree. The rest, which depends on the other labels alone, is kept from the factorization that
    * first saw those labels change (or, for the first factorization, change since the model was built), as are its
    * updates of the recomputed part. On the 140k-tetrahedron pelvis a change of the prostate's modulus recomputes
-   * half of the multiply-adds (0.27-0.30 s instead of 0.5 s on 2 cores). The factor holds the same sums as a whole
-   * factorization in another order; it is the same bit for bit on one thread or two and for the same moduli
+   * half of the multiply-adds (0.27-0.31 s instead of 0.48-0.53 s on 2 cores). The factor holds the same sums as a
+   * whole factorization in another order; it is the same bit for bit on one thread or two and for the same moduli
    * whichever factorizations came before, once the changing labels are known. */
   void
   Factorize();

@@ -267,7 +267,7 @@ LinearElasticModel::Impl::PreconditionedSolve(const Eigen::VectorXd & b, Eigen::
 }
 
 /** K_ff = L L^T by fem::SupernodalFactorizer. When only the moduli of varyingLabels changed since its kept fixed part
- * was computed, only the supernodes they reach are refactorized (on the 140k pelvis, 43 % of the work for the
+ * was computed, only the supernodes they reach are refactorized (on the 140k pelvis, 49.5 % of the work for the
  * prostate). Otherwise the labels whose moduli changed since the last factorization (before the first: since the
  * model was built, as an estimator sets its start moduli) become varyingLabels, as an estimator changes the same
  * unknown moduli again and again, and the whole factor is computed, keeping the new fixed part; with no change to

@@ -49,7 +49,7 @@ namespace fem {
  * their ancestors (SetVaryingEntries()). The others, whose blocks and updates depend on A_fixed alone, are computed
  * first; each varying block, by then A_fixed minus their updates, is kept; a refactorization restores those blocks,
  * adds A_varying and factorizes the varying supernodes alone (FactorizeVarying()). On the 140k-tetrahedron pelvis a
- * prostate modulus varies the supernodes of 43 % of the factorization's multiply-adds: the root separators above
+ * prostate modulus varies the supernodes of 49.5 % of the factorization's multiply-adds: the root separators above
  * the prostate and its subtrees. The factor is the same sums in another order (the fixed descendants' updates
  * first): the same bits on one thread or two, and the same bits for the same A_fixed + A_varying whichever
  * factorization came before.
