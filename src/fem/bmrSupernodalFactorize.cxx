@@ -235,17 +235,16 @@ SupernodalFactorizer::SetVaryingEntries(const std::vector<char> & varies)
       m_VaryingEntries.push_back(p);
     }
   }
-  SplitByVariation(supernodeVaries);
+  SplitByVariation(std::move(supernodeVaries));
 }
 
 /** Marks the ancestors of every varying supernode (its parent holds the first row below its diagonal block, and
  * parents come after children) and splits each part's supernodes into the fixed and the varying, in order. */
 void
-SupernodalFactorizer::SplitByVariation(const std::vector<char> & supernodeVaries)
+SupernodalFactorizer::SplitByVariation(std::vector<char> varies)
 {
-  const Supernodes  L(*m_Factor);
-  std::vector<char> varies = supernodeVaries;
-  double            all = 0.0, varying = 0.0;
+  const Supernodes L(*m_Factor);
+  double           all = 0.0, varying = 0.0;
   for (std::int32_t s = 0; s < static_cast<std::int32_t>(m_Factor->nsuper); ++s)
   {
     const double k = L.Columns(s), b = L.Rows(s) - L.Columns(s);

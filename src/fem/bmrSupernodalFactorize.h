@@ -121,7 +121,7 @@ private:
   void
   PlaceValues(int part, const double * values);
   void
-  SplitByVariation(const std::vector<char> & supernodeVaries);
+  SplitByVariation(std::vector<char> varies);
   int
   FactorizeVarying(const double * varyingValues, unsigned threads, bool restore);
   int
