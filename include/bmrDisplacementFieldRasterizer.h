@@ -126,12 +126,14 @@ private:
  * border of the grid, then interpolates the coarse solution trilinearly into
  * every uncovered fine voxel. Hollow organs (lumens) thus get the harmonic
  * interpolation of their wall motion, bone interiors (enclosed by u = 0) get
- * ~0, and the field decays to zero towards the image border. Then 6 w Gauss-Seidel sweeps of the fine-grid
+ * ~0, and the field decays to zero towards the image border. Then about 2.4 w sweeps (24 for the default
+ * coarsening 4) of successive over-relaxation (Gauss-Seidel, each update scaled by omega = 1.7) of the fine-grid
  * Laplacian on the uncovered voxels within w = 2 coarsening + 2 voxels (city-block distance, w capped at
- * 65534) of the mesh remove the coarse interpolation's mismatch at the mesh boundary.
+ * 65534) of the mesh remove the coarse interpolation's mismatch at the mesh boundary:
+ * \f$ v \leftarrow (1 - \omega) v + \omega \sum_d h_d^{-2} (v_{-d} + v_{+d}) / \sum_d 2 h_d^{-2} \f$.
  *
  * Threaded on \a threader's work units when given (else sequential): the coarse components are solved
- * as independent tasks, the interpolation and the band search split by planes, and the Gauss-Seidel
+ * as independent tasks, the interpolation and the band search split by planes, and the over-relaxation
  * sweeps pipelined plane by plane so that every update sees the values of the sequential order. The
  * result is bit-identical for any number of threads (fixed sweep and summation orders). */
 BiomechanicalRegistration_EXPORT void

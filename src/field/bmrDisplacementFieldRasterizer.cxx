@@ -706,7 +706,8 @@ FindBoundaryBand(const GridGeometry &     grid,
   return band;
 }
 
-// Gauss-Seidel sweeps of the fine-grid Laplacian over the band's voxels, in increasing offset order.
+// Sweeps of successive over-relaxation (SOR: Gauss-Seidel with each update scaled by omega) of the fine-grid
+// Laplacian over the band's voxels, in increasing offset order.
 // A voxel couples only to the planes next to its own, so sweep s may relax plane k as soon as sweep
 // s - 1 has relaxed plane k + 1, and must do so before sweep s + 1 relaxes plane k - 1: every update
 // then reads exactly the values of the sequential sweeps, and the result is bit-identical for any
@@ -720,10 +721,24 @@ FindBoundaryBand(const GridGeometry &     grid,
 // - workers on other threads run the next groups, each waiting plane by plane for the group before.
 // A worker takes the next group only when it has finished its previous one, so the group it waits for
 // is always in progress on a running worker (no deadlock, whatever the thread pool does).
+// How the band is relaxed. On demo pair 1's pull-back (1.05 M band voxels, width 10), against the band's converged
+// solution (3000 Gauss-Seidel sweeps): 60 Gauss-Seidel sweeps (6 w, before) left 0.050 mm at most and 0.010 mm RMS
+// over the voxels that differ; 24 sweeps with omega 1.7 leave 0.0125 and 0.0010 mm (1.6: 0.020 and 0.0032; 1.8: 0.023
+// and 0.0008) in 40 % of the sweeps.
+constexpr double BandOverRelaxation = 1.7;
+/** 2.4 w sweeps, rounded up to whole groups of RelaxBoundaryBand's wavefront (4 sweeps). */
+unsigned int
+BandSweeps(unsigned int width)
+{
+  const unsigned int sweeps = (12 * width + 4) / 5;
+  return (sweeps + 3) / 4 * 4;
+}
+
 void
 RelaxBoundaryBand(const GridGeometry &     grid,
                   const BoundaryBand &     band,
                   unsigned int             sweeps,
+                  double                   omega,
                   double *                 field,
                   itk::MultiThreaderBase * threader)
 {
@@ -738,11 +753,14 @@ RelaxBoundaryBand(const GridGeometry &     grid,
     sumOfWeights += 2.0 * fw[d];
   }
   const double weight = sumOfWeights;
-  // v_c <- (0 + fw_0 (v_c[-x] + v_c[+x]) + fw_1 (...) + fw_2 (...)) / weight for each component c.
+  // v_c <- (1 - omega) v_c + omega (0 + fw_0 (v_c[-x] + v_c[+x]) + fw_1 (...) + fw_2 (...)) / weight for each
+  // component c.
+  const double keep = 1.0 - omega;
 #if defined(__SSE2__)
   // Components 0 and 1 in one SSE2 register, 2 in another: the same IEEE operations in the same order
   // per component (bit-identical to the scalar form), with two divisions per voxel instead of three.
   const __m128d zero = _mm_setzero_pd(), weightV = _mm_set1_pd(weight);
+  const __m128d omegaV = _mm_set1_pd(omega), keepV = _mm_set1_pd(keep);
   const __m128d fwV[3] = { _mm_set1_pd(fw[0]), _mm_set1_pd(fw[1]), _mm_set1_pd(fw[2]) };
   auto          relaxVoxel = [&](std::size_t off) {
     double * v = field + 3 * off;
@@ -754,8 +772,10 @@ RelaxBoundaryBand(const GridGeometry &     grid,
       sum01 = _mm_add_pd(sum01, _mm_mul_pd(fwV[d], _mm_add_pd(_mm_loadu_pd(lower), _mm_loadu_pd(upper))));
       sum2 = _mm_add_sd(sum2, _mm_mul_sd(fwV[d], _mm_add_sd(_mm_load_sd(lower + 2), _mm_load_sd(upper + 2))));
     }
-    _mm_storeu_pd(v, _mm_div_pd(sum01, weightV));
-    _mm_store_sd(v + 2, _mm_div_sd(sum2, weightV));
+    const __m128d relaxed01 = _mm_mul_pd(omegaV, _mm_div_pd(sum01, weightV));
+    const __m128d relaxed2 = _mm_mul_sd(omegaV, _mm_div_sd(sum2, weightV));
+    _mm_storeu_pd(v, _mm_add_pd(_mm_mul_pd(keepV, _mm_loadu_pd(v)), relaxed01));
+    _mm_store_sd(v + 2, _mm_add_sd(_mm_mul_sd(keepV, _mm_load_sd(v + 2)), relaxed2));
   };
 #else
   auto relaxVoxel = [&](std::size_t off) {
@@ -767,7 +787,7 @@ RelaxBoundaryBand(const GridGeometry &     grid,
       {
         sum += fw[d] * (v[comp - fstride[d]] + v[comp + fstride[d]]);
       }
-      v[comp] = sum / weight;
+      v[comp] = keep * v[comp] + omega * (sum / weight);
     }
   };
 #endif
@@ -896,12 +916,12 @@ FillOutsideHarmonic(const GridGeometry &     grid,
   });
   InterpolateCoarseSolution(grid, inside, c, A, coarse, field, threader);
   // The coarse interpolation leaves a mismatch at the mesh boundary, within a few coarse cells of
-  // it. Gauss-Seidel sweeps of the fine-grid Laplacian on the uncovered voxels of that band (in a
+  // it. Over-relaxed Gauss-Seidel sweeps of the fine-grid Laplacian on the uncovered voxels of that band (in a
   // fixed order, so deterministic) remove it.
   const unsigned int width = 2 * static_cast<unsigned int>(c) + 2;
   const BoundaryBand band = width < 255 ? FindBoundaryBand<std::uint8_t>(grid, inside, width, threader)
                                         : FindBoundaryBand<std::uint16_t>(grid, inside, width, threader);
-  RelaxBoundaryBand(grid, band, 6 * width, field, threader);
+  RelaxBoundaryBand(grid, band, BandSweeps(width), BandOverRelaxation, field, threader);
 }
 
 void

@@ -24,6 +24,7 @@
 #include "itkTestingMacros.h"
 
 #include <cmath>
+#include <vector>
 
 namespace {
 using FieldType = itk::Image<itk::Vector<double, 3>, 3>;
@@ -46,6 +47,142 @@ Run(const itk::TetrahedralMeshObject * mesh,
   source->GetMultiThreader()->SetMaximumNumberOfThreads(threads);
   source->Update();
   return source->GetOutput();
+}
+
+/** The band FillOutsideHarmonic relaxes: uncovered voxels within city-block distance \a width of a covered one,
+ * off the grid's border planes (breadth-first from the covered voxels). */
+std::vector<std::size_t>
+RelaxedBand(const bmr::GridGeometry & grid, const std::vector<unsigned char> & inside, unsigned int width)
+{
+  const auto &              n = grid.size;
+  const std::size_t         stride[3] = { 1, n[0], n[0] * n[1] };
+  std::vector<unsigned int> distance(inside.size(), width + 1);
+  std::vector<std::size_t>  front, band;
+  for (std::size_t v = 0; v < inside.size(); ++v)
+  {
+    if (inside[v])
+    {
+      distance[v] = 0;
+      front.push_back(v);
+    }
+  }
+  for (unsigned int d = 1; d <= width; ++d)
+  {
+    std::vector<std::size_t> next;
+    for (const std::size_t v : front)
+    {
+      const std::size_t index[3] = { v % n[0], (v / n[0]) % n[1], v / stride[2] };
+      for (int axis = 0; axis < 3; ++axis)
+      {
+        for (const int step : { -1, 1 })
+        {
+          if ((step < 0 && index[axis] == 0) || (step > 0 && index[axis] + 1 == n[axis]))
+          {
+            continue;
+          }
+          const std::size_t w = step < 0 ? v - stride[axis] : v + stride[axis];
+          if (distance[w] > d)
+          {
+            distance[w] = d;
+            next.push_back(w);
+          }
+        }
+      }
+    }
+    front.swap(next);
+  }
+  for (std::size_t v = 0; v < inside.size(); ++v)
+  {
+    const std::size_t index[3] = { v % n[0], (v / n[0]) % n[1], v / stride[2] };
+    const bool        border = index[0] == 0 || index[1] == 0 || index[2] == 0 || index[0] + 1 == n[0] ||
+                        index[1] + 1 == n[1] || index[2] + 1 == n[2];
+    if (!inside[v] && !border && distance[v] <= width)
+    {
+      band.push_back(v);
+    }
+  }
+  return band;
+}
+
+/** The outside fill's band relaxation against the band's converged solution: a ball of covered voxels (with an
+ * uncovered lumen inside) carries a smooth field that is not harmonic; the band around it is then solved to
+ * convergence here by plain Gauss-Seidel from the fill's result, with the same Dirichlet values (the covered voxels
+ * and the coarse interpolation beyond the band). The fill's over-relaxed sweeps (24 at coarsening 4) must come
+ * within 4e-3 of the field's scale of it: measured 1.4e-3 (0.0082 mm of 6 mm); the 60 plain Gauss-Seidel sweeps used
+ * before left 1.6e-2 (0.094 mm) and 24 plain ones 5.6e-2, both of which fail. The fill is also the same bit for bit
+ * on 1 and 2 threads. */
+bool
+CheckBandRelaxation()
+{
+  using bmr::test::Expect;
+  using bmr::test::ToString;
+  bmr::GridGeometry grid;
+  grid.size = { 56, 48, 40 };
+  grid.spacing = { 1.0, 1.2, 1.5 };
+  const auto &               n = grid.size;
+  const std::size_t          voxels = grid.GetNumberOfVoxels();
+  std::vector<unsigned char> inside(voxels, 0);
+  std::vector<double>        field(3 * voxels, 0.0);
+  for (std::size_t v = 0; v < voxels; ++v)
+  {
+    const double x = (double(v % n[0]) - 28.0) * grid.spacing[0];
+    const double y = (double((v / n[0]) % n[1]) - 24.0) * grid.spacing[1];
+    const double z = (double(v / (n[0] * n[1])) - 20.0) * grid.spacing[2];
+    const double r = std::sqrt(x * x + y * y + z * z);
+    if (r < 16.0 && r > 5.0) // a shell: its lumen is filled too
+    {
+      inside[v] = 1;
+      field[3 * v] = 2.0 + 0.01 * x * x; // mm
+      field[3 * v + 1] = 0.05 * x * y;
+      field[3 * v + 2] = std::sin(0.2 * z) + 0.001 * r * r * r;
+    }
+  }
+  auto twoThreads = itk::MultiThreaderBase::New();
+  twoThreads->SetMaximumNumberOfThreads(2);
+  twoThreads->SetNumberOfWorkUnits(2);
+  std::vector<double> filled = field, filledTwo = field;
+  bmr::FillOutsideHarmonic(grid, filled.data(), inside.data(), 4);
+  bmr::FillOutsideHarmonic(grid, filledTwo.data(), inside.data(), 4, twoThreads);
+
+  const std::vector<std::size_t> band = RelaxedBand(grid, inside, 2 * 4 + 2);
+  const double                   fw[3] = { 1.0 / (grid.spacing[0] * grid.spacing[0]),
+                                           1.0 / (grid.spacing[1] * grid.spacing[1]),
+                                           1.0 / (grid.spacing[2] * grid.spacing[2]) };
+  const std::size_t              stride[3] = { 3, 3 * n[0], 3 * n[0] * n[1] };
+  std::vector<double>            converged = filled;
+  for (double change = 1.0; change > 1e-13;)
+  {
+    change = 0.0;
+    for (const std::size_t v : band)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        double * value = &converged[3 * v + c];
+        double   sum = 0.0;
+        for (int d = 0; d < 3; ++d)
+        {
+          sum += fw[d] * (value[-static_cast<std::ptrdiff_t>(stride[d])] + value[stride[d]]);
+        }
+        const double next = sum / (2.0 * (fw[0] + fw[1] + fw[2]));
+        change = std::max(change, std::abs(next - *value));
+        *value = next;
+      }
+    }
+  }
+  double scale = 0.0, error = 0.0;
+  for (std::size_t i = 0; i < filled.size(); ++i)
+  {
+    scale = std::max(scale, std::abs(field[i]));
+    error = std::max(error, std::abs(filled[i] - converged[i]));
+  }
+  std::cout << "band relaxation: " << band.size() << " band voxels; largest distance to the band's converged solution "
+            << error << " mm (field scale " << scale << " mm)" << std::endl;
+  bool ok = Expect(band.size() > 10000, "the band holds more than 10000 voxels (got " + ToString(band.size()) + ")");
+  ok &=
+    Expect(error <= 4e-3 * scale,
+           "the band within 4e-3 of the field's scale of its converged solution (got " + ToString(error / scale) + ")");
+  ok &= Expect(filled == filledTwo, "the fill is the same bit for bit on 1 and 2 threads");
+  return ok;
 }
 } // namespace
 
@@ -200,6 +337,8 @@ itkPhysicsDeformationFieldSourceTest(int, char *[])
   ok &= Expect(jumpFilled < 0.35 * jumpUnfilled,
                "the fill's largest jump below 0.35 x the unfilled one (got " + ToString(jumpFilled) + " vs " +
                  ToString(jumpUnfilled) + " mm)");
+
+  ok &= CheckBandRelaxation();
 
   // 4. Errors: a mesh without displacement.
   bmr::TetrahedralMesh bare = bmr::test::StructuredCube(2, 1.0);
