@@ -114,7 +114,9 @@ public:
 
   /** Checks the model and computes the symbolic analysis of K_ff (its fill-reducing ordering), which depends only
    * on the mesh and the constrained dofs; Factorize() does it when it has not been done. Done ahead, e.g. on
-   * another thread, it leaves the factorizations and every result as they are. */
+   * another thread, it leaves the factorizations and every result as they are. The element stiffnesses, which the
+   * construction leaves for their first use, are summed here too: on a second thread alongside the ordering when
+   * SetNumberOfSolveThreads() allows two (the same sums either way). */
   void
   Analyze();
 

@@ -120,13 +120,14 @@ private:
     // terms, none of which the analysis and the factorization below write.
     m_Objective.set_value(objective);
     onExit.told = true;
+    // The sweep is ending or over: its core joins the analysis (the element stiffnesses are summed alongside the
+    // ordering) and the factorization, the same factor on any number of threads.
+    objective->GetForwardModel().SetNumberOfSolveThreads(solveThreads);
     objective->GetForwardModel().Prepare();
     const std::vector<double> moduli = m_StartModuliKnown.get();
     m_WarmUp.Close(); // its memory released just before the factorization allocates
     if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
     {
-      // The sweep is ending: its core joins the factorization (the same factor on any number of threads).
-      objective->GetForwardModel().SetNumberOfSolveThreads(solveThreads);
       objective->SetYoungsModuli(moduli);
       objective->GetForwardModel().PrepareSolves();
     }

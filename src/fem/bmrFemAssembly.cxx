@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -340,6 +341,10 @@ OrderAsNumbered(cholmod_common & common)
   common.postorder = 1;
 }
 
+// Built directly in compressed form: the kept entries counted per column of the free numbering, placed by a
+// counting sort on that column, then each column sorted by row; a position is where its entry lands. The
+// nested-dissection numbering turns entries around (a pattern entry may become an upper one), so the pattern's order
+// is not the result's.
 Eigen::SparseMatrix<double>
 FreeBlock(const LowerPattern &              pattern,
           const std::vector<double> &       values,
@@ -347,72 +352,67 @@ FreeBlock(const LowerPattern &              pattern,
           std::size_t                       nfree,
           std::vector<std::int64_t> *       positions)
 {
-  // Built column by column in pattern order, so that the compressed matrix holds the kept entries in the
-  // same order and a running counter is each entry's position.
-  Eigen::SparseMatrix<double> block(static_cast<Eigen::Index>(nfree), static_cast<Eigen::Index>(nfree));
-  std::vector<Eigen::Index>   perColumn(nfree, 0);
-  for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
-  {
-    if (freeIndex[col] < 0)
-    {
-      continue;
-    }
-    for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
-    {
-      const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
-      if (fr >= 0)
-      {
-        ++perColumn[std::min(fr, freeIndex[col])];
-      }
-    }
-  }
-  block.reserve(perColumn);
-  if (positions)
-  {
-    positions->assign(pattern.Size(), -1);
-  }
-  for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
-  {
-    const std::int32_t fc = freeIndex[col];
-    if (fc < 0)
-    {
-      continue;
-    }
-    for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
-    {
-      const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
-      if (fr >= 0)
-      {
-        // The lower triangle in the free numbering, which a nested-dissection numbering may turn around.
-        block.insert(std::max(fr, fc), std::min(fr, fc)) = values[k];
-      }
-    }
-  }
-  block.makeCompressed();
-  if (positions)
-  {
-    // Looked up: a numbering that turns entries around places them out of the pattern's order.
-    const auto * starts = block.outerIndexPtr();
-    const auto * rows = block.innerIndexPtr();
-    for (std::size_t col = 0; col + 1 < pattern.colStart.size(); ++col)
+  using StorageIndex = Eigen::SparseMatrix<double>::StorageIndex;
+  const std::size_t         columns = pattern.colStart.size() - 1;
+  std::vector<std::int64_t> start(nfree + 1, 0);
+  const auto                forEachKept = [&](const auto & visit) {
+    for (std::size_t col = 0; col < columns; ++col)
     {
       const std::int32_t fc = freeIndex[col];
-      if (fc < 0)
-      {
-        continue;
-      }
-      for (std::int64_t k = pattern.colStart[col]; k < pattern.colStart[col + 1]; ++k)
+      for (std::int64_t k = pattern.colStart[col]; fc >= 0 && k < pattern.colStart[col + 1]; ++k)
       {
         const std::int32_t fr = freeIndex[pattern.rowIndex[k]];
         if (fr >= 0)
         {
-          const auto   column = std::min(fr, fc);
-          const auto * at = std::lower_bound(rows + starts[column], rows + starts[column + 1], std::max(fr, fc));
-          (*positions)[k] = at - rows;
+          // The lower triangle in the free numbering.
+          visit(k, std::max(fr, fc), std::min(fr, fc));
         }
       }
     }
+  };
+  forEachKept([&](std::int64_t, std::int32_t, std::int32_t column) { ++start[static_cast<std::size_t>(column) + 1]; });
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  const auto                  nonZeros = static_cast<std::size_t>(start.back());
+  Eigen::SparseMatrix<double> block(static_cast<Eigen::Index>(nfree), static_cast<Eigen::Index>(nfree));
+  block.resizeNonZeros(static_cast<Eigen::Index>(nonZeros));
+  StorageIndex *            rows = block.innerIndexPtr();
+  std::vector<std::int64_t> entryAt(nonZeros); // the pattern entry of each slot
+  std::vector<std::int64_t> next(start.begin(), start.end() - 1);
+  forEachKept([&](std::int64_t k, std::int32_t row, std::int32_t column) {
+    const auto at = static_cast<std::size_t>(next[static_cast<std::size_t>(column)]++);
+    rows[at] = static_cast<StorageIndex>(row);
+    entryAt[at] = k;
+  });
+  std::vector<std::pair<StorageIndex, std::int64_t>> column; // (row, pattern entry), sorted by row
+  for (std::size_t c = 0; c < nfree; ++c)
+  {
+    block.outerIndexPtr()[c] = static_cast<StorageIndex>(start[c]);
+    const auto first = static_cast<std::size_t>(start[c]), last = static_cast<std::size_t>(start[c + 1]);
+    column.clear();
+    for (std::size_t at = first; at < last; ++at)
+    {
+      column.emplace_back(rows[at], entryAt[at]);
+    }
+    std::sort(column.begin(), column.end()); // rows are distinct within a column
+    for (std::size_t i = 0; i < column.size(); ++i)
+    {
+      rows[first + i] = column[i].first;
+      entryAt[first + i] = column[i].second;
+    }
   }
+  if (positions)
+  {
+    positions->assign(pattern.Size(), -1);
+  }
+  for (std::size_t at = 0; at < nonZeros; ++at)
+  {
+    block.valuePtr()[at] = values[static_cast<std::size_t>(entryAt[at])];
+    if (positions)
+    {
+      (*positions)[static_cast<std::size_t>(entryAt[at])] = static_cast<std::int64_t>(at);
+    }
+  }
+  block.outerIndexPtr()[nfree] = static_cast<StorageIndex>(nonZeros);
   return block;
 }
 

@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -59,9 +60,10 @@ struct LinearElasticModel::Impl
   const TetrahedralMesh &                     mesh;
   std::map<std::int32_t, MaterialParameters>  materials;
   std::size_t                                 ndof{ 0 };
-  fem::LowerPattern                           pattern;    // of the full 3N x 3N stiffness
-  std::map<std::int32_t, std::vector<double>> unitValues; // Khat_m per label, on the shared pattern
-  std::vector<double>                         values;     // sum_m E_m Khat_m
+  fem::LowerPattern                           pattern;              // of the full 3N x 3N stiffness
+  std::map<std::int32_t, std::vector<double>> unitValues;           // Khat_m per label, on the shared pattern
+  bool                                        accumulated{ false }; // unitValues and values allocated and summed
+  std::vector<double>                         values;               // sum_m E_m Khat_m
   bool                                        valuesCurrent{ false };
   std::vector<char>                           constrained;
   std::vector<double>                         prescribed; // 3N
@@ -108,10 +110,16 @@ struct LinearElasticModel::Impl
     std::vector<std::int32_t> elements;
     std::vector<std::int32_t> nodes;
   };
+  std::vector<AveragingPatch> patches; // of the averaged materials, until their bulk stiffness is accumulated
+
   std::vector<AveragingPatch>
   BuildAveragingPatches() const;
   void
   BuildPattern();
+  /** The element stiffnesses on the pattern (unitValues), once: deferred from the construction to the first use,
+   * so that Analyze() can compute them alongside the fill-reducing order. */
+  void
+  AccumulateStiffnesses();
   // Pieces of BuildPattern.
   using NodeAdjacency = fem::NodeAdjacency;
   static void
@@ -124,6 +132,9 @@ struct LinearElasticModel::Impl
   CheckElements() const;
   void
   UpdateValues();
+  /** unitValues of \a label, accumulated first if they are not yet. */
+  const std::vector<double> &
+  UnitValues(std::int32_t label);
   void
   SymmetricProduct(const std::vector<double> & x, std::vector<double> & y) const
   {
@@ -559,20 +570,47 @@ LinearElasticModel::Impl::BuildPattern()
 {
   const std::size_t N = mesh.GetNumberOfPoints();
   ndof = 3 * N;
-  NodeAdjacency                     upper = fem::ElementNodeAdjacency(mesh);
-  const std::vector<AveragingPatch> patches = BuildAveragingPatches();
+  NodeAdjacency upper = fem::ElementNodeAdjacency(mesh);
+  patches = BuildAveragingPatches();
   AddPatchNodeCouplings(patches, upper);
   fem::SortAdjacencyAndCheckNodesUsed(upper, "LinearElasticModel");
   pattern = fem::BuildColumnPattern(upper);
+  valuesCurrent = false;
+}
+
+void
+LinearElasticModel::Impl::AccumulateStiffnesses()
+{
+  if (accumulated)
+  {
+    return;
+  }
+  const auto t0 = Clock::now();
   AccumulateUnitElementStiffnesses();
   AccumulateAveragedBulkStiffnesses(patches);
+  std::vector<AveragingPatch>().swap(patches);
   values.assign(pattern.Size(), 0.0);
   valuesCurrent = false;
+  accumulated = true;
+  timings.assemble += SecondsSince(t0);
+}
+
+const std::vector<double> &
+LinearElasticModel::Impl::UnitValues(std::int32_t label)
+{
+  AccumulateStiffnesses();
+  const auto found = unitValues.find(label);
+  if (found == unitValues.end())
+  {
+    Fail("LinearElasticModel", "label " + std::to_string(label) + " has no material");
+  }
+  return found->second;
 }
 
 void
 LinearElasticModel::Impl::UpdateValues()
 {
+  AccumulateStiffnesses();
   if (valuesCurrent)
   {
     return;
@@ -738,10 +776,22 @@ LinearElasticModel::Analyze()
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
   {
-    // The fill-reducing order from the node graph (nine times fewer edges than CHOLMOD's dof graph), given to
-    // CHOLMOD as the free dofs' numbering.
-    const auto serialized = fem::LockOrdering();
-    d.nfree = fem::NumberFreeDofsByNestedDissection(d.pattern, d.constrained, d.freeIndex);
+    // The element stiffnesses are summed on a second thread, when there is one, while this one computes the
+    // fill-reducing order from the node graph (nine times fewer edges than CHOLMOD's dof graph), given to CHOLMOD as
+    // the free dofs' numbering: neither reads what the other writes.
+    std::future<void> accumulated;
+    if (!d.accumulated && d.solveThreads > 1)
+    {
+      accumulated = std::async(std::launch::async, [&d]() { d.AccumulateStiffnesses(); });
+    }
+    {
+      const auto serialized = fem::LockOrdering();
+      d.nfree = fem::NumberFreeDofsByNestedDissection(d.pattern, d.constrained, d.freeIndex);
+    }
+    if (accumulated.valid())
+    {
+      accumulated.get();
+    }
   }
   d.freePatternCurrent = false; // K_ff in the new numbering
   d.freeBlockCurrent = false;
@@ -946,13 +996,12 @@ LinearElasticModel::ComputeMaterialStiffnessProduct(std::int32_t label, const st
   {
     Fail("LinearElasticModel::ComputeMaterialStiffnessProduct", "the displacement vector must hold 3 values per node");
   }
-  const auto it = m_Impl->unitValues.find(label);
-  if (it == m_Impl->unitValues.end())
+  if (m_Impl->materials.count(label) == 0)
   {
     Fail("LinearElasticModel::ComputeMaterialStiffnessProduct", "label " + std::to_string(label) + " has no material");
   }
   std::vector<double> y;
-  fem::SymmetricProduct(m_Impl->pattern, it->second, u, y);
+  fem::SymmetricProduct(m_Impl->pattern, m_Impl->UnitValues(label), u, y);
   return y;
 }
 
