@@ -10,6 +10,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import NullFormatter  # noqa: E402
 
 out = sys.argv[1]
 runs = list(csv.DictReader(open(f"{out}/side_by_side_runs.csv")))
@@ -69,34 +70,44 @@ text = "\n".join(lines) + "\n"
 open(f"{out}/side_by_side_summary.md", "w").write(text)
 print(text)
 
-fig, axes = plt.subplots(1, 3, figsize=(14, 4))
+# One panel per study that ran (SIZES or MESH_SCALES set empty skip theirs).
+panels = ["error"] + (["size"] if size_rows else []) + (["mesh"] if mesh_rows else [])
+fig, axes = plt.subplots(1, len(panels), figsize=(4.7 * len(panels), 4), squeeze=False)
+ax = dict(zip(panels, axes[0]))
+times = []
 for m in methods:
     t = [float(tre[("main", p, m)]["tre_mean_mm"]) for p in pairs if ("main", p, m) in tre]
     if t:
-        axes[0].plot([wall[m]], [statistics.median(t)], "o", label=m)
-axes[0].set_xscale("log")
-axes[0].set_xlabel("median wall time [s]")
-axes[0].set_ylabel("median seed TRE [mm]")
-axes[0].set_title("error against run time")
-axes[0].legend(fontsize=7)
-for m in ["fem", "plastimatch", "itk-demons"]:
-    rows = [r for r in size_rows if r["method"] == m]
-    if rows:
-        axes[1].plot([int(r["voxels"]) for r in rows], [float(r["wall_s"]) for r in rows], "o-", label=m)
-# An empty study (SIZES or MESH_SCALES set empty) leaves its panel linear and blank: log axes need data.
+        ax["error"].plot([wall[m]], [statistics.median(t)], "o", label=m)
+        times.append(wall[m])
+# Log time only over a decade or more: a log axis over less labels its minor ticks on top of each other.
+if times and max(times) > 10 * min(times):
+    ax["error"].set_xscale("log")
+    ax["error"].xaxis.set_minor_formatter(NullFormatter())
+elif times:
+    ax["error"].set_xlim(0, 1.1 * max(times))
+ax["error"].set_ylim(bottom=0)
+ax["error"].set_xlabel("median wall time [s]")
+ax["error"].set_ylabel("median seed TRE [mm]")
+ax["error"].set_title("error against run time")
+ax["error"].legend(fontsize=7)
 if size_rows:
-    axes[1].set_xscale("log")
-    axes[1].set_yscale("log")
-    axes[1].legend(fontsize=7)
-axes[1].set_xlabel("voxels")
-axes[1].set_ylabel("wall time [s]")
-axes[1].set_title("image size")
-axes[2].plot([int(r["tetrahedra"]) for r in mesh_rows], [float(r["wall_s"]) for r in mesh_rows], "o-")
+    for m in ["fem", "plastimatch", "itk-demons"]:
+        rows = [r for r in size_rows if r["method"] == m]
+        if rows:
+            ax["size"].plot([int(r["voxels"]) for r in rows], [float(r["wall_s"]) for r in rows], "o-", label=m)
+    ax["size"].set_xscale("log")
+    ax["size"].set_yscale("log")
+    ax["size"].legend(fontsize=7)
+    ax["size"].set_xlabel("voxels")
+    ax["size"].set_ylabel("wall time [s]")
+    ax["size"].set_title("image size")
 if mesh_rows:
-    axes[2].set_xscale("log")
-    axes[2].set_yscale("log")
-axes[2].set_xlabel("tetrahedra")
-axes[2].set_ylabel("FEM register wall time [s]")
-axes[2].set_title("FEM mesh size")
+    ax["mesh"].plot([int(r["tetrahedra"]) for r in mesh_rows], [float(r["wall_s"]) for r in mesh_rows], "o-")
+    ax["mesh"].set_xscale("log")
+    ax["mesh"].set_yscale("log")
+    ax["mesh"].set_xlabel("tetrahedra")
+    ax["mesh"].set_ylabel("FEM register wall time [s]")
+    ax["mesh"].set_title("FEM mesh size")
 fig.tight_layout()
 fig.savefig(f"{out}/side_by_side.png", dpi=120)
