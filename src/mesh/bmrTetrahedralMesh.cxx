@@ -20,7 +20,6 @@
 #include "bmrError.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -389,55 +388,35 @@ NodesOnBoundary(const TetrahedralMesh & mesh, std::int32_t label)
   return UniqueNodes(faces);
 }
 
-// Only the label's own faces are matched (the prostate's are about a tenth of the pelvis's): a face of the label
+// Only the label's own elements are matched (the prostate's are about a tenth of the pelvis's): a face of the label
 // lies on its surface when no other element of the label shares it, i.e. when its neighbor has another label or
-// there is none. In a valid mesh (a face shared by at most two elements) that is FaceNeighbors' answer.
+// there is none.
 std::vector<std::int32_t>
 LabelSurfaceFaces(const TetrahedralMesh & mesh, std::int32_t label)
 {
-  struct Key
-  {
-    std::array<std::int32_t, 3> nodes;
-    std::size_t                 face; // 4 e + f
-  };
-  std::vector<Key> keys;
+  TetrahedralMesh          own; // the label's elements, their nodes keeping their numbers
+  std::vector<std::size_t> element;
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
-    for (int f = 0; f < 4 && mesh.labels[e] == label; ++f)
+    if (mesh.labels[e] == label)
     {
-      Key k{ {}, 4 * e + static_cast<std::size_t>(f) };
-      for (int i = 0; i < 3; ++i)
-      {
-        k.nodes[i] = mesh.tetrahedra[4 * e + FaceNodes[f][i]];
-      }
-      std::sort(k.nodes.begin(), k.nodes.end());
-      keys.push_back(k);
+      own.tetrahedra.insert(own.tetrahedra.end(), &mesh.tetrahedra[4 * e], &mesh.tetrahedra[4 * e] + 4);
+      own.labels.push_back(label);
+      element.push_back(e);
     }
   }
-  // Equal triples next to each other, in face order among equals.
-  std::vector<std::size_t> order(keys.size());
-  std::iota(order.begin(), order.end(), std::size_t{ 0 });
-  std::sort(order.begin(), order.end(), [&keys](std::size_t a, std::size_t b) {
-    return keys[a].nodes != keys[b].nodes ? keys[a].nodes < keys[b].nodes : a < b;
-  });
-  std::vector<char> shared(keys.size(), 0);
-  for (std::size_t k = 0; k + 1 < order.size(); ++k)
+  const std::vector<std::int64_t> neighbor = FaceNeighbors(own);
+  std::vector<std::int32_t>       faces;
+  for (std::size_t k = 0; k < element.size(); ++k)
   {
-    if (keys[order[k]].nodes == keys[order[k + 1]].nodes)
+    for (int f = 0; f < 4; ++f)
     {
-      shared[order[k]] = shared[order[k + 1]] = 1;
-      ++k; // paired in order, as FaceNeighbors pairs them
-    }
-  }
-  std::vector<std::int32_t> faces;
-  for (std::size_t k = 0; k < keys.size(); ++k)
-  {
-    if (!shared[k])
-    {
-      const std::size_t e = keys[k].face / 4, f = keys[k].face % 4;
-      for (int i = 0; i < 3; ++i)
+      if (neighbor[4 * k + f] < 0)
       {
-        faces.push_back(mesh.tetrahedra[4 * e + FaceNodes[f][i]]);
+        for (int i = 0; i < 3; ++i)
+        {
+          faces.push_back(mesh.tetrahedra[4 * element[k] + FaceNodes[f][i]]);
+        }
       }
     }
   }
