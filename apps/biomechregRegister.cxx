@@ -107,21 +107,29 @@ ParseRegistrationSettings(const Arguments & args)
   {
     throw UsageError("--wall-spacing-mm must be >= 0 (0: every wall node free)");
   }
-  s.walls.regularization = args.Number("--wall-regularization", s.walls.regularization);
+  const std::string motion = args.Choice("--wall-motion", { "normal", "free", "traction", "pressure" });
+  s.walls.motion = motion == "normal"     ? bmr::WallMotionEnum::AlongNormals
+                   : motion == "free"     ? bmr::WallMotionEnum::Free
+                   : motion == "traction" ? bmr::WallMotionEnum::NormalTraction
+                                          : bmr::WallMotionEnum::UniformPressure;
+  if (motion == "pressure" && args.Has("--wall-spacing-mm"))
+  {
+    throw UsageError("--wall-spacing-mm does not apply to --wall-motion pressure (one pressure per wall)");
+  }
+  // One pressure per wall has no near-null direction for the prior to pick from, and the prior on its orthonormal
+  // parameter (sqrt(N) s for N wall nodes) would pull every pressure toward zero: none by default.
+  s.walls.regularization = args.Number("--wall-regularization", motion == "pressure" ? 0.0 : s.walls.regularization);
   if (!(s.walls.regularization >= 0.0))
   {
     throw UsageError("--wall-regularization must be >= 0");
   }
-  const std::string motion = args.Choice("--wall-motion", { "normal", "free", "traction" });
-  s.walls.motion = motion == "normal" ? bmr::WallMotionEnum::AlongNormals
-                   : motion == "free" ? bmr::WallMotionEnum::Free
-                                      : bmr::WallMotionEnum::NormalTraction;
   e.limitElementInversion = args.Choice("--element-inversion", { "allow", "limit" }) == "limit";
-  if (e.limitElementInversion && s.walls.controlSpacing > 0.0)
+  if (e.limitElementInversion && s.walls.ReducedBasis())
   {
-    throw UsageError("--element-inversion limit needs --wall-spacing-mm 0 (one parameter per wall node)");
+    throw UsageError("--element-inversion limit needs --wall-spacing-mm 0 and a wall motion other than pressure "
+                     "(one parameter per wall node)");
   }
-  e.gaussNewtonInner = s.walls.controlSpacing > 0.0;
+  e.gaussNewtonInner = s.walls.ReducedBasis();
   s.meshScale = args.Number("--mesh-scale", s.meshScale);
   if (!(s.meshScale >= 0.25 && s.meshScale <= 4.0))
   {

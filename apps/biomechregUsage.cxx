@@ -39,7 +39,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--tracking-noise-mm S (landmarks_tracked.csv: the fixed seeds + N(0, S^2); 0.5)]\n"
     "                     [--fixed-grid-shift-voxels S (fixed grid offset U(-S, S) voxels; default 0)]\n"
     "                     [--truth-geometry anatomy|voxels (the truth meshes the analytic anatomy the labels\n"
-    "                      sample, whose surfaces stay put when --truth-mesh-scale refines; or the label map's voxels)]\n"
+    "                      sample, whose surfaces stay put when --truth-mesh-scale refines; or the label map's "
+    "voxels)]\n"
     "                     [--truth-refine-size-mm S [--truth-refine-distance-mm D (6)] (the truth's cells <= S mm\n"
     "                      within D mm of the prostate; pelvis 1.25 (the converged truth), spheres 0 = none)]\n"
     "    synthetic moving/fixed pair with ground truth (truth.json, truth_field.nrrd, seed landmarks)\n" },
@@ -49,8 +50,9 @@ const std::pair<const char *, const char *> commands[] = {
   { "register",
     "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
     "                      --scene FILE --out DIR [--sweep-samples N] [--coarse-factor F] [--mesh-scale F]\n"
-    "                      [--wall-spacing-mm D] [--wall-regularization A] [--wall-motion normal|free|traction]\n"
-    "                      [--max-outer-iterations N] [--outer-tolerance T] [--element-inversion allow|limit]\n"
+    "                      [--wall-spacing-mm D] [--wall-regularization A]\n"
+    "                      [--wall-motion normal|free|traction|pressure] [--max-outer-iterations N]\n"
+    "                      [--outer-tolerance T] [--element-inversion allow|limit]\n"
     "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
     "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"
     "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F] [--uncertainty-smoothing-voxels "

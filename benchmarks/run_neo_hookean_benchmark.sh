@@ -13,24 +13,25 @@
 #   DESIGN=filling: bladder fillings of 5, 10, 20 and 25 mm (the bladder wall's largest motion in the truth; the
 #     pressure found by a secant search on a coarser truth mesh), prostate 100 kPa, rectum 0.5 kPa; each pair
 #     estimated with the neo-Hookean and with the linear model: E error, surface RMS, seed TRE, times.
-#   REGISTER_ARGS: the settings of every register run (default "--wall-motion traction --wall-spacing-mm 30
-#   --wall-regularization 0.0001": smooth normal tractions on the walls, docs/estimation.md; add "--uncertainty
-#   none" for point estimates only, "--mesh-scale 1.5" for the ~37k-tetrahedron mesh); APPEND=1 adds rows;
-#   START=K skips the pairs before K.
-# Writes benchmarks/results/neo_hookean_runs_DESIGN.csv (one row per estimation) and, through
-# summarize_neo_hookean.py, neo_hookean_DESIGN.csv, neo_hookean_DESIGN.png and a printed table.
+#   REGISTER_ARGS: the settings of every register run (default "--wall-motion pressure": one unknown uniform
+#   pressure per lumen, docs/estimation.md; "--wall-motion traction --wall-spacing-mm 30 --wall-regularization
+#   0.0001" for smooth tractions that may vary along a wall; add "--uncertainty none" for point estimates only,
+#   "--mesh-scale 1.5" for the ~37k-tetrahedron mesh); APPEND=1 adds rows; START=K skips the pairs before K;
+#   TAG=T names the results DESIGN_T.
+# Writes benchmarks/results/neo_hookean_runs_DESIGN[_TAG].csv (one row per estimation) and, through
+# summarize_neo_hookean.py, neo_hookean_DESIGN[_TAG].csv, .png and a printed table.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
 count="${1:-3}"
 seed="${2:-36}"
 design="${DESIGN:-table36}"
-register_args="${REGISTER_ARGS---wall-motion traction --wall-spacing-mm 30 --wall-regularization 0.0001}"
+register_args="${REGISTER_ARGS---wall-motion pressure}"
 out="$root/benchmarks/results"
 mkdir -p "$out"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-csv="$out/neo_hookean_runs_$design.csv"
+csv="$out/neo_hookean_runs_$design${TAG:+_$TAG}.csv"
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
   echo "design,row,pair,estimation_model,true_E_kPa,truth_tissue_kPa,assumed_tissue_kPa,bladder_kPa,rectum_kPa,bladder_max_mm,rectum_max_mm,seed,estimate_kPa,fit_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,prostate_rms_mm,seed_tre_mm,seed_tre_max_mm,identity_tre_mm,mesh_tetrahedra,outer_iterations,phantom_s,register_s" > "$csv"
 fi

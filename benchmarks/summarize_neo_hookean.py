@@ -90,16 +90,16 @@ for d in rows:
           f'{d["tre"]:.3f} ({d["identity"]:.2f}) | {d["seconds"]:.0f} |')
 
 fig, ax = plt.subplots(1, 2, figsize=(13, 4.8))
-x_key = "filling" if design == "filling" else "E"
-for n, key in enumerate(sorted({(d["row"] if design != "filling" else "", d["model"]) for d in rows})):
-    ds = [d for d in rows if (d["row"] if design != "filling" else "", d["model"]) == key]
+x_key = "filling" if design.startswith("filling") else "E"
+for n, key in enumerate(sorted({(d["row"] if not design.startswith("filling") else "", d["model"]) for d in rows})):
+    ds = [d for d in rows if (d["row"] if not design.startswith("filling") else "", d["model"]) == key]
     label = " ".join(k for k in key if k)
     for d in ds:
         ax[0].plot([d[x_key]] * len(d["errors"]), [100 * e for e in d["errors"]], "o", ms=3, alpha=0.4, color=f"C{n}")
     ax[0].plot([d[x_key] for d in ds], [100 * d["median_error"] for d in ds], "o-", color=f"C{n}", label=label)
     ax[1].plot([d[x_key] for d in ds], [d["tre"] for d in ds], "o-", color=f"C{n}", label=f"{label}: seed TRE")
     ax[1].plot([d[x_key] for d in ds], [d["rms"] for d in ds], "s--", color=f"C{n}", label=f"{label}: prostate RMS")
-xlabel = "bladder filling (largest wall motion) [mm]" if design == "filling" else "true prostate E [kPa]"
+xlabel = "bladder filling (largest wall motion) [mm]" if design.startswith("filling") else "true prostate E [kPa]"
 ax[0].axhline(0, color="k", lw=0.8)
 for level in (-0.1, 0.1):
     ax[0].axhline(100 * level, color="0.6", lw=0.8, ls=":")

@@ -105,7 +105,13 @@ enum class WallMotionEnum : std::uint8_t
   Free,
   /** The walls are not prescribed: each control point carries an unknown traction along the wall's normal (a
    * lumen pressure that may vary along the wall), and the walls move as the tissue lets them. */
-  NormalTraction
+  NormalTraction,
+  /** NormalTraction with one unknown per wall, uniform along it: the pressure of a lumen filled with fluid at rest
+   * (urine, gas), whose hydrostatic variation over the organ (about 0.01 kPa per cm) is negligible. The control
+   * spacing does not apply. Use it with the regularization 0 (biomechreg's default for it): there is no near-null
+   * direction to pick from, and the prior on the orthonormal parameter, sqrt(N) s for a wall of N nodes, pulls every
+   * pressure toward zero (on one pelvis pair alpha = 0.01 read the prostate 7 % softer than alpha = 0). */
+  UniformPressure
 };
 BiomechanicalRegistration_EXPORT std::ostream &
                                  operator<<(std::ostream & os, WallMotionEnum value);
@@ -113,11 +119,19 @@ BiomechanicalRegistration_EXPORT std::ostream &
 /** The settings of WallLoads in an estimation; the defaults are FEMElasticityOptimizer's and biomechreg's. */
 struct BiomechanicalRegistration_EXPORT WallLoadSettings
 {
-  double controlSpacing{ 0.0 }; ///< mm; 0: one control point per wall node
+  double controlSpacing{ 0.0 }; ///< mm; 0: one control point per wall node (not used by UniformPressure)
   /** alpha of the prior alpha/2 |p|^2: small, it picks the least-displacement optimum along the walls'
    * near-null directions so that Phi*(E) is smooth (README, "What the walls do to the estimate"). */
   double         regularization{ 0.01 };
   WallMotionEnum motion{ WallMotionEnum::AlongNormals };
+
+  /** Fewer load parameters than wall nodes (a smooth basis, or one pressure per wall): the estimator then solves
+   * the inner problem by Levenberg-Marquardt, one solve per parameter. */
+  bool
+  ReducedBasis() const
+  {
+    return controlSpacing > 0.0 || motion == WallMotionEnum::UniformPressure;
+  }
 };
 
 /** A loaded wall of WallLoads: its mesh nodes, and the boundary-face label whose faces give its normals. */
@@ -152,6 +166,10 @@ struct BiomechanicalRegistration_EXPORT LoadedWall
  *   and the same prior weight serves both. A lumen under pressure moves its wall this way, tangentially as
  *   well, where prescribed normal motions force the tissue to follow the normal. Only the held nodes are
  *   constrained, so some label must be held (a fixed bone, or a fixed region-of-interest boundary);
+ * - WallMotionEnum::UniformPressure: the forces of NormalTraction with W one column per wall, all of whose
+ *   nodes it weighs 1 (a node on two walls 1/2 each): \f$ f_k = \kappa_k A_k n_k s_w \f$, a single pressure
+ *   \f$ p_w = \kappa_w s_w \f$ per lumen. A lumen filled with fluid at rest is loaded this way; a pressure that
+ *   varies along the wall can instead shape the organs next to it for any modulus (docs/estimation.md);
  * - prior \f$ R(p) = \tfrac{\alpha}{2} |p|^2 \f$ (SetRegularization()): independent of E, so it does not
  *   push the moduli one way, and it picks the least-displacement optimum along the near-null directions
  *   of a wall sliding along itself.
@@ -173,20 +191,21 @@ public:
             const std::vector<LoadedWall> &   walls);
   ~WallLoads() override;
 
-  /** Spacing [mm] of the control points of the smooth wall basis; 0 (default): every control node. */
+  /** Spacing [mm] of the control points of the smooth wall basis; 0 (default): every control node. Kept, but not
+   * used, while the motion is UniformPressure (one control point per wall). */
   void
   SetControlSpacing(double spacing);
   /** Weight alpha [1] of the prior alpha/2 |p|^2 (default 0); finite and >= 0. */
   void
   SetRegularization(double alpha);
   /** Along the normals, free, or normal tractions; GetConstrainedNodes() changes with it (the held nodes
-   * only for NormalTraction), so set it before the forward model takes the constrained nodes. Throws for
-   * NormalTraction when no node is held (nothing would keep the mesh in place). */
+   * only for NormalTraction and UniformPressure), so set it before the forward model takes the constrained nodes.
+   * Throws for those two when no node is held (nothing would keep the mesh in place). */
   void
   SetMotion(WallMotionEnum motion);
   WallMotionEnum
   GetMotion() const;
-  /** mu [kPa] of the traction scale of NormalTraction (default 1): the tissue around the walls. */
+  /** mu [kPa] of the traction scale of NormalTraction and UniformPressure (default 1): the tissue around the walls. */
   void
   SetTractionShearModulus(double mu);
   /** The load-controlled wall nodes, sorted. */

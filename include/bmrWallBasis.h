@@ -55,7 +55,8 @@ public:
   /** \a points: 3N mesh coordinates [mm]; \a walls: for each wall, the indices
    * (into the parameter-node list of size \a numberOfNodes) and mesh node ids of
    * its nodes; a node may belong to several walls (it then blends all their
-   * control points). spacing <= 0 gives the identity basis (one control per node). */
+   * control points). spacing <= 0 gives the identity basis (one control per node); spacing = +infinity one
+   * control point per wall, every node of which it weighs 1 (a uniform value per wall). */
   WallBasis(const std::vector<double> &                                             points,
             const std::vector<std::vector<std::pair<std::int32_t, std::int32_t>>> & walls,
             std::size_t                                                             numberOfNodes,

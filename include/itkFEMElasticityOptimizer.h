@@ -46,8 +46,8 @@ namespace itk {
  * GenerateData() composes the scene's objective, bmr::SurfaceMatchingObjective, from its three parts:
  * - forward model bmr::LinearForwardModel: \f$ K(E) u = f \f$, P1 tetrahedra, u = 0 on fixed walls;
  * - loads bmr::WallLoads: the wall displacements they cause, along the walls' normals by default
- *   (WallMotion: or free, or normal tractions), optionally in a smooth reduced basis (WallControlSpacing), with the
- *   E-independent prior WallRegularization/2 |p|^2;
+ *   (WallMotion: or free, or normal tractions, or one pressure per wall), optionally in a smooth reduced basis
+ *   (WallControlSpacing), with the E-independent prior WallRegularization/2 |p|^2;
  * - data bmr::SurfaceDistanceTerm:
  *   \f$ \Phi = \tfrac12 \sum_s w_s \sum_{l \in s} \phi_s(x_l + u_l)^2 \f$;
  * and runs bmr::ElasticityEstimator with this object's settings: the sweep of \f$\Phi^*(E) = \min_p \Phi(E,p)\f$
@@ -137,15 +137,16 @@ public:
    * (default 1e-3, 0.1 % of E). */
   itkSetMacro(OuterStepTolerance, double);
   itkGetConstMacro(OuterStepTolerance, double);
-  /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node. */
+  /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node; not used
+   * with WallMotion UniformPressure. */
   itkSetMacro(WallControlSpacing, double);
   itkGetConstMacro(WallControlSpacing, double);
   /** Weight of the E-independent prior alpha/2 |p|^2 on the wall parameters (bmr::WallLoads::SetRegularization()). */
   itkSetMacro(WallRegularization, double);
   itkGetConstMacro(WallRegularization, double);
   /** How the walls' unknown loads act (bmr::WallLoads::SetMotion()): displacements along the walls' normals
-   * (default), free displacements, or normal tractions (lumen pressures) under which the walls move as the tissue
-   * lets them. */
+   * (default), free displacements, normal tractions (lumen pressures that may vary along a wall) under which the
+   * walls move as the tissue lets them, or one uniform pressure per wall (UniformPressure). */
   itkSetEnumMacro(WallMotion, bmr::WallMotionEnum);
   itkGetEnumMacro(WallMotion, bmr::WallMotionEnum);
   /** Shorthand: along the normals (on) or free (off). */
@@ -288,6 +289,12 @@ private:
   /** The estimator's settings from this object's. */
   bmr::EstimatorSettings
   Settings() const;
+  /** WallControlSpacing, WallRegularization and WallMotion. */
+  bmr::WallLoadSettings
+  WallSettings() const
+  {
+    return { m_WallControlSpacing, m_WallRegularization, m_WallMotion };
+  }
   /** NumberOfFineSolveThreads, at most ITK's global default number of threads. */
   unsigned int
   FineSolveThreads() const;

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <ostream>
 #include <set>
@@ -207,6 +208,8 @@ operator<<(std::ostream & os, WallMotionEnum value)
       return os << "bmr::WallMotionEnum::Free";
     case WallMotionEnum::NormalTraction:
       return os << "bmr::WallMotionEnum::NormalTraction";
+    case WallMotionEnum::UniformPressure:
+      return os << "bmr::WallMotionEnum::UniformPressure";
   }
   return os << "INVALID VALUE FOR bmr::WallMotionEnum";
 }
@@ -224,6 +227,7 @@ struct WallLoads::Impl
   std::vector<double>        tractionForces; // 3 per control node: 4 A_k n_k / a_w [mm], the force per unit s and mu
   std::vector<std::int32_t>  heldSorted;
   std::unique_ptr<WallBasis> basis;
+  double                     controlSpacing{ 0.0 }; // mm, as set (UniformPressure does not use it)
   double                     regularization{ 0.0 };
   double                     shearModulus{ 1.0 }; // kPa
   WallMotionEnum             motion{ WallMotionEnum::AlongNormals };
@@ -239,7 +243,16 @@ struct WallLoads::Impl
   bool
   Traction() const
   {
-    return motion == WallMotionEnum::NormalTraction;
+    return motion == WallMotionEnum::NormalTraction || motion == WallMotionEnum::UniformPressure;
+  }
+  /** The basis of the current motion: one control point per wall for a uniform pressure (WallBasis' infinite
+   * spacing), the set spacing otherwise. */
+  void
+  RebuildBasis()
+  {
+    const double spacing =
+      motion == WallMotionEnum::UniformPressure ? std::numeric_limits<double>::infinity() : controlSpacing;
+    basis.reset(new WallBasis(mesh.points, walls, controlNodes.size(), spacing));
   }
   /** Per control node, 3 values: d = W p, or for a scalar per control point (W s)_k times \a directions_k (the
    * scalar s blended by the same weights: component 0 of the 3-vector basis). */
@@ -405,7 +418,7 @@ WallLoads::WallLoads(const TetrahedralMesh &           mesh,
       d.walls[w].emplace_back(static_cast<std::int32_t>(k), d.controlNodes[k]);
     }
   }
-  d.basis.reset(new WallBasis(mesh.points, d.walls, d.controlNodes.size(), 0.0));
+  d.RebuildBasis();
   d.normals = SmoothedUnitNormals(mesh, d.walls, FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size()));
   d.tractionForces = TractionForcesPerUnit(mesh, walls, faceLabels, controlIndex, d.walls, d.normals);
   d.heldSorted = heldNodes;
@@ -424,7 +437,8 @@ WallLoads::SetControlSpacing(double spacing)
   {
     Fail("WallLoads::SetControlSpacing", "the control point spacing must be finite");
   }
-  m_Impl->basis.reset(new WallBasis(m_Impl->mesh.points, m_Impl->walls, m_Impl->controlNodes.size(), spacing));
+  m_Impl->controlSpacing = spacing;
+  m_Impl->RebuildBasis();
 }
 
 void
@@ -440,13 +454,20 @@ WallLoads::SetRegularization(double alpha)
 void
 WallLoads::SetMotion(WallMotionEnum motion)
 {
-  if (motion == WallMotionEnum::NormalTraction && m_Impl->heldNodes.empty())
+  const bool traction = motion == WallMotionEnum::NormalTraction || motion == WallMotionEnum::UniformPressure;
+  if (traction && m_Impl->heldNodes.empty())
   {
     Fail("WallLoads::SetMotion",
          "normal tractions on the walls leave no node held: nothing keeps the mesh in place "
          "(the scene needs a fixed label or a fixed region-of-interest boundary)");
   }
+  const bool basisChanges =
+    (m_Impl->motion == WallMotionEnum::UniformPressure) != (motion == WallMotionEnum::UniformPressure);
   m_Impl->motion = motion;
+  if (basisChanges)
+  {
+    m_Impl->RebuildBasis();
+  }
 }
 
 void

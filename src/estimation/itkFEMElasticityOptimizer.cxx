@@ -260,10 +260,11 @@ FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
   {
     itkExceptionMacro(<< "OuterStepTolerance must be finite and not negative, got " << m_OuterStepTolerance);
   }
-  if (m_LimitElementInversion && m_WallControlSpacing > 0.0)
+  if (m_LimitElementInversion && this->WallSettings().ReducedBasis())
   {
     itkExceptionMacro(<< "LimitElementInversion needs one parameter per wall node (WallControlSpacing 0, got "
-                      << m_WallControlSpacing << " mm): the reduced-basis solver sees only the objective nodes");
+                      << m_WallControlSpacing << " mm; WallMotion " << m_WallMotion
+                      << "): the reduced-basis solver sees only the objective nodes");
   }
 }
 
@@ -288,7 +289,7 @@ FEMElasticityOptimizer::Settings() const
   s.uncertaintyStep = m_UncertaintyStep;
   s.limitElementInversion = m_LimitElementInversion;
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
-  s.gaussNewtonInner = m_WallControlSpacing > 0.0;
+  s.gaussNewtonInner = this->WallSettings().ReducedBasis();
   if (!m_WarmStartModuli.empty())
   {
     for (const bmr::UnknownModulus & u : bmr::SceneUnknownModuli(m_Scene))

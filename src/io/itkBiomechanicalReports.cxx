@@ -357,6 +357,10 @@ WallLawCaveat(bmr::WallMotionEnum motion)
       return "the interval assumes lumens loaded by normal tractions (--wall-motion traction): on pressure-filled "
              "lumens it covered 12 of 12 truths at 95 % and 9 of 12 at 68 % with the default half-widths; such "
              "tractions cannot fit walls that move along their normals (docs/benchmarks.md, pressure-filled lumens)";
+    case bmr::WallMotionEnum::UniformPressure:
+      return "the interval assumes one uniform pressure per lumen (--wall-motion pressure); its half-widths were "
+             "calibrated on walls that move along their normals, not on pressure-filled lumens (docs/benchmarks.md, "
+             "neo-Hookean estimation)";
   }
   return std::string();
 }

@@ -107,6 +107,12 @@ expect_error(bad_step_limit "--element-inversion must be allow or limit"
 expect_error(step_limit_reduced_basis "--element-inversion limit needs --wall-spacing-mm 0"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --element-inversion limit --wall-spacing-mm 6 --out ${TEMP}/r5)
+expect_error(pressure_with_spacing "--wall-spacing-mm does not apply to --wall-motion pressure"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --wall-motion pressure --wall-spacing-mm 6 --out ${TEMP}/r5)
+expect_error(pressure_step_limit "a wall motion other than pressure"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --wall-motion pressure --element-inversion limit --out ${TEMP}/r5)
 # Probability images: not ORGAN=FILE, an organ that is no objective organ, voxels outside [0, 1] (the fixed CT);
 # a bad uncertainty method.
 expect_error(probability_syntax "--fixed-probabilities takes ORGAN=FILE pairs"

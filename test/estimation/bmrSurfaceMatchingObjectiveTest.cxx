@@ -18,8 +18,8 @@
 // The registration objective and its adjoint gradients (bmr::SurfaceMatchingObjective):
 // the Taylor remainder |Phi(p + h v) - Phi(p) - h grad(Phi).v| against central
 // finite differences must shrink as h^2 (slope in [1.9, 2.1] over four halvings)
-// for the wall displacements, for normal wall tractions and for log E; the signed distance sampler must
-// reproduce an affine function exactly; bad set-ups are named.
+// for the wall displacements, for normal wall tractions, for one uniform pressure per wall and for log E; the signed
+// distance sampler must reproduce an affine function exactly; bad set-ups are named.
 #include "bmrElasticityEstimator.h"
 #include "bmrMesher.h"
 #include "bmrSurfaceMatchingObjective.h"
@@ -353,12 +353,70 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
                                 bmr::test::ToString(mean) + " mm)");
     }
   }
+  // 6b. One uniform pressure per wall (WallMotionEnum::UniformPressure): a single parameter for the cavity, whose
+  // nodal forces are the per-node tractions' all scaled by one factor (a Gaussian basis of any finite spacing would
+  // vary that factor along the wall); its adjoint gradient and log E's by Taylor test, both models.
+  for (const bmr::MaterialModelEnum model : { bmr::MaterialModelEnum::Linear, bmr::MaterialModelEnum::NeoHookean })
+  {
+    bmr::Scene withModel = scene;
+    withModel.model = model;
+    const std::string             name = model == bmr::MaterialModelEnum::Linear ? "linear" : "neo-Hookean";
+    bmr::SurfaceMatchingObjective pressure(mesh, withModel, bmr::SceneObjectiveSurfaces(withModel, mesh, maps));
+    pressure.SetWallMotion(bmr::WallMotionEnum::NormalTraction);
+    const bmr::BoundaryLoad allNodes =
+      pressure.GetWallLoads().Apply(std::vector<double>(pressure.GetWallLoads().GetNumberOfParameters(), 1.0));
+    pressure.SetWallControlSpacing(4.0); // kept, but not used by the uniform pressure
+    pressure.SetWallMotion(bmr::WallMotionEnum::UniformPressure);
+    ok &= bmr::test::Expect(pressure.GetWallLoads().GetNumberOfParameters() == 1,
+                            name + " uniform pressure: one parameter for the one wall (got " +
+                              bmr::test::ToString(pressure.GetWallLoads().GetNumberOfParameters()) + ")");
+    const std::vector<double> uniform = pressure.GetWallLoads().Direction(0).forces;
+    double                    lowest = 1e300, highest = -1e300;
+    for (std::int32_t n : pressure.GetWallLoads().GetControlNodes())
+    {
+      double dot = 0.0, norm2 = 0.0;
+      for (int c = 0; c < 3; ++c)
+      {
+        dot += uniform[3 * n + c] * allNodes.forces[3 * n + c];
+        norm2 += allNodes.forces[3 * n + c] * allNodes.forces[3 * n + c];
+      }
+      lowest = std::min(lowest, dot / norm2);
+      highest = std::max(highest, dot / norm2);
+    }
+    ok &=
+      bmr::test::Expect(uniform.size() == allNodes.forces.size() && lowest > 0.0 && highest - lowest <= 1e-12 * highest,
+                        name + " uniform pressure: the per-node tractions scaled by one factor (ratios " +
+                          bmr::test::ToString(lowest) + " to " + bmr::test::ToString(highest) + ")");
+    pressure.SetYoungsModuli({ 40.0 });
+    const std::vector<double> s = pressure.MatchSurfaces();
+    std::vector<double>       gs, gl;
+    const double              phiP = pressure.Evaluate(s, &gs, &gl);
+    ok &= bmr::test::CheckTaylor(("uniform pressure (" + name + ")").c_str(),
+                                 [&](double h) { return pressure.Evaluate({ s[0] + h }, nullptr, nullptr); },
+                                 phiP,
+                                 gs[0],
+                                 0.1);
+    ok &= bmr::test::CheckTaylor(("log E under a uniform pressure (" + name + ")").c_str(),
+                                 [&](double h) {
+                                   pressure.SetYoungsModuli({ 40.0 * std::exp(h) });
+                                   const double value = pressure.Evaluate(s, nullptr, nullptr);
+                                   pressure.SetYoungsModuli({ 40.0 });
+                                   return value;
+                                 },
+                                 phiP,
+                                 gl[0],
+                                 0.05);
+  }
   {
     bmr::Scene floating = scene;
     floating.roiBoundaryFixed = false;
     bmr::SurfaceMatchingObjective o(mesh, floating, bmr::SceneObjectiveSurfaces(floating, mesh, maps));
     ok &= bmr::test::ExpectException(
       "tractions with nothing held", [&] { o.SetWallMotion(bmr::WallMotionEnum::NormalTraction); }, "in place");
+    ok &= bmr::test::ExpectException(
+      "a uniform pressure with nothing held",
+      [&] { o.SetWallMotion(bmr::WallMotionEnum::UniformPressure); },
+      "in place");
   }
 
   // 7. The estimator starts its fine stage from the loads it is handed (ElasticityEstimator::SetFineStartLoads):
