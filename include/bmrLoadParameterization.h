@@ -166,10 +166,12 @@ struct BiomechanicalRegistration_EXPORT LoadedWall
  *   and the same prior weight serves both. A lumen under pressure moves its wall this way, tangentially as
  *   well, where prescribed normal motions force the tissue to follow the normal. Only the held nodes are
  *   constrained, so some label must be held (a fixed bone, or a fixed region-of-interest boundary);
- * - WallMotionEnum::UniformPressure: the forces of NormalTraction with W one column per wall, all of whose
- *   nodes it weighs 1 (a node on two walls 1/2 each): \f$ f_k = \kappa_k A_k n_k s_w \f$, a single pressure
- *   \f$ p_w = \kappa_w s_w \f$ per lumen. A lumen filled with fluid at rest is loaded this way; a pressure that
- *   varies along the wall can instead shape the organs next to it for any modulus (docs/estimation.md);
+ * - WallMotionEnum::UniformPressure: one parameter per wall (W one column per wall, all of whose nodes it
+ *   weighs 1; a node on two walls 1/2 each) and, in place of \f$A_k n_k\f$, the node's share of its faces' own
+ *   area vectors: \f$ f_k = \kappa_w s_w \sum_{f \ni k} a_f n_f / 3 \f$, the consistent P1 load of one pressure
+ *   \f$ p_w = \kappa_w s_w \f$ per lumen, whose staircase tilts cancel over the wall as a real pressure's do.
+ *   A lumen filled with fluid at rest is loaded this way; a pressure that varies along the wall can instead shape
+ *   the organs next to it for any modulus (docs/estimation.md);
  * - prior \f$ R(p) = \tfrac{\alpha}{2} |p|^2 \f$ (SetRegularization()): independent of E, so it does not
  *   push the moduli one way, and it picks the least-displacement optimum along the near-null directions
  *   of a wall sliding along itself.

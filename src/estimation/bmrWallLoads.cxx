@@ -151,24 +151,21 @@ SmoothedUnitNormals(const TetrahedralMesh & mesh, const WallList & walls, const 
   return smoothed;
 }
 
-/** NormalTraction's force per unit parameter and unit shear modulus at each control node k (3 values):
- * 4 A_k n_k / a_w [mm], A_k the node's share of its walls' area, n_k its smoothed normal and
- * a_w = sqrt(A_w / 4 pi) the equivalent radius of the first wall it lies on. */
+/** The force per unit parameter and unit shear modulus at each control node k (3 values): 4 v_k / a_w [mm], v_k the
+ * node's area vector [mm^2] and a_w = sqrt(A_w / 4 pi) the equivalent radius of the first wall it lies on (A_w the
+ * area of that wall's faces, \a areaOfLabel). */
 std::vector<double>
-TractionForcesPerUnit(const TetrahedralMesh &           mesh,
-                      const std::vector<LoadedWall> &   walls,
-                      const std::set<std::int32_t> &    faceLabels,
-                      const std::vector<std::int32_t> & controlIndex,
-                      const WallList &                  wallNodes,
-                      const std::vector<double> &       normals)
+LameScaledForces(const std::vector<LoadedWall> &        walls,
+                 const std::map<std::int32_t, double> & areaOfLabel,
+                 const WallList &                       wallNodes,
+                 const std::vector<double> &            areaVectors)
 {
-  std::map<std::int32_t, double> areaOfLabel;
-  const std::vector<double> nodeArea = NodalFaceAreas(mesh, faceLabels, controlIndex, normals.size() / 3, areaOfLabel);
-  std::vector<double>       forces(normals.size(), 0.0);
-  std::vector<char>         done(nodeArea.size(), 0);
+  std::vector<double> forces(areaVectors.size(), 0.0);
+  std::vector<char>   done(areaVectors.size() / 3, 0);
   for (std::size_t w = 0; w < walls.size(); ++w)
   {
-    const double radius = std::sqrt(areaOfLabel[walls[w].faceLabel] / (4.0 * 3.14159265358979323846));
+    const auto   area = areaOfLabel.find(walls[w].faceLabel);
+    const double radius = area == areaOfLabel.end() ? 0.0 : std::sqrt(area->second / (4.0 * 3.14159265358979323846));
     for (const auto & node : wallNodes[w])
     {
       const auto k = static_cast<std::size_t>(node.first);
@@ -177,7 +174,7 @@ TractionForcesPerUnit(const TetrahedralMesh &           mesh,
         done[k] = 1;
         for (int c = 0; c < 3; ++c)
         {
-          forces[3 * k + c] = 4.0 * nodeArea[k] * normals[3 * k + c] / radius;
+          forces[3 * k + c] = 4.0 * areaVectors[3 * k + c] / radius;
         }
       }
     }
@@ -225,6 +222,7 @@ struct WallLoads::Impl
   WallList                   walls;          // per wall: (control index, mesh node)
   std::vector<double>        normals;        // 3 per control node
   std::vector<double>        tractionForces; // 3 per control node: 4 A_k n_k / a_w [mm], the force per unit s and mu
+  std::vector<double>        pressureForces; // the same with the faces' own area vectors: 4 sum_f a_f n_f / 3 a_w
   std::vector<std::int32_t>  heldSorted;
   std::unique_ptr<WallBasis> basis;
   double                     controlSpacing{ 0.0 }; // mm, as set (UniformPressure does not use it)
@@ -244,6 +242,12 @@ struct WallLoads::Impl
   Traction() const
   {
     return motion == WallMotionEnum::NormalTraction || motion == WallMotionEnum::UniformPressure;
+  }
+  /** The force per unit parameter and unit shear modulus at each control node (3 values) of the current motion. */
+  const std::vector<double> &
+  ForcesPerUnit() const
+  {
+    return motion == WallMotionEnum::UniformPressure ? pressureForces : tractionForces;
   }
   /** The basis of the current motion: one control point per wall for a uniform pressure (WallBasis' infinite
    * spacing), the set spacing otherwise. */
@@ -285,12 +289,13 @@ struct WallLoads::Impl
   {
     return Expand(p, normals);
   }
-  /** NormalTraction's nodal forces [mN] (3N): the base forces plus mu 4 A_k n_k / a_w (W s)_k at control node k. */
+  /** The nodal forces [mN] (3N) of NormalTraction and UniformPressure: the base forces plus mu (W s)_k times
+   * ForcesPerUnit() at control node k. */
   std::vector<double>
   TractionForces(std::vector<double> base, const std::vector<double> & s) const
   {
     base.resize(basePrescribed.size(), 0.0);
-    const std::vector<double> f = Expand(s, tractionForces);
+    const std::vector<double> f = Expand(s, ForcesPerUnit());
     for (std::size_t k = 0; k < controlNodes.size(); ++k)
     {
       for (int c = 0; c < 3; ++c)
@@ -419,8 +424,22 @@ WallLoads::WallLoads(const TetrahedralMesh &           mesh,
     }
   }
   d.RebuildBasis();
-  d.normals = SmoothedUnitNormals(mesh, d.walls, FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size()));
-  d.tractionForces = TractionForcesPerUnit(mesh, walls, faceLabels, controlIndex, d.walls, d.normals);
+  const std::vector<double> normalSums = FaceNormalSums(mesh, faceLabels, controlIndex, d.controlNodes.size());
+  d.normals = SmoothedUnitNormals(mesh, d.walls, normalSums);
+  // A traction that varies along the wall acts along the smoothed normal on the node's share of the area; a uniform
+  // pressure p loads node k with p sum_f a_f n_f / 3 over its faces, exactly the consistent P1 load, whose
+  // staircase tilts cancel over the wall as the pressure's do.
+  std::map<std::int32_t, double> areaOfLabel;
+  const std::vector<double>      nodeArea =
+    NodalFaceAreas(mesh, faceLabels, controlIndex, d.controlNodes.size(), areaOfLabel);
+  std::vector<double> smoothedAreaVectors(d.normals.size()), faceAreaVectors(d.normals.size());
+  for (std::size_t i = 0; i < d.normals.size(); ++i)
+  {
+    smoothedAreaVectors[i] = nodeArea[i / 3] * d.normals[i];
+    faceAreaVectors[i] = normalSums[i] / 6.0; // the sums are of cross products, twice each face's area
+  }
+  d.tractionForces = LameScaledForces(walls, areaOfLabel, d.walls, smoothedAreaVectors);
+  d.pressureForces = LameScaledForces(walls, areaOfLabel, d.walls, faceAreaVectors);
   d.heldSorted = heldNodes;
   std::sort(d.heldSorted.begin(), d.heldSorted.end());
   d.constrained = heldNodes;
@@ -545,7 +564,7 @@ WallLoads::PullBackGradient(const std::vector<double> & p,
   std::vector<double>       gradient;
   if (d.Traction())
   {
-    std::vector<double> h = d.Components(atWalls, d.tractionForces);
+    std::vector<double> h = d.Components(atWalls, d.ForcesPerUnit());
     for (double & x : h)
     {
       x *= d.shearModulus;
