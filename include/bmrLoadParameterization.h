@@ -200,9 +200,9 @@ public:
   /** Weight alpha [1] of the prior alpha/2 |p|^2 (default 0); finite and >= 0. */
   void
   SetRegularization(double alpha);
-  /** Along the normals, free, or normal tractions; GetConstrainedNodes() changes with it (the held nodes
-   * only for NormalTraction and UniformPressure), so set it before the forward model takes the constrained nodes.
-   * Throws for those two when no node is held (nothing would keep the mesh in place). */
+  /** Along the normals, free, normal tractions or one pressure per wall; GetConstrainedNodes() changes with it (the
+   * held nodes only for NormalTraction and UniformPressure), so set it before the forward model takes the constrained
+   * nodes. Throws for those two when no node is held (nothing would keep the mesh in place). */
   void
   SetMotion(WallMotionEnum motion);
   WallMotionEnum
