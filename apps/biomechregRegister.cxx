@@ -112,13 +112,14 @@ ParseRegistrationSettings(const Arguments & args)
                    : motion == "free"     ? bmr::WallMotionEnum::Free
                    : motion == "traction" ? bmr::WallMotionEnum::NormalTraction
                                           : bmr::WallMotionEnum::UniformPressure;
-  if (motion == "pressure" && args.Has("--wall-spacing-mm"))
+  for (const char * option : { "--wall-spacing-mm", "--wall-regularization" })
   {
-    throw UsageError("--wall-spacing-mm does not apply to --wall-motion pressure (one pressure per wall)");
+    if (motion == "pressure" && args.Has(option))
+    {
+      throw UsageError(std::string(option) + " does not apply to --wall-motion pressure (one pressure per wall)");
+    }
   }
-  // One pressure per wall has no near-null direction for the prior to pick from, and the prior on its orthonormal
-  // parameter (sqrt(N) s for N wall nodes) would pull every pressure toward zero: none by default.
-  s.walls.regularization = args.Number("--wall-regularization", motion == "pressure" ? 0.0 : s.walls.regularization);
+  s.walls.regularization = args.Number("--wall-regularization", s.walls.regularization);
   if (!(s.walls.regularization >= 0.0))
   {
     throw UsageError("--wall-regularization must be >= 0");

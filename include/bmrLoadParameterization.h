@@ -108,9 +108,9 @@ enum class WallMotionEnum : std::uint8_t
   NormalTraction,
   /** NormalTraction with one unknown per wall, uniform along it: the pressure of a lumen filled with fluid at rest
    * (urine, gas), whose hydrostatic variation over the organ (about 0.01 kPa per cm) is negligible. The control
-   * spacing does not apply. Use it with the regularization 0 (biomechreg's default for it): there is no near-null
-   * direction to pick from, and the prior on the orthonormal parameter, sqrt(N) s for a wall of N nodes, pulls every
-   * pressure toward zero (on one pelvis pair alpha = 0.01 read the prostate 7 % softer than alpha = 0). */
+   * spacing and the prior do not apply: there is no near-null direction to pick from, and the ridge on the
+   * orthonormal parameter, sqrt(N) s for a wall of N nodes, would pull every pressure toward zero (on one pelvis pair
+   * alpha = 0.01 read the prostate 7 % softer than none). */
   UniformPressure
 };
 BiomechanicalRegistration_EXPORT std::ostream &
@@ -197,7 +197,8 @@ public:
    * used, while the motion is UniformPressure (one control point per wall). */
   void
   SetControlSpacing(double spacing);
-  /** Weight alpha [1] of the prior alpha/2 |p|^2 (default 0); finite and >= 0. */
+  /** Weight alpha [1] of the prior alpha/2 |p|^2 (default 0); finite and >= 0. Kept, but not used, while the motion
+   * is UniformPressure. */
   void
   SetRegularization(double alpha);
   /** Along the normals, free, normal tractions or one pressure per wall; GetConstrainedNodes() changes with it (the

@@ -244,6 +244,13 @@ struct WallLoads::Impl
     return motion == WallMotionEnum::NormalTraction || motion == WallMotionEnum::UniformPressure;
   }
   /** The force per unit parameter and unit shear modulus at each control node (3 values) of the current motion. */
+  /** The prior's weight: none for a uniform pressure, which has no near-null direction to pick from and whose
+   * orthonormal parameter (sqrt(N) s for a wall of N nodes) the ridge would pull toward zero. */
+  double
+  PriorWeight() const
+  {
+    return motion == WallMotionEnum::UniformPressure ? 0.0 : regularization;
+  }
   const std::vector<double> &
   ForcesPerUnit() const
   {
@@ -578,7 +585,7 @@ WallLoads::PullBackGradient(const std::vector<double> & p,
   }
   for (std::size_t i = 0; i < p.size(); ++i)
   {
-    gradient[i] += d.regularization * p[i];
+    gradient[i] += d.PriorWeight() * p[i];
   }
   return gradient;
 }
@@ -586,7 +593,7 @@ WallLoads::PullBackGradient(const std::vector<double> & p,
 double
 WallLoads::EvaluatePrior(const std::vector<double> & p) const
 {
-  return RidgePrior(m_Impl->regularization, p);
+  return RidgePrior(m_Impl->PriorWeight(), p);
 }
 
 std::vector<double>

@@ -110,6 +110,9 @@ expect_error(step_limit_reduced_basis "--element-inversion limit needs --wall-sp
 expect_error(pressure_with_spacing "--wall-spacing-mm does not apply to --wall-motion pressure"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --wall-motion pressure --wall-spacing-mm 6 --out ${TEMP}/r5)
+expect_error(pressure_with_prior "--wall-regularization does not apply to --wall-motion pressure"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --wall-motion pressure --wall-regularization 0.01 --out ${TEMP}/r5)
 expect_error(pressure_step_limit "a wall motion other than pressure"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --wall-motion pressure --element-inversion limit --out ${TEMP}/r5)

@@ -393,8 +393,13 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
         " to " + bmr::test::ToString(highest) + ", largest part across " + bmr::test::ToString(across) + ")");
     pressure.SetYoungsModuli({ 40.0 });
     const std::vector<double> s = pressure.MatchSurfaces();
-    std::vector<double>       gs, gl;
-    const double              phiP = pressure.Evaluate(s, &gs, &gl);
+    pressure.SetWallRegularization(0.01); // kept, but not used by the uniform pressure
+    ok &= bmr::test::Expect(pressure.GetWallLoads().EvaluatePrior(s) == 0.0 && s[0] != 0.0,
+                            name + " uniform pressure: no prior (got " +
+                              bmr::test::ToString(pressure.GetWallLoads().EvaluatePrior(s)) +
+                              " at s = " + bmr::test::ToString(s[0]) + ")");
+    std::vector<double> gs, gl;
+    const double        phiP = pressure.Evaluate(s, &gs, &gl);
     ok &= bmr::test::CheckTaylor(("uniform pressure (" + name + ")").c_str(),
                                  [&](double h) { return pressure.Evaluate({ s[0] + h }, nullptr, nullptr); },
                                  phiP,
