@@ -487,8 +487,19 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
   Eigen::VectorXd rp, rTry;
   Eigen::MatrixXd J;
   double          value = residuals(p, rp, &J);
-  double          mu = 1e-3;
-  LoadSolution    result;
+  if (!std::isfinite(value))
+  {
+    // No equilibrium follows the start's loads (a nonlinear model: a start carried over from another modulus or
+    // scene): begin at zero loads, the unloaded state, which always is one. Without it r and J would be empty.
+    p.setZero();
+    value = residuals(p, rp, &J);
+    if (!std::isfinite(value))
+    {
+      Fail("EstimationObjective::SolveLoadsGaussNewton", "no equilibrium at the start's loads nor at zero loads");
+    }
+  }
+  double       mu = 1e-3;
+  LoadSolution result;
   result.stop = "maximum number of iterations";
   unsigned int it = 0;
   bool         converged = false;
