@@ -12,13 +12,15 @@ import numpy as np
 from scipy.ndimage import map_coordinates
 
 
-def read_field(path):
-    """The field as an array [3, x, y, z] with its origin and direction-times-spacing matrix (columns = axes)."""
+def read_nrrd(path):
+    """An axis-aligned or oblique NRRD image as an array ([components,] x, y, z) with its origin and
+    direction-times-spacing matrix (columns = axes); a vector image's first axis is its components."""
     raw = open(path, "rb").read()
     end = raw.index(b"\n\n")
     header = dict(line.split(": ", 1) for line in raw[:end].decode().splitlines()[1:] if ": " in line)
     sizes = [int(s) for s in header["sizes"].split()]
-    dtype = {"float": "<f4", "double": "<f8"}[header["type"]]
+    dtype = {"float": "<f4", "double": "<f8", "int": "<i4", "short": "<i2", "unsigned char": "u1",
+             "uchar": "u1", "unsigned short": "<u2"}[header["type"]]
     if header.get("endian", "little") == "big":
         dtype = dtype.replace("<", ">")
     data = raw[end + 2:]
@@ -26,11 +28,16 @@ def read_field(path):
         data = gzip.decompress(data)
     elif header["encoding"] != "raw":
         raise SystemExit(f"{path}: encoding {header['encoding']} is not read here")
-    values = np.frombuffer(data, dtype=dtype).reshape(sizes[::-1]).transpose()  # [3, x, y, z]
+    values = np.frombuffer(data, dtype=dtype).reshape(sizes[::-1]).transpose()
     axes = [[float(v) for v in re.findall(r"[-+0-9.eE]+", d)] for d in re.findall(r"\(([^)]*)\)",
                                                                                  header["space directions"])]
     origin = np.array([float(v) for v in re.findall(r"[-+0-9.eE]+", header["space origin"])])
     return values, origin, np.array(axes).T
+
+
+def read_field(path):
+    """The field as an array [3, x, y, z] with its origin and direction-times-spacing matrix (columns = axes)."""
+    return read_nrrd(path)
 
 
 def read_landmarks(path):
@@ -38,11 +45,16 @@ def read_landmarks(path):
     return {r[0]: np.array([float(v) for v in r[1:4]]) for r in rows[1:]}
 
 
-field, origin, matrix = read_field(sys.argv[1])
-fixed, moving = read_landmarks(sys.argv[2]), read_landmarks(sys.argv[3])
-errors = []
-for name, x in fixed.items():
-    index = np.linalg.solve(matrix, x - origin)
-    u = [map_coordinates(field[c], index.reshape(3, 1), order=1, mode="nearest")[0] for c in range(3)]
-    errors.append(float(np.linalg.norm(x + np.array(u) - moving[name])))
-print(f"{np.mean(errors):.4f},{np.max(errors):.4f}")
+def main():
+    field, origin, matrix = read_field(sys.argv[1])
+    fixed, moving = read_landmarks(sys.argv[2]), read_landmarks(sys.argv[3])
+    errors = []
+    for name, x in fixed.items():
+        index = np.linalg.solve(matrix, x - origin)
+        u = [map_coordinates(field[c], index.reshape(3, 1), order=1, mode="nearest")[0] for c in range(3)]
+        errors.append(float(np.linalg.norm(x + np.array(u) - moving[name])))
+    print(f"{np.mean(errors):.4f},{np.max(errors):.4f}")
+
+
+if __name__ == "__main__":
+    main()
