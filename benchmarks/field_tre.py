@@ -35,18 +35,13 @@ def read_nrrd(path):
     return values, origin, np.array(axes).T
 
 
-def read_field(path):
-    """The field as an array [3, x, y, z] with its origin and direction-times-spacing matrix (columns = axes)."""
-    return read_nrrd(path)
-
-
 def read_landmarks(path):
     rows = [r for r in csv.reader(line for line in open(path) if not line.startswith("#"))]
     return {r[0]: np.array([float(v) for v in r[1:4]]) for r in rows[1:]}
 
 
 def main():
-    field, origin, matrix = read_field(sys.argv[1])
+    field, origin, matrix = read_nrrd(sys.argv[1])  # [3, x, y, z]
     fixed, moving = read_landmarks(sys.argv[2]), read_landmarks(sys.argv[3])
     errors = []
     for name, x in fixed.items():

@@ -6,7 +6,7 @@ from the moving label map's voxels, `--truth-geometry voxels --truth-refine-size
 the estimation scene given the truth's mesh sizes), loaded by one uniform pressure per lumen, the law the estimation
 assumes (`register --wall-motion pressure`). Model, mesh and load law are then exact; what is left between the
 estimate and the truth is the fixed scan's binary label map (sampled on its own grid, shifted by up to half a voxel)
-and the optimizer. Two measurements:
+and the optimizer. Three measurements:
   estimates  scenes A (bladder 2.2, rectum 1.0 kPa) and B (1.35, 1.5 kPa) of the Table 3.6 analog x prostate E in
              {50, 100, 150} kPa at 1 mm voxels, and both scenes at 100 kPa at 0.5 mm voxels; N seeds per row.
   profiles   for the first pair of each 100 kPa row: Phi*(E), the objective [mm^2] minimized over the two
@@ -118,9 +118,11 @@ def profiles(work, runs):
         ph = os.path.join(work, f"ph{r['pair']}")
         for factor in PROFILE_FACTORS:
             E = r["true_E_kPa"] * factor
-            report = register(ph, crime_scene(ph, f"scene_E{factor}.json", E), os.path.join(work, f"prof{r['pair']}_{factor}"))
+            report = register(ph, crime_scene(ph, f"scene_E{factor}.json", E),
+                              os.path.join(work, f"prof{r['pair']}_{factor}"))
             out.append(dict(scene=r["scene"], spacing_mm=r["spacing_mm"], pair=r["pair"], seed=r["seed"],
-                            true_E_kPa=r["true_E_kPa"], held_E_kPa=round(E, 3), phi_mm2=round(report["final_phi_mm2"], 4),
+                            true_E_kPa=r["true_E_kPa"], held_E_kPa=round(E, 3),
+                            phi_mm2=round(report["final_phi_mm2"], 4),
                             free_estimate_kPa=r["estimate_kPa"], free_phi_mm2=r["phi_mm2"]))
             print(",".join(str(v) for v in out[-1].values()), flush=True)
     return out
