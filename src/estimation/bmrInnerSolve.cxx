@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "bmrInnerSolve.h"
+#include "bmrError.h"
 
 #include "itkLBFGS2Optimizerv4.h"
 
@@ -176,7 +177,19 @@ SolveInner(EstimationObjective &       objective,
   {
     result = MinimizeLoadsLBFGS(objective, start, settings, rejected);
   }
+  const std::size_t infeasible = objective.GetNumberOfInfeasibleEvaluations();
   result.value = objective.Evaluate(result.parameters, &result.gradient, &result.logModulusGradient);
+  if (objective.GetNumberOfInfeasibleEvaluations() > infeasible)
+  {
+    // L-BFGS ended where no nonlinear state follows the loads: a start no state reaches has a zero gradient, so it
+    // never left it. Again from zero loads, the unloaded state, which always is one.
+    const std::vector<double> zero(start.size(), 0.0);
+    if (start == zero)
+    {
+      Fail("SolveInner", "no equilibrium at zero loads");
+    }
+    return SolveInner(objective, moduli, zero, settings, rejected);
+  }
   return result;
 }
 
