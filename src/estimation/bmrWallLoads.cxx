@@ -243,7 +243,6 @@ struct WallLoads::Impl
   {
     return motion == WallMotionEnum::NormalTraction || motion == WallMotionEnum::UniformPressure;
   }
-  /** The force per unit parameter and unit shear modulus at each control node (3 values) of the current motion. */
   /** The prior's weight: none for a uniform pressure, which has no near-null direction to pick from and whose
    * orthonormal parameter (sqrt(N) s for a wall of N nodes) the ridge would pull toward zero. */
   double
@@ -251,6 +250,7 @@ struct WallLoads::Impl
   {
     return motion == WallMotionEnum::UniformPressure ? 0.0 : regularization;
   }
+  /** The force per unit parameter and unit shear modulus at each control node (3 values) of the current motion. */
   const std::vector<double> &
   ForcesPerUnit() const
   {
