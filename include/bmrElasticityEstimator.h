@@ -51,7 +51,8 @@ struct BiomechanicalRegistration_EXPORT IterationRecord
   std::vector<double> logModulusGradient;
   unsigned int        innerIterations{ 0 };
   double              seconds{ 0.0 };
-  SolverWork          work; ///< the inner solve's model work (LoadSolution::work; nonlinear models count it)
+  SolverWork          work;           ///< the inner solve's model work (LoadSolution::work; nonlinear models count it)
+  bool                loose{ false }; ///< solved to EstimatorSettings::looseInnerGradientTolerance only
 };
 
 /** Settings of ElasticityEstimator; the defaults are those of FEMElasticityOptimizer and biomechreg. */
@@ -62,12 +63,16 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
   unsigned int maximumOuterIterations{ 20 }; ///< function evaluations of the outer search
   double       outerStepTolerance{ 1e-3 };   ///< one unknown: stop when the next step in log E is shorter
   double       innerGradientTolerance{ 1e-5 };
-  double       outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
-  double       flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds
-  bool         estimateUncertainty{ true };
-  double       uncertaintyStep{ 0.05 };        ///< delta in log E of the curvature's central differences
-  bool         limitElementInversion{ false }; ///< one parameter per wall node only
-  bool         gaussNewtonInner{ false };      ///< Levenberg-Marquardt inner solve (reduced wall basis)
+  /** One unknown, L-BFGS inner solves: the tolerance of the fine evaluations the secant search only passes
+   * through; each one it would stop on is solved on to innerGradientTolerance first (bmr::SecantSearch's inexact
+   * points). Not above innerGradientTolerance: every evaluation to the full tolerance. */
+  double looseInnerGradientTolerance{ 3e-4 };
+  double outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
+  double flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds
+  bool   estimateUncertainty{ true };
+  double uncertaintyStep{ 0.05 };        ///< delta in log E of the curvature's central differences
+  bool   limitElementInversion{ false }; ///< one parameter per wall node only
+  bool   gaussNewtonInner{ false };      ///< Levenberg-Marquardt inner solve (reduced wall basis)
   /** Warm start [kPa, unknowns' order]: when given, there is no sweep (and no coarse objective is needed) and
    * the outer search starts here, its first step from startRelativeCurvature (EstimationResult's, of an
    * earlier estimate of nearly the same data). Used by the resamples of the stated interval. */
@@ -114,7 +119,9 @@ struct BiomechanicalRegistration_EXPORT EstimationResult
  *   on \f$ d\Phi^{*}/d\log E = 0 \f$, its first step from the sweep's curvature relative to \f$\Phi^*\f$ (the
  *   fine mesh's \f$\Phi^*\f$ differs from the coarse one's by the number of nodes, and so does its
  *   curvature), stopping when the next step in log E is below outerStepTolerance (0.1 % of E) or the gradient
- *   below outerGradientTolerance; two or more: itk::LBFGSBOptimizerv4. The result is the best point visited;
+ *   below outerGradientTolerance. Its evaluations are inner solves to looseInnerGradientTolerance, each
+ *   continued to innerGradientTolerance before the search stops on it; two or more: itk::LBFGSBOptimizerv4,
+ *   every evaluation to innerGradientTolerance. The result is the best point visited and solved in full;
  * - identifiability, per unknown: flat (relative variation of Phi* over its bounds below
  *   flatnessThreshold), or the sweep's minimum on a bound, or the estimate on a bound;
  * - uncertainty: \f$ H = \partial^2\Phi^{*}/\partial\log E^2 \f$ by central differences of the envelope

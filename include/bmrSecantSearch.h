@@ -25,12 +25,14 @@
 
 namespace bmr {
 
-/** One evaluated point of a one-dimensional search: x, f(x) and f'(x). */
+/** One evaluated point of a one-dimensional search: x, f(x) and f'(x). An inexact point is known only to a looser
+ * precision (f from above, f' to about its error); SecantSearch steps from it but refines it before stopping on it. */
 struct BiomechanicalRegistration_EXPORT SecantPoint
 {
   double x{ 0.0 };
   double value{ 0.0 };
   double derivative{ 0.0 };
+  bool   exact{ true };
 };
 
 /** Settings of SecantSearch. */
@@ -52,6 +54,7 @@ struct BiomechanicalRegistration_EXPORT SecantSearchResult
   SecantPoint  best;
   unsigned int evaluations{ 0 };
   bool         onBound{ false };
+  unsigned int refinements{ 0 }; ///< inexact points evaluated again exactly (not counted in evaluations)
   double       curvature{ 0.0 }; ///< the last secant (or the guess) of f''
   std::string  stopCondition;
 };
@@ -69,11 +72,19 @@ struct BiomechanicalRegistration_EXPORT SecantSearchResult
  * 1.618). Used for the outer search over log E of one unknown modulus, where each evaluation is an inner
  * solve and the sweep supplies the curvature guess: the general bounded L-BFGS needs about two more
  * evaluations for the same tolerance, because it starts with a unit step of unknown scale.
+ *
+ * \a evaluate may return inexact points (SecantPoint::exact false), cheaper evaluations whose f' is known to less
+ * than derivativeTolerance: the search steps from them, and when it would stop on one (any of the conditions
+ * above), it asks \a refine for the exact point at the same x and decides again. So the search only stops on an
+ * exact point, and the best point is the exact one of least f. Far from the minimum, where |f'| is large, f''s
+ * error moves the next step by about error / f''. In the outer search an inexact point is an inner solve to a
+ * looser tolerance, and its refinement that solve continued to the full one.
  * Deterministic; holds no state between calls. */
 BiomechanicalRegistration_EXPORT SecantSearchResult
 SecantSearch(const std::function<SecantPoint(double x)> & evaluate,
              double                                       start,
-             const SecantSearchSettings &                 settings);
+             const SecantSearchSettings &                 settings,
+             const std::function<SecantPoint(double x)> & refine = {});
 
 } // namespace bmr
 

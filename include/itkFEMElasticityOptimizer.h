@@ -131,6 +131,11 @@ public:
   itkGetConstMacro(MaximumNumberOfOuterIterations, unsigned int);
   itkSetMacro(InnerGradientTolerance, double);
   itkGetConstMacro(InnerGradientTolerance, double);
+  /** One unknown modulus, L-BFGS inner solves: the looser inner tolerance (relative, as InnerGradientTolerance) of
+   * the fine evaluations the secant search only passes through; the point it stops on is solved on to
+   * InnerGradientTolerance (default 3e-4; not above InnerGradientTolerance: every evaluation in full). */
+  itkSetMacro(LooseInnerGradientTolerance, double);
+  itkGetConstMacro(LooseInnerGradientTolerance, double);
   itkSetMacro(OuterGradientTolerance, double);
   itkGetConstMacro(OuterGradientTolerance, double);
   /** One unknown modulus: the secant search stops when its next step in log E would be shorter than this
@@ -313,6 +318,7 @@ private:
   unsigned int                  m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
   unsigned int                  m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
   double                        m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
+  double                        m_LooseInnerGradientTolerance{ bmr::EstimatorSettings{}.looseInnerGradientTolerance };
   double                        m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
   double                        m_OuterStepTolerance{ bmr::EstimatorSettings{}.outerStepTolerance };
   double                        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };

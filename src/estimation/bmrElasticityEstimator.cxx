@@ -260,17 +260,25 @@ struct ElasticityEstimator::Stages
     return estimator.m_Unknowns;
   }
   LoadSolution
-  Solve(EstimationObjective & objective, const std::vector<double> & E, const std::vector<double> & start)
+  Solve(EstimationObjective &       objective,
+        const std::vector<double> & E,
+        const std::vector<double> & start,
+        double                      tolerance)
   {
     InnerSettings inner;
     inner.maximumIterations = settings.maximumInnerIterations;
-    inner.tolerance = settings.innerGradientTolerance;
+    inner.tolerance = tolerance;
     inner.gaussNewton = settings.gaussNewtonInner;
     inner.limitInversion = settings.limitElementInversion;
     const SolverWork before = objective.GetForwardModel().GetSolverWork();
     LoadSolution     s = SolveInner(objective, E, start, inner, result.rejectedSteps);
     s.work = WorkSince(objective.GetForwardModel().GetSolverWork(), before);
     return s;
+  }
+  LoadSolution
+  Solve(EstimationObjective & objective, const std::vector<double> & E, const std::vector<double> & start)
+  {
+    return Solve(objective, E, start, settings.innerGradientTolerance);
   }
   void
   Record(const IterationRecord & record, std::vector<IterationRecord> & list, double newProgress)
@@ -281,6 +289,13 @@ struct ElasticityEstimator::Stages
     {
       estimator.m_Observer(record, progress);
     }
+  }
+  /** One unknown, L-BFGS inner solves, a looser tolerance set: the outer search's evaluations are loose first. */
+  bool
+  LooseOuterEvaluations() const
+  {
+    return moduli.size() == 1 && !settings.gaussNewtonInner &&
+           settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
   }
   void
   Sweep();
@@ -345,30 +360,39 @@ ElasticityEstimator::Stages::Sweep()
 }
 
 /** The fine stage's inner solves: each warm-started from the previous optimum, recorded, and the best
- * visited kept (an outer search may end on a trial point). */
+ * visited kept (an outer search may end on a trial point). A loose solve (to looseInnerGradientTolerance, a point
+ * the outer search passes through) is never the best: the result always comes from a full solve. */
 struct ElasticityEstimator::Stages::FineEvaluations
 {
   Stages &            stages;
   LoadSolution        last;
+  bool                lastLoose{ false };
   unsigned int        evaluation{ 0 };
   std::vector<double> bestModuli, bestLoads;
   double              bestValue{ std::numeric_limits<double>::infinity() };
 
+  /** The inner solve at \a E, loose or to the full tolerance; asked for again, the last one (an outer search
+   * starts by evaluating the point it was given), unless that was loose and a full one is asked for: then the
+   * loose solve is continued to the full tolerance. */
   const LoadSolution &
-  At(const std::vector<double> & E)
+  At(const std::vector<double> & E, bool loose = false)
   {
-    if (evaluation > 0 && stages.result.history.back().youngsModuli == E)
+    if (evaluation > 0 && stages.result.history.back().youngsModuli == E && (loose || !lastLoose))
     {
-      return last; // an outer search starts by evaluating the point it was given
+      return last;
     }
     const auto ts = Clock::now();
-    last = stages.Solve(stages.estimator.Fine(), E, stages.loads);
+    last = stages.Solve(stages.estimator.Fine(),
+                        E,
+                        stages.loads,
+                        loose ? stages.settings.looseInnerGradientTolerance : stages.settings.innerGradientTolerance);
+    lastLoose = loose;
     stages.loads = last.parameters;
-    stages.Record(MakeRecord("fine", evaluation, E, last, SecondsSince(ts)),
-                  stages.result.history,
-                  std::min(0.99, 0.5 + 0.02 * double(evaluation + 1)));
+    IterationRecord record = MakeRecord("fine", evaluation, E, last, SecondsSince(ts));
+    record.loose = loose;
+    stages.Record(record, stages.result.history, std::min(0.99, 0.5 + 0.02 * double(evaluation + 1)));
     ++evaluation;
-    if (last.value < bestValue)
+    if (!loose && last.value < bestValue)
     {
       bestValue = last.value;
       bestModuli = E;
@@ -382,7 +406,7 @@ void
 ElasticityEstimator::Stages::Fine()
 {
   FineEvaluations fine{ *this };
-  fine.At(moduli);
+  fine.At(moduli, LooseOuterEvaluations());
   if (moduli.size() == 1)
   {
     OuterSecant(fine);
@@ -401,21 +425,27 @@ ElasticityEstimator::Stages::OuterSecant(FineEvaluations & fine)
 {
   const UnknownModulus & unknown = Unknowns()[0];
   SecantSearchSettings   search;
+  const double           startValue = fine.last.value; // Phi* at the start, from above when loose
   search.lowerBound = std::log(unknown.lowerBound);
   search.upperBound = std::log(unknown.upperBound);
-  search.curvatureGuess = status[0].relativeCurvature * fine.bestValue;
+  search.curvatureGuess = status[0].relativeCurvature * startValue;
   search.stepTolerance = settings.outerStepTolerance;
-  search.derivativeTolerance = settings.outerGradientTolerance * std::max(fine.bestValue, 1e-12);
+  search.derivativeTolerance = settings.outerGradientTolerance * std::max(startValue, 1e-12);
   search.maximumEvaluations = settings.maximumOuterIterations;
-  const auto evaluate = [&](double logE) {
-    const LoadSolution & s = fine.At({ std::exp(logE) });
-    IterationRecord      r = result.history.back();
+  const bool loose = LooseOuterEvaluations();
+  const auto point = [&](double logE, const LoadSolution & s) {
+    IterationRecord r = result.history.back();
     r.stage = "outer";
     r.iteration = static_cast<unsigned int>(result.outerIterations.size());
     result.outerIterations.push_back(r);
-    return SecantPoint{ logE, s.value, s.logModulusGradient[0] };
+    return SecantPoint{ logE, s.value, s.logModulusGradient[0], !fine.lastLoose };
   };
-  const SecantSearchResult found = SecantSearch(evaluate, std::log(moduli[0]), search);
+  const auto evaluate = [&](double logE) { return point(logE, fine.At({ std::exp(logE) }, loose)); };
+  const auto refine = [&](double logE) {
+    result.outerIterations.pop_back(); // the same outer iteration, now solved in full
+    return point(logE, fine.At({ std::exp(logE) }, false));
+  };
+  const SecantSearchResult found = SecantSearch(evaluate, std::log(moduli[0]), search, refine);
   result.outerStopCondition = "secant search: " + found.stopCondition;
   result.relativeCurvature = found.curvature / std::max(fine.bestValue, 1e-300);
 }
@@ -603,7 +633,8 @@ ElasticityEstimator::ElasticityEstimator(std::function<EstimationObjective &()> 
     Fail("ElasticityEstimator",
          "NumberOfSweepSamples must be at least 3, got " + std::to_string(m_Settings.numberOfSweepSamples));
   }
-  if (!(m_Settings.innerGradientTolerance > 0.0) || !(m_Settings.outerGradientTolerance > 0.0))
+  if (!(m_Settings.innerGradientTolerance > 0.0) || !(m_Settings.outerGradientTolerance > 0.0) ||
+      !(m_Settings.looseInnerGradientTolerance > 0.0))
   {
     Fail("ElasticityEstimator", "the gradient tolerances must be positive");
   }

@@ -40,6 +40,17 @@ CheckSettings(const SecantSearchSettings & s, double start)
   }
 }
 
+void
+CheckFinite(const SecantPoint & p)
+{
+  if (!std::isfinite(p.value) || !std::isfinite(p.derivative))
+  {
+    std::ostringstream msg;
+    msg << "the function or its derivative is not finite at x = " << p.x;
+    Fail("SecantSearch", msg.str());
+  }
+}
+
 /** \a p lies lower than \a q, or as low within rounding and with a smaller |f'| (near the minimum, f changes
  * by f'' e^2 / 2, below its own precision, while f' still tells which point is closer). */
 bool
@@ -89,7 +100,10 @@ struct Bracket
 } // namespace
 
 SecantSearchResult
-SecantSearch(const std::function<SecantPoint(double x)> & evaluate, double start, const SecantSearchSettings & s)
+SecantSearch(const std::function<SecantPoint(double x)> & evaluate,
+             double                                       start,
+             const SecantSearchSettings &                 s,
+             const std::function<SecantPoint(double x)> & refine)
 {
   CheckSettings(s, start);
   SecantSearchResult r;
@@ -97,46 +111,48 @@ SecantSearch(const std::function<SecantPoint(double x)> & evaluate, double start
   SecantPoint        p = evaluate(std::clamp(start, s.lowerBound, s.upperBound));
   SecantPoint        previous = p;
   double             curvature = s.curvatureGuess;
+  bool               haveBest = false;
   r.evaluations = 1;
-  r.best = p;
   r.curvature = curvature;
   for (;;)
   {
-    if (!std::isfinite(p.value) || !std::isfinite(p.derivative))
+    CheckFinite(p);
+    if (p.exact || !refine)
     {
-      std::ostringstream msg;
-      msg << "the function or its derivative is not finite at x = " << p.x;
-      Fail("SecantSearch", msg.str());
+      r.best = !haveBest || Better(p, r.best) ? p : r.best;
+      haveBest = true;
     }
-    r.best = Better(p, r.best) ? p : r.best;
-    if (std::abs(p.derivative) <= s.derivativeTolerance)
+    const bool  onBound = (p.x <= s.lowerBound && p.derivative > 0.0) || (p.x >= s.upperBound && p.derivative < 0.0);
+    std::string stop = std::abs(p.derivative) <= s.derivativeTolerance ? "the derivative is within the tolerance"
+                       : onBound                                       ? "the minimum lies on a bound"
+                                                                       : "";
+    double      next = p.x;
+    if (stop.empty())
     {
-      r.stopCondition = "the derivative is within the tolerance";
-      break;
+      bracket.Update(p);
+      if (r.evaluations > 1 && p.x != previous.x)
+      {
+        curvature = (p.derivative - previous.derivative) / (p.x - previous.x);
+        r.curvature = curvature;
+      }
+      double step = curvature > 0.0 ? -p.derivative / curvature : std::copysign(s.maximumStep, -p.derivative);
+      step = std::clamp(step, -s.maximumStep, s.maximumStep);
+      next = bracket.Keep(p, p.x + step);
+      stop = std::abs(next - p.x) < s.stepTolerance  ? "the next step is below the step tolerance"
+             : r.evaluations >= s.maximumEvaluations ? "the maximum number of evaluations is reached"
+                                                     : "";
     }
-    if ((p.x <= s.lowerBound && p.derivative > 0.0) || (p.x >= s.upperBound && p.derivative < 0.0))
+    if (!stop.empty() && !p.exact && refine)
     {
-      r.onBound = true;
-      r.stopCondition = "the minimum lies on a bound";
-      break;
+      p = refine(p.x); // decide again on the exact point
+      p.exact = true;
+      ++r.refinements;
+      continue;
     }
-    bracket.Update(p);
-    if (r.evaluations > 1 && p.x != previous.x)
+    if (!stop.empty())
     {
-      curvature = (p.derivative - previous.derivative) / (p.x - previous.x);
-      r.curvature = curvature;
-    }
-    double step = curvature > 0.0 ? -p.derivative / curvature : std::copysign(s.maximumStep, -p.derivative);
-    step = std::clamp(step, -s.maximumStep, s.maximumStep);
-    const double next = bracket.Keep(p, p.x + step);
-    if (std::abs(next - p.x) < s.stepTolerance)
-    {
-      r.stopCondition = "the next step is below the step tolerance";
-      break;
-    }
-    if (r.evaluations >= s.maximumEvaluations)
-    {
-      r.stopCondition = "the maximum number of evaluations is reached";
+      r.onBound = onBound && std::abs(p.derivative) > s.derivativeTolerance;
+      r.stopCondition = stop;
       break;
     }
     r.curvature = curvature;

@@ -252,7 +252,7 @@ FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
   {
     itkExceptionMacro(<< "NumberOfSweepSamples must be at least 3, got " << m_NumberOfSweepSamples);
   }
-  if (!(m_InnerGradientTolerance > 0.0) || !(m_OuterGradientTolerance > 0.0))
+  if (!(m_InnerGradientTolerance > 0.0) || !(m_OuterGradientTolerance > 0.0) || !(m_LooseInnerGradientTolerance > 0.0))
   {
     itkExceptionMacro(<< "the gradient tolerances must be positive");
   }
@@ -282,6 +282,7 @@ FEMElasticityOptimizer::Settings() const
   s.maximumInnerIterations = m_MaximumNumberOfInnerIterations;
   s.maximumOuterIterations = m_MaximumNumberOfOuterIterations;
   s.innerGradientTolerance = m_InnerGradientTolerance;
+  s.looseInnerGradientTolerance = m_LooseInnerGradientTolerance;
   s.outerGradientTolerance = m_OuterGradientTolerance;
   s.outerStepTolerance = m_OuterStepTolerance;
   s.flatnessThreshold = m_FlatnessThreshold;
@@ -436,6 +437,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "MaximumNumberOfInnerIterations: " << m_MaximumNumberOfInnerIterations << std::endl;
   os << indent << "MaximumNumberOfOuterIterations: " << m_MaximumNumberOfOuterIterations << std::endl;
   os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
+  os << indent << "LooseInnerGradientTolerance: " << m_LooseInnerGradientTolerance << std::endl;
   os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
   os << indent << "OuterStepTolerance: " << m_OuterStepTolerance << std::endl;
   os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;

@@ -196,7 +196,8 @@ IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std
   {
     o << ",dphi_dlogE_" << n << "_mm2";
   }
-  o << ",inner_iterations,seconds,newton_iterations,factorizations\n" << std::setprecision(10);
+  // loose: 1 when the inner solve stopped at the looser tolerance of a point the outer search passes through.
+  o << ",inner_iterations,seconds,newton_iterations,factorizations,loose\n" << std::setprecision(10);
   for (const auto & r : records)
   {
     o << r.stage << "," << r.iteration;
@@ -210,7 +211,7 @@ IterationHistoryCsv(const std::vector<bmr::IterationRecord> & records, const std
       o << "," << g;
     }
     o << "," << r.innerIterations << "," << r.seconds << "," << r.work.newtonIterations << "," << r.work.factorizations
-      << "\n";
+      << "," << (r.loose ? 1 : 0) << "\n";
   }
   return o.str();
 }
@@ -313,7 +314,7 @@ FormatIterationRecord(const bmr::IterationRecord & r)
     o << "  dPhi/dlogE " << std::setprecision(2) << std::setw(9) << g;
   }
   o << "  |dPhi/dp| " << std::setprecision(1) << r.wallGradientNorm << "  inner " << std::setw(4) << r.innerIterations
-    << "  " << std::fixed << std::setprecision(2) << r.seconds << " s";
+    << "  " << std::fixed << std::setprecision(2) << r.seconds << " s" << (r.loose ? "  (loose)" : "");
   if (r.work.newtonIterations > 0)
   {
     o << "  (" << r.work.stateSolves << " solves, " << r.work.newtonIterations << " Newton iterations, "

@@ -390,6 +390,7 @@ RunEstimation(const EstimationSetup &                                 setup,
   optimizer->SetMaximumNumberOfInnerIterations(e.maximumInnerIterations);
   optimizer->SetMaximumNumberOfOuterIterations(e.maximumOuterIterations);
   optimizer->SetInnerGradientTolerance(e.innerGradientTolerance);
+  optimizer->SetLooseInnerGradientTolerance(e.looseInnerGradientTolerance);
   optimizer->SetOuterGradientTolerance(e.outerGradientTolerance);
   optimizer->SetOuterStepTolerance(e.outerStepTolerance);
   optimizer->SetFlatnessThreshold(e.flatnessThreshold);

@@ -23,12 +23,17 @@
 // - log cosh(x - 1), whose derivative saturates, so that the plain secant from far points overshoots:
 //   the bracket keeps every step inside [a, b] and between sampled signs, and it still converges (1e-8);
 // - minima beyond a bound end on that bound, flagged;
+// - inexact points (f' off by up to half the derivative tolerance, as a loose inner solve's): the search steps
+//   from them, stops only on an exact one (refined at the same x), and ends within the tolerance of the minimum,
+//   as it does on exact points;
 // - bad settings and non-finite derivatives are refused by name.
 #include "bmrSecantSearch.h"
 #include "bmrTestUtilities.h"
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
+#include <iostream>
 #include <vector>
 
 namespace {
@@ -133,6 +138,45 @@ MinimumBeyondBounds()
 }
 
 bool
+InexactPointsRefined()
+{
+  bool ok = true;
+  // f = e^x - 2x; an inexact f' is off by a bias of either sign or by an error that changes with x.
+  const std::function<double(double)> errors[] = { [](double) { return 0.5e-6; },
+                                                   [](double) { return -0.5e-6; },
+                                                   [](double x) { return 0.5e-6 * std::sin(1e7 * x); } };
+  for (const auto & error : errors)
+  {
+    const auto                df = [](double x) { return std::exp(x) - 2.0; };
+    std::vector<double>       refined;
+    bmr::SecantSearchSettings s;
+    s.lowerBound = -3.0;
+    s.upperBound = 3.0;
+    s.stepTolerance = 0.0;
+    s.derivativeTolerance = 1e-6;
+    const auto inexact = [&](double x) {
+      return bmr::SecantPoint{ x, std::exp(x) - 2.0 * x, df(x) + error(x), false };
+    };
+    const auto exact = [&](double x) {
+      refined.push_back(x);
+      return bmr::SecantPoint{ x, std::exp(x) - 2.0 * x, df(x) };
+    };
+    const auto   r = bmr::SecantSearch(inexact, -1.0, s, exact);
+    const double minimum = std::log(2.0);
+    const auto   what = "inexact f' off by " + ToString(error(1.0)) + " at x = 1: ";
+    std::cout << what << r.evaluations << " evaluations, " << r.refinements << " refinements, " << r.stopCondition
+              << std::endl;
+    ok &= Expect(r.refinements >= 1 && !refined.empty() && refined.back() == r.best.x,
+                 what + "ends on a refined point (refinements " + ToString(r.refinements) + ")");
+    ok &= Expect(r.best.exact && std::abs(df(r.best.x)) <= s.derivativeTolerance,
+                 what + "|f'| within the tolerance at the end, got " + ToString(df(r.best.x)));
+    // |f'| <= 1e-6 with f''(ln 2) = 2: within 5e-7 of the minimum.
+    ok &= Expect(std::abs(r.best.x - minimum) <= 5.1e-7, what + "ln 2 to 5e-7, got " + ToString(r.best.x));
+  }
+  return ok;
+}
+
+bool
 BadInputRefused()
 {
   bmr::SecantSearchSettings bounds;
@@ -162,6 +206,7 @@ bmrSecantSearchTest(int, char *[])
   ok &= SuperlinearWithoutGuess();
   ok &= BracketKeepsSteps();
   ok &= MinimumBeyondBounds();
+  ok &= InexactPointsRefined();
   ok &= BadInputRefused();
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

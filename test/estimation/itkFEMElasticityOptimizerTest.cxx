@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <thread>
 #include <vector>
 
@@ -157,6 +158,61 @@ CheckWarmStart(itk::FEMElasticityOptimizer & optimizer)
   ok &= bmr::test::ExpectException(
     "warm start outside the bounds", [&] { optimizer.Update(); }, "outside its bounds");
   optimizer.SetWarmStart({}, 0.0);
+  return ok;
+}
+
+/** The secant search's loose evaluations (LooseInnerGradientTolerance, default 3e-4 against the full 1e-5): the
+ * estimate is the one of full evaluations within what the stopping rule allows (as in CheckWarmStart: both ends
+ * lie within t / c + 0.001 in log E of the minimum); some evaluations were loose, the last was not, and the
+ * result is a full solve's (the least Phi* of the full ones: a loose Phi* is the inner solve's value above its
+ * optimum, which must not win). Without the loose ones (the tolerance set to the full one), none is loose. */
+bool
+CheckLooseEvaluations(itk::FEMElasticityOptimizer & optimizer)
+{
+  const auto run = [&optimizer](double loose, std::size_t & looseSolves, unsigned int & innerIterations) -> double {
+    optimizer.SetLooseInnerGradientTolerance(loose);
+    ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
+    looseSolves = 0;
+    innerIterations = 0;
+    for (const auto & r : optimizer.GetHistory())
+    {
+      looseSolves += r.loose;
+      innerIterations += r.stage == "fine" ? r.innerIterations : 0;
+    }
+    return optimizer.GetEstimatedYoungsModuli().at("inclusion");
+  };
+  const double spacing = optimizer.GetWallControlSpacing();
+  optimizer.SetWallControlSpacing(0.0); // one parameter per wall node: L-BFGS inner solves (LM's are never loose)
+  std::size_t  looseSolves = 0, noneLoose = 0;
+  unsigned int looseWork = 0, fullWork = 0;
+  const double full = run(optimizer.GetInnerGradientTolerance(), noneLoose, fullWork);
+  const double E = run(bmr::EstimatorSettings{}.looseInnerGradientTolerance, looseSolves, looseWork);
+  double       leastFull = std::numeric_limits<double>::infinity();
+  bool         lastLoose = true;
+  for (const auto & r : optimizer.GetHistory())
+  {
+    if (r.stage == "fine")
+    {
+      leastFull = r.loose ? leastFull : std::min(leastFull, r.value);
+      lastLoose = r.loose;
+    }
+  }
+  const auto & history = optimizer.GetHistory();
+  const double curvature = optimizer.GetResult().relativeCurvature;
+  const double tolerance = 2.0 * (optimizer.GetOuterGradientTolerance() / curvature + 0.001);
+  std::cout << "loose evaluations: E " << E << " kPa (" << looseSolves << " loose of " << history.size() << " solves, "
+            << looseWork << " fine inner iterations), all full " << full << " kPa (" << fullWork << ")" << std::endl;
+  bool ok = Expect(std::abs(std::log(E / full)) <= tolerance,
+                   "loose evaluations find the full ones' estimate to " + ToString(tolerance) + " in log E (" +
+                     ToString(full) + " -> " + ToString(E) + " kPa)");
+  ok &=
+    Expect(looseSolves >= 1 && noneLoose == 0,
+           "loose solves by default, none without (got " + ToString(looseSolves) + ", " + ToString(noneLoose) + ")");
+  ok &= Expect(!lastLoose, "the last fine solve is a full one");
+  optimizer.SetWallControlSpacing(spacing);
+  ok &= Expect(optimizer.GetFinalValue() == leastFull,
+               "the result is the least Phi* of the full solves (got " + ToString(optimizer.GetFinalValue()) +
+                 " against " + ToString(leastFull) + " mm^2)");
   return ok;
 }
 
@@ -378,6 +434,7 @@ itkFEMElasticityOptimizerTest(int, char *[])
   optimizer->WallMotionAlongNormalsOn();
   ok &= CheckUncertainty(*optimizer);
   ok &= CheckWarmStart(*optimizer);
+  ok &= CheckLooseEvaluations(*optimizer);
   ok &= CheckMeshSource(*optimizer, mesh);
 
   std::cout << optimizer;
