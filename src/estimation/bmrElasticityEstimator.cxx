@@ -290,12 +290,18 @@ struct ElasticityEstimator::Stages
       estimator.m_Observer(record, progress);
     }
   }
-  /** One unknown, L-BFGS inner solves, a looser tolerance set: the outer search's evaluations are loose first. */
+  /** L-BFGS inner solves and a looser tolerance set: the sweep's samples are loose, which only locate the fine
+   * stage's start. */
+  bool
+  LooseSweep() const
+  {
+    return !settings.gaussNewtonInner && settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
+  }
+  /** One unknown besides: the outer search's evaluations are loose first. */
   bool
   LooseOuterEvaluations() const
   {
-    return moduli.size() == 1 && !settings.gaussNewtonInner &&
-           settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
+    return moduli.size() == 1 && LooseSweep();
   }
   void
   Sweep();
@@ -336,6 +342,7 @@ ElasticityEstimator::Stages::Sweep()
   std::vector<double>   start = objective.EstimateInitialParameters();
   const unsigned int    n = settings.numberOfSweepSamples;
   const double          total = double(n) * double(moduli.size());
+  const double tolerance = LooseSweep() ? settings.looseInnerGradientTolerance : settings.innerGradientTolerance;
   for (std::size_t k = 0; k < moduli.size(); ++k)
   {
     const UnknownModulus &       unknown = Unknowns()[k];
@@ -347,10 +354,11 @@ ElasticityEstimator::Stages::Sweep()
       E[k] = unknown.lowerBound * std::pow(unknown.upperBound / unknown.lowerBound, double(i) / double(n - 1));
       // Continuation: each sample starts from the previous optimum, so that the sweep follows one branch of
       // minima of the (non-convex) distance objective and Phi*(E) is smooth.
-      const LoadSolution s = Solve(objective, E, start);
+      const LoadSolution s = Solve(objective, E, start, tolerance);
       start = s.parameters;
       const unsigned int index = static_cast<unsigned int>(k * n + i);
       samples.push_back(MakeRecord("sweep", index, E, s, SecondsSince(ts)));
+      samples.back().loose = LooseSweep();
       Record(samples.back(), result.sweep, 0.5 * double(index + 1) / total);
       PredictFineStart(samples, k);
     }
