@@ -50,7 +50,9 @@ ParseMarkerSettings(const Arguments & args)
 void
 PrintMethods(const itk::MarkerResult & r)
 {
-  std::cout << "\n  method   fit max [mm]   leave-one-out RMS [mm]   IoU      D [mm]\n";
+  std::cout << "\n  method   fit max [mm]   leave-one-out RMS [mm]   IoU      D [mm]"
+            << (r.methods.empty() || r.methods[0].leaveOneOutTrueRms < 0.0 ? "" : "   leave-one-out vs truth [mm]")
+            << "\n";
   for (const auto & m : r.methods)
   {
     double fit = 0.0;
@@ -63,6 +65,10 @@ PrintMethods(const itk::MarkerResult & r)
     if (m.intersectionOverUnion >= 0.0)
     {
       std::cout << std::setw(9) << m.intersectionOverUnion << std::setw(10) << m.meanSurfaceDistance;
+    }
+    if (m.leaveOneOutTrueRms >= 0.0)
+    {
+      std::cout << std::setw(m.intersectionOverUnion >= 0.0 ? 30 : 49) << m.leaveOneOutTrueRms;
     }
     std::cout << "\n";
   }
@@ -78,6 +84,7 @@ MarkersCommand(const Arguments & args)
   const std::string planningMarkersPath = args.Require("--planning-markers");
   const std::string treatmentMarkersPath = args.Require("--treatment-markers");
   const std::string treatmentLabelsPath = args.Get("--treatment-labels");
+  const std::string trueMarkersPath = args.Get("--true-treatment-markers");
   const std::string out = args.Require("--out");
   const auto        settings = ParseMarkerSettings(args);
   const bool        ignoreROIs = IgnoreUnmappedROIs(args);
@@ -91,6 +98,8 @@ MarkersCommand(const Arguments & args)
   const auto       labels = ReadLabelsOrRTStruct(labelsPath, "planning label image", ct, scene, ignoreROIs);
   const auto       planningMarkers = bmr::ReadLandmarks(planningMarkersPath);
   const auto       treatmentMarkers = bmr::ReadLandmarks(treatmentMarkersPath);
+  // A phantom's noise-free treatment markers (evaluation only): read now, so that a bad file fails before the fit.
+  const auto trueMarkers = trueMarkersPath.empty() ? std::vector<bmr::Landmark>() : bmr::ReadLandmarks(trueMarkersPath);
   // Real treatment labels (for the evaluation only) lie on the planning grid; an RTSTRUCT is gridded there.
   LabelImageType::Pointer treatmentLabels;
   if (!treatmentLabelsPath.empty())
@@ -106,6 +115,10 @@ MarkersCommand(const Arguments & args)
     timer.Begin("evaluation against the treatment labels (IoU, D)");
     itk::EvaluateMarkerMethods(result, treatmentLabels, scene.FindLabel(settings.organ)->value);
     timer.End();
+  }
+  if (!trueMarkersPath.empty())
+  {
+    itk::EvaluateLeaveOneOutAgainstTruth(result, trueMarkers);
   }
   timer.Begin("write outputs");
   MakeOutputDirectory(out);

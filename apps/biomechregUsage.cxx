@@ -105,6 +105,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                     [--organ NAME (prostate)] [--box-margin-mm M (25)] [--control-spacing-mm S (8)]\n"
     "                     [--regularization A (1e-3)] [--mesh-scale F (1)] [--modulus NAME=E_kPa,...]\n"
     "                     [--leave-one-out on|off] [--unmapped-rois refuse|ignore]\n"
+    "                     [--true-treatment-markers FILE (evaluation, phantoms: leave-one-out against the\n"
+    "                      noise-free positions)]\n"
     "    the treatment anatomy from tracked markers (LPS mm; .csv, .fcsv, .json; paired by id): FEM with forces on\n"
     "    the organ's surface in a static box, against rigid alignment and a thin-plate spline; leave-one-out TRE;\n"
     "    writes field.nrrd (treatment -> planning, mm), warped_ct.nrrd, warped_labels.nrrd, report.json and the\n"

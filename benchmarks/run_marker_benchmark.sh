@@ -4,7 +4,8 @@
 #      bladder 3-8 mm, rectum 2-5 mm, seed placement; 1.25 x 1.25 x 2.5 mm voxels), three implanted seeds each,
 #      the treatment seeds tracked with 0.5 mm Gaussian noise per axis (landmarks_tracked.csv);
 #   2. `biomechreg markers` from the planning scan and the tracked treatment markers only, assuming a population
-#      prostate modulus of ASSUMED_E kPa (default 60; the truth is drawn, not known) -> leave-one-out TRE, and
+#      prostate modulus of ASSUMED_E kPa (default 60; the truth is drawn, not known) -> leave-one-out TRE (against
+#      the tracked position of the left-out marker, and against its true position, landmarks_fixed.csv), and
 #      prostate IoU and D against the true treatment labels, for FEM, rigid alignment and thin-plate spline;
 #   3. `biomechreg dose`: a conformal plan on the planning anatomy (PTV = prostate + margin, 78 Gy, 6 mm penumbra)
 #      for margins 5, 7, 9, 11, 13 mm, fixed in the room, scored on the planned anatomy, the true treatment anatomy
@@ -14,7 +15,8 @@
 # Usage: benchmarks/run_marker_benchmark.sh [PAIRS] [SEED]   (about 1.5 min per pair on 2 cores; WORK_DIR keeps the
 # phantoms, and a WORK_DIR that already holds them reuses them)
 # Another population: PHANTOM_SET_OPTIONS="--prostate-E-range 15,40 --bladder-range 8,15" (phantom-set's options)
-# with STUDY=NAME, which writes into benchmarks/results/markers_NAME/ instead.
+# with STUDY=NAME, which writes into benchmarks/results/markers_NAME/ instead. DOSE=off skips step 3 (the markers
+# alone take about 15 s per pair).
 # Writes benchmarks/results/markers_pairs.csv, markers_dose.csv, markers_summary.md, markers.png.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -41,7 +43,8 @@ else
 fi
 pairs_csv="$out/markers_pairs.csv"
 dose_csv="$out/markers_dose.csv"
-echo "pair,true_E_kPa,method,loo_rms_mm,fit_max_mm,iou,mean_surface_distance_mm,fem_seconds" > "$pairs_csv.tmp"
+echo "pair,true_E_kPa,method,loo_rms_mm,fit_max_mm,iou,mean_surface_distance_mm,fem_seconds,loo_true_rms_mm" \
+  > "$pairs_csv.tmp"
 echo "pair,margin_mm,anatomy,structure,gEUD_Gy,D95_Gy,Dmean_Gy" > "$dose_csv.tmp"
 
 for dir in "$work"/phantoms/*/; do
@@ -51,7 +54,7 @@ for dir in "$work"/phantoms/*/; do
   "$bin" markers --planning-ct "$dir/moving_ct.nrrd" --planning-labels "$dir/moving_labels.nrrd" \
     --scene "$dir/scene.json" --modulus "prostate=$assumed" --planning-markers "$dir/landmarks_moving.csv" \
     --treatment-markers "$dir/landmarks_tracked.csv" --treatment-labels "$dir/fixed_labels.nrrd" \
-    --out "$dir/markers" >> "$log"
+    --true-treatment-markers "$dir/landmarks_fixed.csv" --out "$dir/markers" >> "$log"
   /usr/bin/python3 - "$dir" "$name" >> "$pairs_csv.tmp" <<'PY'
 import json, sys
 d, name = sys.argv[1], sys.argv[2]
@@ -61,8 +64,10 @@ E = truth["youngs_modulus_kPa"]["prostate"]
 fem_s = sum(v for k, v in r["wall_time_s"].items() if k.startswith("FEM") or k.startswith("mesh"))
 for m, v in r["methods"].items():
     print(f"{name},{E},{m},{v['leave_one_out_rms_mm']},{max(v['fit_residual_mm'])},"
-          f"{v['intersection_over_union']},{v['mean_surface_distance_mm']},{fem_s if m == 'fem' else 0}")
+          f"{v['intersection_over_union']},{v['mean_surface_distance_mm']},{fem_s if m == 'fem' else 0},"
+          f"{v['leave_one_out_true_rms_mm']}")
 PY
+  [ "${DOSE:-on}" = off ] && continue
   for margin in 5 7 9 11 13; do
     plan="$dir/plan_$margin"
     "$bin" dose --labels "$dir/moving_labels.nrrd" --scene "$dir/scene.json" --plan-margin "$margin" --plot off \

@@ -93,10 +93,20 @@ for m in methods:
     dd = [float(by[m][p]["mean_surface_distance_mm"]) for p in names]
     lines.append(f"| {m} | {statistics.median(loo):.2f} | {min(loo):.2f}-{max(loo):.2f} | {statistics.median(iou):.3f} | "
                  f"{min(iou):.3f}-{max(iou):.3f} | {statistics.median(dd):.2f} |")
+# The leave-one-out error against the left-out marker's true position (without its tracking noise), when recorded.
+with_truth = all(by[m][p].get("loo_true_rms_mm") not in (None, "") for m in methods for p in names)
+quantities = [("loo_rms_mm", "LOO TRE [mm]", -1)]
+quantities += [("loo_true_rms_mm", "LOO TRE vs truth [mm]", -1)] if with_truth else []
+quantities += [("iou", "IoU", 1), ("mean_surface_distance_mm", "D [mm]", -1)]
+if with_truth:
+    lines += ["", "| method | median LOO TRE against the true positions [mm] | range |", "|---|---:|---:|"]
+    for m in methods:
+        loo = [float(by[m][p]["loo_true_rms_mm"]) for p in names]
+        lines.append(f"| {m} | {statistics.median(loo):.2f} | {min(loo):.2f}-{max(loo):.2f} |")
 lines += ["", "Paired tests, FEM against each reference (difference = FEM - reference; two-sided):", "",
           "| reference | quantity | FEM better in | mean difference | paired t p | Wilcoxon exact p |", "|---|---|---:|---:|---:|---:|"]
 for ref in ["rigid", "tps"]:
-    for key, label, better in [("loo_rms_mm", "LOO TRE [mm]", -1), ("iou", "IoU", 1), ("mean_surface_distance_mm", "D [mm]", -1)]:
+    for key, label, better in quantities:
         diff = [float(by["fem"][p][key]) - float(by[ref][p][key]) for p in names]
         wins = sum(1 for x in diff if better * x > 0)
         lines.append(f"| {ref} | {label} | {wins}/{len(diff)} | {statistics.mean(diff):+.3f} | {paired_t(diff):.4f} | "

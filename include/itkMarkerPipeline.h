@@ -22,6 +22,8 @@
 
 #include "bmrLandmarks.h"
 
+#include <array>
+
 namespace itk {
 
 /** Settings of EstimateTreatmentFromMarkers(); the defaults are biomechreg markers'.
@@ -45,12 +47,18 @@ struct BiomechanicalRegistration_EXPORT MarkerSettings
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct BiomechanicalRegistration_EXPORT MarkerMethodResult
 {
-  std::string                          method;
-  std::vector<double>                  fitResidual;            ///< per marker, fitted to all [mm]
-  std::vector<double>                  leaveOneOutError;       ///< per marker, fitted to the others [mm]
-  double                               leaveOneOutRms{ -1.0 }; ///< mm; < 0 when not computed
-  BiomechanicalFieldType::Pointer      field;                  ///< treatment -> planning [mm] on the planning grid
-  BiomechanicalLabelImageType::Pointer warpedLabels;           ///< the estimated treatment labels
+  std::string         method;
+  std::vector<double> fitResidual;            ///< per marker, fitted to all [mm]
+  std::vector<double> leaveOneOutError;       ///< per marker, fitted to the others [mm]
+  double              leaveOneOutRms{ -1.0 }; ///< mm; < 0 when not computed
+  /** Per marker, where the method fitted to the others puts it [mm, treatment frame]; empty when not computed. */
+  std::vector<std::array<double, 3>> leaveOneOutPrediction;
+  /** The same predictions against the markers' true treatment positions, without their tracking noise
+   * (EvaluateLeaveOneOutAgainstTruth(), phantoms): per marker [mm] and RMS [mm]; < 0 when not evaluated. */
+  std::vector<double>                  leaveOneOutTrueError;
+  double                               leaveOneOutTrueRms{ -1.0 };
+  BiomechanicalFieldType::Pointer      field;        ///< treatment -> planning [mm] on the planning grid
+  BiomechanicalLabelImageType::Pointer warpedLabels; ///< the estimated treatment labels
   /** Against the real treatment labels (EvaluateMarkerMethods()): the organ's intersection over union and the
    * mean one-sided surface distance D [mm] from the real organ's surface to the estimated one (Table 4.1);
    * < 0 when not evaluated. */
@@ -103,6 +111,14 @@ BiomechanicalRegistration_EXPORT void
 EvaluateMarkerMethods(MarkerResult &                      result,
                       const BiomechanicalLabelImageType * treatmentLabels,
                       std::int32_t                        organLabel);
+
+/** Fills every method's leaveOneOutTrueError and leaveOneOutTrueRms: the distance [mm] of each leave-one-out
+ * prediction from that marker's true treatment position in \a trueTreatmentMarkers (paired by id; a phantom's
+ * noise-free seeds), where leaveOneOutError measures it against the tracked position, whose noise is in every
+ * method's error alike. Throws, naming the marker, when one is missing; does nothing without leave-one-out.
+ * \ingroup BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT void
+EvaluateLeaveOneOutAgainstTruth(MarkerResult & result, const std::vector<bmr::Landmark> & trueTreatmentMarkers);
 
 /** report.json of a marker run (units in the keys). \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT std::string

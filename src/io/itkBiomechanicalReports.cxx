@@ -155,6 +155,12 @@ MarkerReportJson(const MarkerResult & r, const MarkerSettings & settings)
       entry["leave_one_out_error_mm"] = m.leaveOneOutError;
       entry["leave_one_out_rms_mm"] = m.leaveOneOutRms;
     }
+    if (m.leaveOneOutTrueRms >= 0.0)
+    {
+      // Against the true positions (phantoms): without the left-out marker's tracking noise.
+      entry["leave_one_out_true_error_mm"] = m.leaveOneOutTrueError;
+      entry["leave_one_out_true_rms_mm"] = m.leaveOneOutTrueRms;
+    }
     if (m.intersectionOverUnion >= 0.0)
     {
       entry["intersection_over_union"] = m.intersectionOverUnion;

@@ -276,12 +276,12 @@ Rms(const std::vector<double> & values)
 }
 
 /** Each marker predicted by \a predict fitted to the others. */
-std::vector<double>
+PointList
 LeaveOneOut(const PointList &                                                                             from,
             const PointList &                                                                             to,
             const std::function<bmr::Point3(const PointList &, const PointList &, const bmr::Point3 &)> & predict)
 {
-  std::vector<double> errors;
+  PointList predictions;
   for (std::size_t k = 0; k < from.size(); ++k)
   {
     PointList a, b;
@@ -293,10 +293,18 @@ LeaveOneOut(const PointList &                                                   
         b.push_back(to[j]);
       }
     }
-    const bmr::Point3 y = predict(a, b, from[k]);
-    errors.push_back(std::hypot(y[0] - to[k][0], y[1] - to[k][1], y[2] - to[k][2]));
+    predictions.push_back(predict(a, b, from[k]));
   }
-  return errors;
+  return predictions;
+}
+
+/** \a m's leave-one-out predictions and their errors against the tracked positions \a to. */
+void
+SetLeaveOneOut(MarkerMethodResult & m, const PointList & predictions, const PointList & to)
+{
+  m.leaveOneOutPrediction = predictions;
+  m.leaveOneOutError = Distances(predictions, to);
+  m.leaveOneOutRms = Rms(m.leaveOneOutError);
 }
 
 /** The pull-back field of a point map treatment -> planning on \a reference's grid. */
@@ -344,14 +352,15 @@ FemMethod(const BoxModel &      box,
   fem.fitResidual = Distances(probe.DeformedPositions(u), to);
   if (leaveOneOut)
   {
+    PointList predictions;
     for (std::size_t k = 0; k < from.size(); ++k)
     {
       std::vector<double> weights(from.size(), 1.0);
       weights[k] = 0.0;
       const std::vector<double> uk = box.Fit(from, to, weights, nullptr);
-      fem.leaveOneOutError.push_back(Distances(probe.DeformedPositions(uk), to)[k]);
+      predictions.push_back(probe.DeformedPositions(uk)[k]);
     }
-    fem.leaveOneOutRms = Rms(fem.leaveOneOutError);
+    SetLeaveOneOut(fem, predictions, to);
   }
   return fem;
 }
@@ -378,14 +387,14 @@ ReferenceMethods(const ImageBase<3> * reference, const PointList & from, const P
   tps.fitResidual = Distances(viaSpline, to);
   if (leaveOneOut)
   {
-    rigid.leaveOneOutError = LeaveOneOut(from, to, [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
+    const auto rigidPredicts = [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
       return bmr::FitRigidTransform(a, b).Apply(x);
-    });
-    tps.leaveOneOutError = LeaveOneOut(from, to, [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
+    };
+    const auto splinePredicts = [](const PointList & a, const PointList & b, const bmr::Point3 & x) {
       return bmr::ThinPlateSpline(a, b).Apply(x);
-    });
-    rigid.leaveOneOutRms = Rms(rigid.leaveOneOutError);
-    tps.leaveOneOutRms = Rms(tps.leaveOneOutError);
+    };
+    SetLeaveOneOut(rigid, LeaveOneOut(from, to, rigidPredicts), to);
+    SetLeaveOneOut(tps, LeaveOneOut(from, to, splinePredicts), to);
   }
   rigid.field = FieldOfMap(reference, [&](const bmr::Point3 & y) { return motion.ApplyInverse(y); });
   tps.field = FieldOfMap(reference, [&](const bmr::Point3 & y) { return back.Apply(y); });
@@ -404,8 +413,7 @@ Unmoved(const BiomechanicalLabelImageType * planningLabels,
   none.fitResidual = Distances(from, to);
   if (leaveOneOut)
   {
-    none.leaveOneOutError = none.fitResidual;
-    none.leaveOneOutRms = Rms(none.leaveOneOutError);
+    SetLeaveOneOut(none, from, to); // the planning positions, whichever markers are left out
   }
   auto copy = ImageDuplicator<BiomechanicalLabelImageType>::New();
   copy->SetInputImage(planningLabels);
@@ -589,6 +597,30 @@ EvaluateMarkerMethods(MarkerResult &                      result,
     }
     m.intersectionOverUnion = static_cast<double>(o.inBoth) / static_cast<double>(o.inA + o.inB - o.inBoth);
     m.meanSurfaceDistance = MeanOneSidedSurfaceDistance(treatmentLabels, m.warpedLabels.GetPointer(), organLabel);
+  }
+}
+
+void
+EvaluateLeaveOneOutAgainstTruth(MarkerResult & result, const std::vector<bmr::Landmark> & trueTreatmentMarkers)
+{
+  PointList truth;
+  for (const std::string & id : result.markerIds)
+  {
+    const auto found = std::find_if(
+      trueTreatmentMarkers.begin(), trueTreatmentMarkers.end(), [&id](const bmr::Landmark & l) { return l.id == id; });
+    if (found == trueTreatmentMarkers.end())
+    {
+      bmr::Fail("EvaluateLeaveOneOutAgainstTruth", "marker \"" + id + "\" has no true treatment position");
+    }
+    truth.push_back(found->point);
+  }
+  for (MarkerMethodResult & m : result.methods)
+  {
+    if (m.leaveOneOutPrediction.size() == truth.size())
+    {
+      m.leaveOneOutTrueError = Distances(m.leaveOneOutPrediction, truth);
+      m.leaveOneOutTrueRms = Rms(m.leaveOneOutTrueError);
+    }
   }
 }
 

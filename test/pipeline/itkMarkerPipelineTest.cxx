@@ -187,11 +187,32 @@ itkMarkerPipelineTest(int, char *[])
                  " mm)");
   ok &= Expect(r.warnings.size() == 0, "no warning with every modulus known");
 
+  // Leave-one-out against the true positions: the tracked ones as the truth give the tracked errors exactly; a
+  // truth 0.5 mm off the tracked position of gold2 (3-4-5) gives rigid alignment and the spline, which predict the
+  // tracked translation exactly, 0.5 mm there and 0 elsewhere.
+  itk::EvaluateLeaveOneOutAgainstTruth(r, to);
+  ok &= Expect(fem.leaveOneOutTrueError == fem.leaveOneOutError && fem.leaveOneOutTrueRms == fem.leaveOneOutRms,
+               "the tracked markers as the truth give the tracked leave-one-out errors");
+  auto truth = to;
+  truth[1].point[0] += 0.3;
+  truth[1].point[1] -= 0.4;
+  itk::EvaluateLeaveOneOutAgainstTruth(r, truth);
+  for (const auto * m : { &rigid, &tps })
+  {
+    ok &= Expect(m->leaveOneOutTrueError.size() == 3 && std::abs(m->leaveOneOutTrueError[1] - 0.5) < 1e-9 &&
+                   m->leaveOneOutTrueError[0] < 1e-9 && m->leaveOneOutTrueError[2] < 1e-9,
+                 m->method + ": 0.5 mm against the moved truth of gold2 only (got " +
+                   ToString(m->leaveOneOutTrueError.empty() ? -1.0 : m->leaveOneOutTrueError[1]) + " mm)");
+  }
+
   using bmr::test::ExpectException;
   auto renamed = to;
   renamed[1].id = "other";
   ok &= ExpectException(
     "unpaired id", [&] { itk::EstimateTreatmentFromMarkers(planning, nullptr, scene, from, renamed); }, "gold2");
+  truth.pop_back();
+  ok &= ExpectException(
+    "a marker without its true position", [&] { itk::EvaluateLeaveOneOutAgainstTruth(r, truth); }, "gold3");
   auto inBone = from;
   inBone[0].point = { { c[0], c[1], c[2] - 200.0 } };
   ok &= ExpectException(
