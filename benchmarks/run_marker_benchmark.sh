@@ -16,7 +16,7 @@
 # phantoms, and a WORK_DIR that already holds them reuses them)
 # Another population: PHANTOM_SET_OPTIONS="--prostate-E-range 15,40 --bladder-range 8,15" (phantom-set's options)
 # with STUDY=NAME, which writes into benchmarks/results/markers_NAME/ instead. DOSE=off skips step 3 (the markers
-# alone take about 15 s per pair).
+# alone take about 15 s per pair). MARKERS_OPTIONS adds options to `markers` (e.g. "--control-spacing-mm 16").
 # Writes benchmarks/results/markers_pairs.csv, markers_dose.csv, markers_summary.md, markers.png.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -51,10 +51,11 @@ for dir in "$work"/phantoms/*/; do
   name=$(basename "$dir")
   [ -f "$dir/truth.json" ] || continue
   echo "markers: $name"
+  # shellcheck disable=SC2086 # MARKERS_OPTIONS are words on purpose
   "$bin" markers --planning-ct "$dir/moving_ct.nrrd" --planning-labels "$dir/moving_labels.nrrd" \
     --scene "$dir/scene.json" --modulus "prostate=$assumed" --planning-markers "$dir/landmarks_moving.csv" \
     --treatment-markers "$dir/landmarks_tracked.csv" --treatment-labels "$dir/fixed_labels.nrrd" \
-    --true-treatment-markers "$dir/landmarks_fixed.csv" --out "$dir/markers" >> "$log"
+    --true-treatment-markers "$dir/landmarks_fixed.csv" ${MARKERS_OPTIONS:-} --out "$dir/markers" >> "$log"
   /usr/bin/python3 - "$dir" "$name" >> "$pairs_csv.tmp" <<'PY'
 import json, sys
 d, name = sys.argv[1], sys.argv[2]
