@@ -119,6 +119,10 @@ MarkersCommand(const Arguments & args)
   if (!trueMarkersPath.empty())
   {
     itk::EvaluateLeaveOneOutAgainstTruth(result, trueMarkers);
+    if (result.methods.empty() || result.methods[0].leaveOneOutTrueRms < 0.0)
+    {
+      PrintWarning("--true-treatment-markers is not used: leave-one-out is off or there are fewer than 3 markers");
+    }
   }
   timer.Begin("write outputs");
   MakeOutputDirectory(out);

@@ -90,5 +90,5 @@ PY
   done
 done
 mv "$pairs_csv.tmp" "$pairs_csv"
-mv "$dose_csv.tmp" "$dose_csv"
+if [ "${DOSE:-on}" = off ]; then rm -f "$dose_csv.tmp"; else mv "$dose_csv.tmp" "$dose_csv"; fi
 /usr/bin/python3 "$root/benchmarks/summarize_markers.py" "$out"

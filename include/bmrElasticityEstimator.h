@@ -63,9 +63,9 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
   unsigned int maximumOuterIterations{ 20 }; ///< function evaluations of the outer search
   double       outerStepTolerance{ 1e-3 };   ///< one unknown: stop when the next step in log E is shorter
   double       innerGradientTolerance{ 1e-5 };
-  /** One unknown, L-BFGS inner solves: the tolerance of the fine evaluations the secant search only passes
-   * through; each one it would stop on is solved on to innerGradientTolerance first (bmr::SecantSearch's inexact
-   * points). Not above innerGradientTolerance: every evaluation to the full tolerance. */
+  /** L-BFGS inner solves: the tolerance of the sweep's samples and, with one unknown, of the fine evaluations the
+   * secant search only passes through; each one it would stop on is solved on to innerGradientTolerance first
+   * (bmr::SecantSearch's inexact points). Not above innerGradientTolerance: every solve to the full tolerance. */
   double looseInnerGradientTolerance{ 3e-4 };
   double outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
   double flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds

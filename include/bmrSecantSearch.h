@@ -44,7 +44,7 @@ struct BiomechanicalRegistration_EXPORT SecantSearchSettings
   double       maximumStep{ 0.5 };         ///< largest |x_{k+1} - x_k|
   double       stepTolerance{ 1e-3 };      ///< stop when the next step would be shorter
   double       derivativeTolerance{ 0.0 }; ///< stop when |f'| is not larger (absolute)
-  unsigned int maximumEvaluations{ 20 };
+  unsigned int maximumEvaluations{ 20 };   ///< of evaluate(); refine() comes on top, at most once per point
 };
 
 /** What SecantSearch found: the evaluated point of least f, how many evaluations, why it stopped, and

@@ -131,9 +131,10 @@ public:
   itkGetConstMacro(MaximumNumberOfOuterIterations, unsigned int);
   itkSetMacro(InnerGradientTolerance, double);
   itkGetConstMacro(InnerGradientTolerance, double);
-  /** One unknown modulus, L-BFGS inner solves: the looser inner tolerance (relative, as InnerGradientTolerance) of
-   * the fine evaluations the secant search only passes through; the point it stops on is solved on to
-   * InnerGradientTolerance (default 3e-4; not above InnerGradientTolerance: every evaluation in full). */
+  /** L-BFGS inner solves: the looser inner tolerance (relative, as InnerGradientTolerance) of the sweep's samples
+   * and, with one unknown modulus, of the fine evaluations the secant search only passes through; the point it
+   * stops on is solved on to InnerGradientTolerance (default 3e-4; not above InnerGradientTolerance: every solve
+   * in full). */
   itkSetMacro(LooseInnerGradientTolerance, double);
   itkGetConstMacro(LooseInnerGradientTolerance, double);
   itkSetMacro(OuterGradientTolerance, double);

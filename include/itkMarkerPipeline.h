@@ -115,7 +115,8 @@ EvaluateMarkerMethods(MarkerResult &                      result,
 /** Fills every method's leaveOneOutTrueError and leaveOneOutTrueRms: the distance [mm] of each leave-one-out
  * prediction from that marker's true treatment position in \a trueTreatmentMarkers (paired by id; a phantom's
  * noise-free seeds), where leaveOneOutError measures it against the tracked position, whose noise is in every
- * method's error alike. Throws, naming the marker, when one is missing; does nothing without leave-one-out.
+ * method's error alike. Does nothing without leave-one-out; otherwise throws, naming the marker, when one is
+ * missing (markers the result does not hold are ignored).
  * \ingroup BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT void
 EvaluateLeaveOneOutAgainstTruth(MarkerResult & result, const std::vector<bmr::Landmark> & trueTreatmentMarkers);

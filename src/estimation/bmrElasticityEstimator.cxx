@@ -290,8 +290,9 @@ struct ElasticityEstimator::Stages
       estimator.m_Observer(record, progress);
     }
   }
-  /** L-BFGS inner solves and a looser tolerance set: the sweep's samples are loose, which only locate the fine
-   * stage's start. */
+  /** L-BFGS inner solves and a looser tolerance set: the sweep's samples are loose. They locate the fine stage's
+   * start and judge flatness, for which a loose Phi* (above the optimum by about 3e-5 relative on the demo pair)
+   * and its log-E derivative do. */
   bool
   LooseSweep() const
   {

@@ -97,6 +97,26 @@ struct Bracket
     return hiSampled ? 0.5 * (hi + std::max(p.x, lo)) : hi;
   }
 };
+
+/** The next x from \a p: Newton's step with the secant curvature through \a previous (when given and apart; else
+ * \a curvature as it is), or \a maximumStep downhill when that is not positive; limited to \a maximumStep and kept
+ * inside \a bracket, which takes \a p first. */
+double
+SecantStep(const SecantPoint & p,
+           const SecantPoint * previous,
+           double              maximumStep,
+           Bracket &           bracket,
+           double &            curvature)
+{
+  bracket.Update(p);
+  if (previous != nullptr && p.x != previous->x)
+  {
+    curvature = (p.derivative - previous->derivative) / (p.x - previous->x);
+  }
+  double step = curvature > 0.0 ? -p.derivative / curvature : std::copysign(maximumStep, -p.derivative);
+  step = std::clamp(step, -maximumStep, maximumStep);
+  return bracket.Keep(p, p.x + step);
+}
 } // namespace
 
 SecantSearchResult
@@ -126,18 +146,14 @@ SecantSearch(const std::function<SecantPoint(double x)> & evaluate,
     std::string stop = std::abs(p.derivative) <= s.derivativeTolerance ? "the derivative is within the tolerance"
                        : onBound                                       ? "the minimum lies on a bound"
                                                                        : "";
-    double      next = p.x;
+    // The bracket and the secant take the point only once it is final: an inexact point the search would stop on
+    // is refined first, so that its derivative's error (whose sign may be wrong near the minimum) shapes neither.
+    Bracket trialBracket = bracket;
+    double  trialCurvature = curvature;
+    double  next = p.x;
     if (stop.empty())
     {
-      bracket.Update(p);
-      if (r.evaluations > 1 && p.x != previous.x)
-      {
-        curvature = (p.derivative - previous.derivative) / (p.x - previous.x);
-        r.curvature = curvature;
-      }
-      double step = curvature > 0.0 ? -p.derivative / curvature : std::copysign(s.maximumStep, -p.derivative);
-      step = std::clamp(step, -s.maximumStep, s.maximumStep);
-      next = bracket.Keep(p, p.x + step);
+      next = SecantStep(p, r.evaluations > 1 ? &previous : nullptr, s.maximumStep, trialBracket, trialCurvature);
       stop = std::abs(next - p.x) < s.stepTolerance  ? "the next step is below the step tolerance"
              : r.evaluations >= s.maximumEvaluations ? "the maximum number of evaluations is reached"
                                                      : "";
@@ -149,13 +165,15 @@ SecantSearch(const std::function<SecantPoint(double x)> & evaluate,
       ++r.refinements;
       continue;
     }
+    bracket = trialBracket;
+    curvature = trialCurvature;
+    r.curvature = curvature;
     if (!stop.empty())
     {
       r.onBound = onBound && std::abs(p.derivative) > s.derivativeTolerance;
       r.stopCondition = stop;
       break;
     }
-    r.curvature = curvature;
     previous = p;
     p = evaluate(next);
     ++r.evaluations;

@@ -603,6 +603,13 @@ EvaluateMarkerMethods(MarkerResult &                      result,
 void
 EvaluateLeaveOneOutAgainstTruth(MarkerResult & result, const std::vector<bmr::Landmark> & trueTreatmentMarkers)
 {
+  const bool predicted = std::any_of(result.methods.begin(), result.methods.end(), [](const MarkerMethodResult & m) {
+    return !m.leaveOneOutPrediction.empty();
+  });
+  if (!predicted)
+  {
+    return; // no leave-one-out (turned off, or fewer than three markers)
+  }
   PointList truth;
   for (const std::string & id : result.markerIds)
   {
