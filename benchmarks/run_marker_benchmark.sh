@@ -16,7 +16,7 @@
 # phantoms, and a WORK_DIR that already holds them reuses them)
 # Another population: PHANTOM_SET_OPTIONS="--prostate-E-range 15,40 --bladder-range 8,15" (phantom-set's options)
 # with STUDY=NAME, which writes into benchmarks/results/markers_NAME/ instead. DOSE=off skips step 3 (the markers
-# alone take about 15 s per pair). MARKERS_OPTIONS adds options to `markers` (e.g. "--control-spacing-mm 16").
+# alone take about 15 s per pair; the folder then holds no markers_dose.csv). MARKERS_OPTIONS adds options to `markers` (e.g. "--control-spacing-mm 16").
 # Writes benchmarks/results/markers_pairs.csv, markers_dose.csv, markers_summary.md, markers.png.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -90,5 +90,6 @@ PY
   done
 done
 mv "$pairs_csv.tmp" "$pairs_csv"
-if [ "${DOSE:-on}" = off ]; then rm -f "$dose_csv.tmp"; else mv "$dose_csv.tmp" "$dose_csv"; fi
+# The folder holds one run: without the dose study, no dose table of an earlier run stays beside these pairs.
+if [ "${DOSE:-on}" = off ]; then rm -f "$dose_csv.tmp" "$dose_csv"; else mv "$dose_csv.tmp" "$dose_csv"; fi
 /usr/bin/python3 "$root/benchmarks/summarize_markers.py" "$out"

@@ -5,6 +5,7 @@ anatomy per margin. Writes markers_summary.md and markers.png into the results f
 import csv
 import itertools
 import math
+import os
 import statistics
 import sys
 
@@ -15,7 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 out = sys.argv[1]
 pairs = list(csv.DictReader(open(f"{out}/markers_pairs.csv")))
-dose = list(csv.DictReader(open(f"{out}/markers_dose.csv")))
+# Without the dose study (DOSE=off) there is no dose table: the gEUD tables and panel stay empty.
+dose_path = f"{out}/markers_dose.csv"
+dose = list(csv.DictReader(open(dose_path))) if os.path.exists(dose_path) else []
 methods = ["fem", "rigid", "tps", "none"]
 
 
