@@ -22,6 +22,7 @@
 #include "bmrTetrahedralMesh.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace bmr {
@@ -68,6 +69,14 @@ public:
    * starting point for the loads; nodes flagged in \a held stay put. */
   virtual std::vector<double>
   MatchDisplacement(const std::vector<char> & held) const = 0;
+  /** The nodes whose displacement Evaluate() and EvaluateResiduals() read (ascending), or nothing when they may read
+   * any node (the default). With every term's nodes known, an estimation solves for the state at these nodes alone
+   * (ForwardModel::TrySolveObservedState()). */
+  virtual std::optional<std::vector<std::int32_t>>
+  GetObservedNodes() const
+  {
+    return std::nullopt;
+  }
 };
 
 /** One organ surface of the objective: the mesh nodes on it, its weight and the signed distance map
@@ -107,6 +116,9 @@ public:
   ComputeStatistics(const std::vector<double> & u) const override;
   std::vector<double>
   MatchDisplacement(const std::vector<char> & held) const override;
+  /** The nodes of every surface. */
+  std::optional<std::vector<std::int32_t>>
+  GetObservedNodes() const override;
   void
   SetMatchingIterations(unsigned int iterations)
   {

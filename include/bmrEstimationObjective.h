@@ -86,9 +86,30 @@ public:
   /** Nodal displacement [mm] (3N) for the load parameters \a p. */
   std::vector<double>
   ComputeDisplacement(const std::vector<double> & p);
-  /** Elements turned inside out (deformed volume <= 0) by the displacement of the last Evaluate(). */
+  /** Elements turned inside out (deformed volume <= 0) by the displacement of the last Evaluate() (solving for
+   * the whole state when that evaluation solved the observed dofs alone). */
   std::size_t
-  GetNumberOfInvertedElements() const;
+  GetNumberOfInvertedElements();
+  /** Whether Evaluate() solves for the state and the adjoint only at the dofs it reads (default on): the data
+   * terms' nodes (DataTerm::GetObservedNodes()) and the unknown materials', and the free dofs the pull-back to the
+   * loads reads (ForwardModel::TrySolveObservedState(), SolveObservedAdjoint()). Its values and gradients are the
+   * same bit for bit; on the demo pair the triangular solves then skip about half the factor. Off, every solve is
+   * whole, as a caller counting inverted elements after every evaluation needs. Without effect when a data term
+   * may read any node, or with a nonlinear model (whose barrier reads every element). Changing it drops the
+   * kept last evaluation. */
+  void
+  SetObservedSolves(bool observed);
+  bool
+  GetObservedSolves() const
+  {
+    return m_ObservedSolves;
+  }
+  /** The dofs (3N indices, ascending) of the state that observed solves compute; empty when every solve is whole. */
+  const std::vector<std::int32_t> &
+  GetObservedStateDofs() const
+  {
+    return m_StateDofs;
+  }
   /** Evaluations whose loads the model could not reach, since construction. */
   std::size_t
   GetNumberOfInfeasibleEvaluations() const
@@ -147,6 +168,10 @@ private:
   std::vector<const DataTerm *>       m_Terms;
   std::vector<std::int32_t>           m_UnknownLabels;
   std::size_t                         m_Inverted{ 0 };
+  bool                                m_InvertedKnown{ true };
+  bool                                m_ObservedSolves{ true };
+  bool                                m_ObserveState{ false }, m_ObserveAdjoint{ false };
+  std::vector<std::int32_t>           m_StateDofs, m_AdjointDofs; // the observed dofs (FindObservedDofs())
   std::size_t                         m_Infeasible{ 0 };
   double                              m_LastFeasibleValue{ 0.0 };
   std::unique_ptr<CompressionBarrier> m_Barrier;
@@ -163,11 +188,14 @@ private:
     std::vector<double> u, lambda, gradientP;
     double              value{ 0.0 };
     std::size_t         inverted{ 0 };
+    bool                observed{ false }; ///< u and lambda exact at the observed dofs only
   };
   Evaluation m_Last;
 
   std::vector<double>
   CurrentModuli() const;
+  void
+  FindObservedDofs();
   /** Solves at \a p (and the adjoint when \a adjoint) into m_Last; false when the model cannot reach p. */
   bool
   EvaluateAt(const std::vector<double> & p, bool adjoint);

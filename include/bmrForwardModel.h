@@ -102,6 +102,26 @@ public:
    * at the last state (3N in, 3N out). */
   virtual std::vector<double>
   SolveAdjoint(const std::vector<double> & g) = 0;
+  /** As TrySolveState(), but \a u need only be exact at the dofs \a observedDofs (3N indices, any order) and the
+   * constrained ones: a model may leave the other dofs 0 to save work (an estimation reads the state on the organ
+   * surfaces and the unknown materials alone). The default computes every dof. */
+  virtual bool
+  TrySolveObservedState(const std::vector<double> &       forces,
+                        const std::vector<double> &       prescribed,
+                        const std::vector<std::int32_t> & observedDofs,
+                        std::vector<double> &             u)
+  {
+    (void)observedDofs;
+    return TrySolveState(forces, prescribed, u);
+  }
+  /** As SolveAdjoint(), but lambda need only be exact at the dofs \a observedDofs and at those
+   * ApplyTangentAtConstrained() reads; a model may leave the others 0. The default computes every dof. */
+  virtual std::vector<double>
+  SolveObservedAdjoint(const std::vector<double> & g, const std::vector<std::int32_t> & observedDofs)
+  {
+    (void)observedDofs;
+    return SolveAdjoint(g);
+  }
   /** K_T v at every dof (3N): the tangent applied to a nodal vector. */
   virtual std::vector<double>
   ApplyTangent(const std::vector<double> & v) const = 0;
@@ -174,6 +194,15 @@ public:
   SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed) override;
   std::vector<double>
   SolveAdjoint(const std::vector<double> & g) override;
+  /** LinearElasticModel::Solve() with \a observedDofs: the same values bit for bit at those dofs. */
+  bool
+  TrySolveObservedState(const std::vector<double> &       forces,
+                        const std::vector<double> &       prescribed,
+                        const std::vector<std::int32_t> & observedDofs,
+                        std::vector<double> &             u) override;
+  /** LinearElasticModel::Solve() observing \a observedDofs and the free dofs coupled to the constrained ones. */
+  std::vector<double>
+  SolveObservedAdjoint(const std::vector<double> & g, const std::vector<std::int32_t> & observedDofs) override;
   std::vector<double>
   ApplyTangent(const std::vector<double> & v) const override;
   /** LinearElasticModel::ComputeCouplingForces(): K_cf v_f, bit for bit K v at the constrained dofs. */
@@ -199,6 +228,8 @@ public:
 private:
   const TetrahedralMesh &             m_Mesh;
   std::unique_ptr<LinearElasticModel> m_Model;
+  std::vector<std::int32_t>           m_CoupledDofs; // LinearElasticModel::GetCoupledFreeDegreesOfFreedom()
+  bool                                m_CoupledDofsCurrent{ false };
 };
 
 } // namespace bmr

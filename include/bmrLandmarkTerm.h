@@ -70,6 +70,9 @@ public:
   Evaluate(const std::vector<double> & u, std::vector<double> * gradient) const override;
   void
   EvaluateResiduals(const std::vector<double> & u, std::vector<double> & r, ResidualJacobian * jacobian) const override;
+  /** The nodes of the elements holding the markers. */
+  std::optional<std::vector<std::int32_t>>
+  GetObservedNodes() const override;
   /** One group, "markers": count, RMS, maximum and mean of the distances |x̂_k - T_k| [mm] of every marker
    * (weighted 0 included). */
   std::vector<ResidualStatistics>

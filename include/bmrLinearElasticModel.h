@@ -181,6 +181,21 @@ public:
   std::vector<double>
   Solve(const std::vector<double> & forces, const std::vector<double> & prescribed);
 
+  /** As Solve(forces, prescribed), but exact only at the dofs \a observedDofs (3N indices, any order) and the
+   * constrained ones; the other free dofs are 0. The backward triangular solve then computes only the factor's
+   * supernodes that hold an observed dof and their ancestors in the elimination tree, each value by the same
+   * operations as Solve(), so the observed displacements are Solve()'s bit for bit. (Both solves skip the supernodes
+   * that no nonzero of the right-hand side reaches, whose values are exact zeros.) When the solve iterates with a
+   * kept factorization (SetRefactorizationThreshold()), every dof is computed. */
+  std::vector<double>
+  Solve(const std::vector<double> &       forces,
+        const std::vector<double> &       prescribed,
+        const std::vector<std::int32_t> & observedDofs);
+
+  /** The free dofs that ComputeCouplingForces() reads (3N indices, ascending): those coupled to a constrained one. */
+  std::vector<std::int32_t>
+  GetCoupledFreeDegreesOfFreedom() const;
+
   /** Khat_m u at every dof [mN per kPa]: the derivative of K(E) u with respect to
    * the modulus of material \a label, dK/dE_m u. */
   std::vector<double>
@@ -218,6 +233,11 @@ public:
   GetTimings() const;
 
 private:
+  std::vector<double>
+  SolveObserving(const std::vector<double> &       forces,
+                 const std::vector<double> &       prescribed,
+                 const std::vector<std::int32_t> * observedDofs);
+
   struct Impl;
   std::unique_ptr<Impl> m_Impl;
 };

@@ -71,6 +71,13 @@ public:
   PullBackGradient(const std::vector<double> & p,
                    const std::vector<double> & prescribedSensitivity,
                    const std::vector<double> & forceSensitivity) const = 0;
+  /** Whether PullBackGradient() reads \a forceSensitivity (the adjoint state), at any free dof: true (the default)
+   * unless p sets only prescribed displacements. */
+  virtual bool
+  ReadsForceSensitivity() const
+  {
+    return true;
+  }
   /** The prior R(p) [mm^2] added to the data terms (0 when there is none). */
   virtual double
   EvaluatePrior(const std::vector<double> & p) const = 0;
@@ -234,6 +241,9 @@ public:
   PullBackGradient(const std::vector<double> & p,
                    const std::vector<double> & prescribedSensitivity,
                    const std::vector<double> & forceSensitivity) const override;
+  /** Only with NormalTraction and UniformPressure, whose p sets forces. */
+  bool
+  ReadsForceSensitivity() const override;
   double
   EvaluatePrior(const std::vector<double> & p) const override;
   std::vector<double>

@@ -87,6 +87,10 @@ struct BiomechanicalRegistration_EXPORT MeshQuality
 BiomechanicalRegistration_EXPORT double
 TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e);
 
+/** The distinct values of \a nodes (node or dof indices), ascending. */
+BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
+                                 UniqueNodes(std::vector<std::int32_t> nodes);
+
 /** Number of elements whose deformed volume (points + \a displacement [mm], 3 per node) is <= 0:
  * turned inside out, where linear elasticity no longer describes the tissue. */
 BiomechanicalRegistration_EXPORT std::size_t

@@ -77,6 +77,57 @@ EstimationObjective::EstimationObjective(ForwardModel &                model,
   {
     m_Barrier = std::make_unique<CompressionBarrier>(m_Model.GetMesh());
   }
+  FindObservedDofs();
+}
+
+/** The dofs an evaluation reads: of the state, the data terms' nodes and the unknown materials' (for
+ * ModulusGradient()), unless a term may read any node; of the adjoint, the unknown materials' (and the pull-back's,
+ * EvaluateAt()). None when the barrier reads every element. */
+void
+EstimationObjective::FindObservedDofs()
+{
+  if (m_Barrier)
+  {
+    return;
+  }
+  const TetrahedralMesh &   mesh = m_Model.GetMesh();
+  std::vector<std::int32_t> materialNodes;
+  for (std::size_t e = 0; e < mesh.labels.size(); ++e)
+  {
+    if (std::find(m_UnknownLabels.begin(), m_UnknownLabels.end(), mesh.labels[e]) != m_UnknownLabels.end())
+    {
+      materialNodes.insert(materialNodes.end(), &mesh.tetrahedra[4 * e], &mesh.tetrahedra[4 * e] + 4);
+    }
+  }
+  const auto dofsOf = [](const std::vector<std::int32_t> & nodes) {
+    std::vector<std::int32_t> dofs;
+    for (const std::int32_t n : UniqueNodes(nodes))
+    {
+      dofs.insert(dofs.end(), { 3 * n, 3 * n + 1, 3 * n + 2 });
+    }
+    return dofs;
+  };
+  m_AdjointDofs = dofsOf(materialNodes);
+  m_ObserveAdjoint = true;
+  std::vector<std::int32_t> stateNodes = materialNodes;
+  for (const DataTerm * term : m_Terms)
+  {
+    const std::optional<std::vector<std::int32_t>> nodes = term->GetObservedNodes();
+    if (!nodes)
+    {
+      return;
+    }
+    stateNodes.insert(stateNodes.end(), nodes->begin(), nodes->end());
+  }
+  m_StateDofs = dofsOf(stateNodes);
+  m_ObserveState = true;
+}
+
+void
+EstimationObjective::SetObservedSolves(bool observed)
+{
+  m_ObservedSolves = observed;
+  m_Last.valid = false; // evaluated again, as asked
 }
 
 EstimationObjective::~EstimationObjective() = default;
@@ -122,12 +173,15 @@ EstimationObjective::EvaluateAt(const std::vector<double> & p, bool adjoint)
 {
   m_Last.valid = false;
   const BoundaryLoad load = m_Loads.Apply(p);
-  if (!m_Model.TrySolveState(load.forces, load.prescribed, m_Last.u))
+  const bool         observed = m_ObservedSolves && m_ObserveState;
+  if (observed ? !m_Model.TrySolveObservedState(load.forces, load.prescribed, m_StateDofs, m_Last.u)
+               : !m_Model.TrySolveState(load.forces, load.prescribed, m_Last.u))
   {
     return false;
   }
   const std::vector<double> & u = m_Last.u;
-  m_Last.inverted = CountInvertedElements(m_Model.GetMesh(), u);
+  m_Last.observed = observed;
+  m_Last.inverted = observed ? 0 : CountInvertedElements(m_Model.GetMesh(), u);
   std::vector<double> g(adjoint ? u.size() : 0, 0.0);
   double              value = 0.0;
   for (const DataTerm * term : m_Terms)
@@ -143,7 +197,10 @@ EstimationObjective::EvaluateAt(const std::vector<double> & p, bool adjoint)
   m_Last.gradientP.clear();
   if (adjoint)
   {
-    m_Last.lambda = m_Model.SolveAdjoint(g);
+    // The pull-back reads the adjoint at the constrained dofs' neighbors (the model's part) and, when p sets
+    // forces, wherever they act (asked each time: a parameterization may switch, e.g. WallLoads::SetMotion()).
+    const bool observedAdjoint = m_ObservedSolves && m_ObserveAdjoint && !m_Loads.ReadsForceSensitivity();
+    m_Last.lambda = observedAdjoint ? m_Model.SolveObservedAdjoint(g, m_AdjointDofs) : m_Model.SolveAdjoint(g);
     m_Last.gradientP = PullBackThroughLoads(m_Model, m_Loads, p, g, m_Last.lambda);
   }
   m_Last.parameters = p;
@@ -183,6 +240,7 @@ EstimationObjective::Evaluate(const std::vector<double> & p,
     return InfeasibleValue(gradientP, gradientLogE);
   }
   m_Inverted = m_Last.inverted;
+  m_InvertedKnown = !m_Last.observed;
   m_LastFeasibleValue = m_Last.value;
   if (gradientP != nullptr)
   {
@@ -202,6 +260,7 @@ EstimationObjective::InfeasibleValue(std::vector<double> * gradientP, std::vecto
 {
   ++m_Infeasible;
   m_Inverted = m_Model.GetMesh().GetNumberOfTetrahedra();
+  m_InvertedKnown = true;
   if (gradientP != nullptr)
   {
     gradientP->assign(GetNumberOfParameters(), 0.0);
@@ -221,8 +280,14 @@ EstimationObjective::ComputeDisplacement(const std::vector<double> & p)
 }
 
 std::size_t
-EstimationObjective::GetNumberOfInvertedElements() const
+EstimationObjective::GetNumberOfInvertedElements()
 {
+  if (!m_InvertedKnown)
+  {
+    // The last state was solved at the observed dofs alone: the whole of it, once.
+    m_Inverted = CountInvertedElements(m_Model.GetMesh(), ComputeDisplacement(m_Last.parameters));
+    m_InvertedKnown = true;
+  }
   return m_Inverted;
 }
 
@@ -413,9 +478,7 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
   std::vector<double> r;
   ResidualJacobian    pattern;
   StackResiduals(m_Terms, std::vector<double>(3 * m_Model.GetMesh().GetNumberOfPoints(), 0.0), r, &pattern);
-  std::vector<std::int32_t> dofs = pattern.dofs;
-  std::sort(dofs.begin(), dofs.end());
-  dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
+  const std::vector<std::int32_t> dofs = UniqueNodes(pattern.dofs);
   // A linear model's state is affine in p: computed once. A nonlinear one is solved at every p, and its
   // derivative du/dp taken from the tangent at each point where the Jacobian is needed.
   const bool  linear = m_Model.IsLinear();

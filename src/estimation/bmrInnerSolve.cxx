@@ -107,6 +107,14 @@ MinimizeLoadsLBFGS(EstimationObjective &       objective,
                    const InnerSettings &       settings,
                    std::size_t &               rejected)
 {
+  // Inverted elements are counted after every evaluation: whole states.
+  struct WholeStates
+  {
+    EstimationObjective & objective;
+    const bool            observed{ objective.GetObservedSolves() };
+    ~WholeStates() { objective.SetObservedSolves(observed); }
+  } whole{ objective };
+  objective.SetObservedSolves(whole.observed && !settings.limitInversion);
   std::size_t         allowed = 0;
   double              ceiling = 0.0;
   double              bestFeasibleValue = 0.0;

@@ -19,6 +19,7 @@
 
 #include "bmrError.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -141,6 +142,18 @@ LandmarkTerm::DeformedPositions(const std::vector<double> & u) const
     positions.push_back(x);
   }
   return positions;
+}
+
+std::optional<std::vector<std::int32_t>>
+LandmarkTerm::GetObservedNodes() const
+{
+  std::vector<std::int32_t> nodes;
+  for (const MeshLocation & location : m_Locations)
+  {
+    const std::int32_t * t = &m_Mesh.tetrahedra[4 * location.element];
+    nodes.insert(nodes.end(), t, t + 4);
+  }
+  return UniqueNodes(std::move(nodes));
 }
 
 double

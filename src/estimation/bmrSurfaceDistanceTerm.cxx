@@ -179,6 +179,17 @@ SurfaceDistanceTerm::ComputeStatistics(const std::vector<double> & u) const
   return stats;
 }
 
+std::optional<std::vector<std::int32_t>>
+SurfaceDistanceTerm::GetObservedNodes() const
+{
+  std::vector<std::int32_t> nodes;
+  for (const ObjectiveSurface & surface : m_Surfaces)
+  {
+    nodes.insert(nodes.end(), surface.nodes.begin(), surface.nodes.end());
+  }
+  return UniqueNodes(std::move(nodes));
+}
+
 std::vector<double>
 SurfaceDistanceTerm::MatchDisplacement(const std::vector<char> & held) const
 {

@@ -560,6 +560,12 @@ WallLoads::Direction(std::size_t j) const
   return { {}, m_Impl->WithWalls(zero, m_Impl->Expand(unit)) };
 }
 
+bool
+WallLoads::ReadsForceSensitivity() const
+{
+  return m_Impl->Traction();
+}
+
 std::vector<double>
 WallLoads::PullBackGradient(const std::vector<double> & p,
                             const std::vector<double> & prescribedSensitivity,

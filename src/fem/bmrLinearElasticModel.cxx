@@ -215,16 +215,43 @@ struct LinearElasticModel::Impl
   /** K_ff^-1 b with the current factorization: fem::SupernodalSolver on solveThreads threads (the same result on
    * any number), or CHOLMOD's own solve for a factor it does not take. */
   Eigen::VectorXd
-  TriangularSolve(const Eigen::VectorXd & b)
+  TriangularSolve(const Eigen::VectorXd & b, const std::vector<std::int32_t> * observedFree = nullptr)
   {
     if (!triangularReady)
     {
       return solver.solve(b);
     }
     Eigen::VectorXd x(b.size());
-    triangular.Solve(b.data(), x.data(), solveThreads);
+    if (observedFree != nullptr)
+    {
+      triangular.Solve(b.data(), x.data(), solveThreads, *observedFree);
+    }
+    else
+    {
+      triangular.Solve(b.data(), x.data(), solveThreads);
+    }
     return x;
   }
+  /** The free indices of the free dofs among \a dofs (3N indices; throws on one out of range). */
+  std::vector<std::int32_t>
+  FreeIndices(const std::vector<std::int32_t> & dofs) const
+  {
+    std::vector<std::int32_t> free;
+    free.reserve(dofs.size());
+    for (const std::int32_t dof : dofs)
+    {
+      if (dof < 0 || static_cast<std::size_t>(dof) >= ndof)
+      {
+        Fail("LinearElasticModel::Solve", "observed degree of freedom " + std::to_string(dof) + " is out of range");
+      }
+      if (freeIndex[dof] >= 0)
+      {
+        free.push_back(freeIndex[dof]);
+      }
+    }
+    return free;
+  }
+
   /** K_fc x_c at the free dofs (\a constrainedRows false) or K_cf x_f at the constrained ones (true). */
   void
   CouplingProduct(const std::vector<double> & x, bool constrainedRows, std::vector<double> & y)
@@ -888,6 +915,42 @@ LinearElasticModel::Solve(const std::vector<double> & forces)
 std::vector<double>
 LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<double> & prescribedAll)
 {
+  return SolveObserving(forces, prescribedAll, nullptr);
+}
+
+std::vector<double>
+LinearElasticModel::Solve(const std::vector<double> &       forces,
+                          const std::vector<double> &       prescribedAll,
+                          const std::vector<std::int32_t> & observedDofs)
+{
+  return SolveObserving(forces, prescribedAll, &observedDofs);
+}
+
+std::vector<std::int32_t>
+LinearElasticModel::GetCoupledFreeDegreesOfFreedom() const
+{
+  Impl & d = *m_Impl;
+  if (!d.couplingCurrent)
+  {
+    d.coupling = fem::BuildCouplingRows(d.pattern, d.constrained);
+    d.couplingCurrent = true;
+  }
+  std::vector<std::int32_t> coupled;
+  for (std::size_t i = 0; i < d.ndof; ++i)
+  {
+    if (!d.constrained[i] && d.coupling.rowStart[i + 1] > d.coupling.rowStart[i])
+    {
+      coupled.push_back(static_cast<std::int32_t>(i));
+    }
+  }
+  return coupled;
+}
+
+std::vector<double>
+LinearElasticModel::SolveObserving(const std::vector<double> &       forces,
+                                   const std::vector<double> &       prescribedAll,
+                                   const std::vector<std::int32_t> * observedDofs)
+{
   Impl &                           d = *m_Impl;
   const fem::SingleThreadedCholmod serial;
   if (!forces.empty() && forces.size() != d.ndof)
@@ -917,6 +980,8 @@ LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<
   {
     Factorize();
   }
+  const std::vector<std::int32_t> observedFree =
+    observedDofs ? d.FreeIndices(*observedDofs) : std::vector<std::int32_t>{};
   const auto t0 = Clock::now();
   // Only the free rows of K g are read and g vanishes on the free dofs: the coupling block K_fc g_c gives them
   // bit for bit (fem::CouplingProduct), and nothing when g = 0 (an adjoint).
@@ -943,10 +1008,12 @@ LinearElasticModel::Solve(const std::vector<double> & forces, const std::vector<
   if (d.nfree > 0)
   {
     Eigen::VectorXd x;
+    // Conjugate gradients need every dof of each iterate; a direct solve only the observed ones (and their
+    // ancestors in the elimination tree).
     if (!iterate || !d.PreconditionedSolve(b, x))
     {
       Factorize();
-      x = d.TriangularSolve(b);
+      x = d.TriangularSolve(b, observedDofs ? &observedFree : nullptr);
     }
     if (d.solver.info() != Eigen::Success || !x.allFinite())
     {

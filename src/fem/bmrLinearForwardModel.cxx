@@ -46,6 +46,7 @@ void
 LinearForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & nodes)
 {
   m_Model->SetDirichletConditions(nodes, {});
+  m_CoupledDofsCurrent = false;
 }
 
 void
@@ -89,6 +90,29 @@ LinearForwardModel::SolveAdjoint(const std::vector<double> & g)
 {
   // K is symmetric: the adjoint system is the state system with zero prescribed values.
   return m_Model->Solve(g, std::vector<double>(g.size(), 0.0));
+}
+
+bool
+LinearForwardModel::TrySolveObservedState(const std::vector<double> &       forces,
+                                          const std::vector<double> &       prescribed,
+                                          const std::vector<std::int32_t> & observedDofs,
+                                          std::vector<double> &             u)
+{
+  u = m_Model->Solve(forces, prescribed, observedDofs);
+  return true;
+}
+
+std::vector<double>
+LinearForwardModel::SolveObservedAdjoint(const std::vector<double> & g, const std::vector<std::int32_t> & observedDofs)
+{
+  if (!m_CoupledDofsCurrent)
+  {
+    m_CoupledDofs = m_Model->GetCoupledFreeDegreesOfFreedom();
+    m_CoupledDofsCurrent = true;
+  }
+  std::vector<std::int32_t> observed(observedDofs);
+  observed.insert(observed.end(), m_CoupledDofs.begin(), m_CoupledDofs.end());
+  return m_Model->Solve(g, std::vector<double>(g.size(), 0.0), observed);
 }
 
 std::vector<double>

@@ -228,6 +228,18 @@ SupernodalSolver::SetFactor(const cholmod_factor * factor)
   m_Factor = factor;
   CutTree();
   const std::size_t n = factor->n;
+  const Supernodes  S(*factor);
+  m_SupernodeOf.resize(n);
+  for (std::int32_t s = 0; s < static_cast<std::int32_t>(factor->nsuper); ++s)
+  {
+    std::fill(m_SupernodeOf.begin() + S.first[s], m_SupernodeOf.begin() + S.first[s + 1], s);
+  }
+  const int * perm = static_cast<const int *>(factor->Perm);
+  m_PermutedRow.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    m_PermutedRow[perm != nullptr ? perm[k] : k] = static_cast<std::int32_t>(k);
+  }
   m_Y.assign(n, 0.0);
   m_Shared[0].assign(n, 0.0);
   m_Shared[1].assign(n, 0.0);
@@ -240,8 +252,9 @@ SupernodalSolver::SetFactor(const cholmod_factor * factor)
 void
 SupernodalSolver::CutTree()
 {
-  const Supernodes          S(*m_Factor);
-  const SupernodeTree       tree(*m_Factor, S);
+  const Supernodes    S(*m_Factor);
+  const SupernodeTree tree(*m_Factor, S);
+  m_Parent = tree.parent;
   std::vector<std::int32_t> candidates = tree.roots;
   std::vector<std::int32_t> moved;
   double                    topSize = 0.0;
@@ -416,7 +429,10 @@ SupernodalSolver::ForwardBin(int bin)
 {
   for (const std::int32_t s : m_Bin[bin])
   {
-    ForwardSupernode(s, m_Shared[bin].data(), m_Work[bin]);
+    if (m_Reached[s])
+    {
+      ForwardSupernode(s, m_Shared[bin].data(), m_Work[bin]);
+    }
   }
 }
 
@@ -425,7 +441,20 @@ SupernodalSolver::BackwardBin(int bin)
 {
   for (auto it = m_Bin[bin].rbegin(); it != m_Bin[bin].rend(); ++it)
   {
-    BackwardSupernode(*it, m_Work[bin]);
+    if (m_Needed[*it])
+    {
+      BackwardSupernode(*it, m_Work[bin]);
+    }
+  }
+}
+
+/** Marks supernode \a s and its ancestors, up to the first one marked before (whose ancestors are). */
+void
+SupernodalSolver::MarkWithAncestors(std::int32_t s, std::vector<char> & marks) const
+{
+  for (; s >= 0 && !marks[s]; s = m_Parent[s])
+  {
+    marks[s] = 1;
   }
 }
 
@@ -460,11 +489,36 @@ SupernodalSolver::RunBins(void (SupernodalSolver::*pass)(int), unsigned threads)
 void
 SupernodalSolver::Solve(const double * b, double * x, unsigned threads)
 {
+  Run(b, x, threads, nullptr);
+}
+
+void
+SupernodalSolver::Solve(const double * b, double * x, unsigned threads, const std::vector<std::int32_t> & observed)
+{
+  Run(b, x, threads, &observed);
+}
+
+void
+SupernodalSolver::Run(const double * b, double * x, unsigned threads, const std::vector<std::int32_t> * observed)
+{
   const std::size_t n = m_Factor->n;
   const int *       perm = static_cast<const int *>(m_Factor->Perm);
+  m_Reached.assign(m_Factor->nsuper, 0);
   for (std::size_t k = 0; k < n; ++k)
   {
     m_Y[k] = perm != nullptr ? b[perm[k]] : b[k];
+    if (m_Y[k] != 0.0)
+    {
+      MarkWithAncestors(m_SupernodeOf[k], m_Reached);
+    }
+  }
+  m_Needed.assign(m_Factor->nsuper, observed == nullptr ? 1 : 0);
+  if (observed != nullptr)
+  {
+    for (const std::int32_t row : *observed)
+    {
+      MarkWithAncestors(m_SupernodeOf[m_PermutedRow[row]], m_Needed);
+    }
   }
   RunBins(&SupernodalSolver::ForwardBin, threads);
   for (const std::int32_t r : m_TopColumns)
@@ -476,16 +530,22 @@ SupernodalSolver::Solve(const double * b, double * x, unsigned threads)
   }
   for (const std::int32_t s : m_Top)
   {
-    ForwardSupernode(s, nullptr, m_Work[0]);
+    if (m_Reached[s])
+    {
+      ForwardSupernode(s, nullptr, m_Work[0]);
+    }
   }
   for (auto it = m_Top.rbegin(); it != m_Top.rend(); ++it)
   {
-    BackwardSupernode(*it, m_Work[0]);
+    if (m_Needed[*it])
+    {
+      BackwardSupernode(*it, m_Work[0]);
+    }
   }
   RunBins(&SupernodalSolver::BackwardBin, threads);
   for (std::size_t k = 0; k < n; ++k)
   {
-    x[perm != nullptr ? perm[k] : k] = m_Y[k];
+    x[perm != nullptr ? perm[k] : k] = m_Needed[m_SupernodeOf[k]] ? m_Y[k] : 0.0;
   }
 }
 

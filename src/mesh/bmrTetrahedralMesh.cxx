@@ -130,15 +130,15 @@ FaceNeighbors(const TetrahedralMesh & mesh)
   return neighbor;
 }
 
+} // namespace
+
 std::vector<std::int32_t>
-UniqueNodes(const std::vector<std::int32_t> & faces)
+UniqueNodes(std::vector<std::int32_t> nodes)
 {
-  std::vector<std::int32_t> nodes(faces);
   std::sort(nodes.begin(), nodes.end());
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   return nodes;
 }
-} // namespace
 
 double
 TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e)

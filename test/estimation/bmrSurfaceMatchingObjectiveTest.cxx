@@ -127,6 +127,33 @@ CheckInfeasibleStart(bmr::SurfaceMatchingObjective & objective, const std::vecto
 
 } // namespace
 
+/** The evaluation at \a d with observed solves, the default, equals the one with whole solves bit for bit: the
+ * observed dofs (the surfaces' and the inclusion's nodes) are computed by the same operations. They must be fewer
+ * than all, or nothing was skipped. The inverted elements are counted from the whole state either way. */
+bool
+CheckObservedSolves(bmr::EstimationObjective & objective, const std::vector<double> & d)
+{
+  const std::size_t   observed = objective.GetObservedStateDofs().size();
+  const std::size_t   all = 3 * objective.GetForwardModel().GetMesh().GetNumberOfPoints();
+  std::vector<double> gp[2], ge[2];
+  double              phi[2];
+  std::size_t         inverted[2];
+  for (const int whole : { 0, 1 })
+  {
+    objective.SetObservedSolves(whole == 0); // drops the kept evaluation
+    phi[whole] = objective.Evaluate(d, &gp[whole], &ge[whole]);
+    inverted[whole] = objective.GetNumberOfInvertedElements();
+  }
+  objective.SetObservedSolves(true);
+  const bool equal = phi[0] == phi[1] && gp[0] == gp[1] && ge[0] == ge[1];
+  std::cout << "observed solves: " << observed << " of " << all << " dofs; equal to whole solves bit for bit " << equal
+            << std::endl;
+  bool ok = bmr::test::Expect(observed > 0 && observed < all, "the state is observed at some dofs, not all");
+  ok &= bmr::test::Expect(equal, "observed solves give the whole solves' value and gradients bit for bit");
+  ok &= bmr::test::Expect(inverted[0] == inverted[1], "the inverted elements are counted from the whole state");
+  return ok;
+}
+
 int
 bmrSurfaceMatchingObjectiveTest(int, char *[])
 {
@@ -208,6 +235,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     slopeD,
     0.1);
   ok &= CheckLogModulusTaylor("log E", objective, d, phi0, ge[0], 0.1);
+  ok &= CheckObservedSolves(objective, d);
 
   // 3. Walls move along their normals: with every parameter 1, each cavity wall node moves by 1 mm along the
   // wall normal, which on this sphere points to the center (out of the tissue). The normals average face

@@ -321,6 +321,93 @@ CheckKeptFixedPartRefactorization()
   }
   return ok;
 }
+
+/** Solves observing some dofs only (LinearElasticModel::Solve() with observed dofs) on the 16^3 cube held at its
+ * bottom, two materials, with forces on the top face alone and the side x = 15 moved (prescribed on the model's
+ * constrained dofs as a second set of held nodes):
+ * - the whole solve of this sparse right-hand side (whose forward solve skips the supernodes no load reaches) has a
+ *   relative residual of at most 1e-10, as in CheckTwoThreadSolves(): a skipped supernode a load reached gives
+ *   order 1;
+ * - observing the nodes of the corner x, y <= 3, the observed and the constrained dofs equal the whole solve's bit for
+ *   bit, on one thread and on two (the same operations, skipping only supernodes nothing observed needs);
+ * - every other free dof is 0, and at least a quarter of the free dofs are (the backward solve skipped their
+ *   supernodes; none is 0 in the whole solve);
+ * - an observed dof out of range is refused. */
+bool
+CheckObservedSolves()
+{
+  using bmr::test::Expect;
+  using bmr::test::ToString;
+  const bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(15, 1.0, 2);
+  std::vector<std::int32_t>  held = BottomNodes(mesh), observed;
+  std::vector<double>        forces(mesh.points.size(), 0.0), prescribed(mesh.points.size(), 0.0);
+  for (std::size_t n = 0; n < mesh.GetNumberOfPoints(); ++n)
+  {
+    const double * x = &mesh.points[3 * n];
+    if (x[2] == 15.0)
+    {
+      forces[3 * n] = 0.2 * std::sin(0.3 * static_cast<double>(n));
+      forces[3 * n + 2] = -1.0;
+    }
+    if (x[0] == 15.0 && x[2] > 0.0)
+    {
+      held.push_back(static_cast<std::int32_t>(n));
+      prescribed[3 * n] = -0.1 * x[2] / 15.0;
+    }
+    if (x[0] <= 3.0 && x[1] <= 3.0)
+    {
+      observed.insert(observed.end(), { 3 * static_cast<std::int32_t>(n) + 2, 3 * static_cast<std::int32_t>(n) });
+    }
+  }
+  std::sort(held.begin(), held.end());
+  const std::map<std::int32_t, bmr::MaterialParameters> materials{ { 1, { 10.0, 0.35 } }, { 2, { 50.0, 0.45 } } };
+  bmr::LinearElasticModel                               one(mesh, materials), two(mesh, materials);
+  for (bmr::LinearElasticModel * m : { &one, &two })
+  {
+    m->SetDirichletConditions(held, {});
+  }
+  two.SetNumberOfSolveThreads(2);
+  const std::vector<double> whole = one.Solve(forces, prescribed);
+  const std::vector<double> part1 = one.Solve(forces, prescribed, observed);
+  const std::vector<double> part2 = two.Solve(forces, prescribed, observed);
+  const std::vector<char> & constrained = one.GetConstrainedDegreesOfFreedom();
+  std::vector<char>         isObserved(whole.size(), 0);
+  for (const std::int32_t dof : observed)
+  {
+    isObserved[dof] = 1;
+  }
+  bool        equal = part1 == part2, othersZero = true;
+  std::size_t free = 0, zero = 0, wholeZero = 0;
+  for (std::size_t i = 0; i < whole.size(); ++i)
+  {
+    if (isObserved[i] || constrained[i])
+    {
+      equal = equal && part1[i] == whole[i];
+      continue;
+    }
+    ++free;
+    zero += part1[i] == 0.0 ? 1 : 0;
+    wholeZero += whole[i] == 0.0 ? 1 : 0;
+  }
+  const double residual = RelativeResidual(one, forces, whole);
+  std::cout << "observed solves: " << observed.size() << " dofs observed; residual " << residual << "; " << zero
+            << " of " << free << " other free dofs skipped (0); equal bit for bit " << equal << std::endl;
+  bool ok = Expect(residual <= 1e-10, "the sparse right-hand side solves to 1e-10 (got " + ToString(residual) + ")");
+  ok &= Expect(equal, "the observed and constrained dofs equal the whole solve's bit for bit, on one thread and two");
+  ok &= Expect(wholeZero == 0 && 4 * zero >= free,
+               "at least a quarter of the other free dofs are skipped (got " + ToString(zero) + " of " +
+                 ToString(free) + ")");
+  for (std::size_t i = 0; i < whole.size(); ++i)
+  {
+    othersZero = othersZero && (isObserved[i] || constrained[i] || part1[i] == 0.0 || part1[i] == whole[i]);
+  }
+  ok &= Expect(othersZero, "every other free dof is 0 or, computed as an ancestor's, the whole solve's value");
+  ok &= bmr::test::ExpectException(
+    "an observed dof out of range",
+    [&] { one.Solve(forces, prescribed, std::vector<std::int32_t>{ static_cast<std::int32_t>(whole.size()) }); },
+    "out of range");
+  return ok;
+}
 } // namespace
 
 int
@@ -332,6 +419,7 @@ bmrLinearElasticModelTest(int, char *[])
   bool ok = CheckSerialOpenMP(); // first: it counts the process's threads
   ok &= CheckTwoThreadSolves();
   ok &= CheckKeptFixedPartRefactorization();
+  ok &= CheckObservedSolves();
 
   // 1. Patch test: u = A x + b on the boundary reproduces it exactly inside (P1 elements contain linear fields).
   {
