@@ -163,17 +163,18 @@ private:
   double
   InfeasibleValue(std::vector<double> * gradientP, std::vector<double> * gradientLogE);
 
-  ForwardModel &                      m_Model;
-  LoadParameterization &              m_Loads;
-  std::vector<const DataTerm *>       m_Terms;
-  std::vector<std::int32_t>           m_UnknownLabels;
-  std::size_t                         m_Inverted{ 0 };
-  bool                                m_InvertedKnown{ true };
-  bool                                m_ObservedSolves{ true };
-  bool                                m_ObserveState{ false }, m_ObserveAdjoint{ false };
-  std::vector<std::int32_t>           m_StateDofs, m_AdjointDofs; // the observed dofs (FindObservedDofs())
-  std::size_t                         m_Infeasible{ 0 };
-  double                              m_LastFeasibleValue{ 0.0 };
+  ForwardModel &                m_Model;
+  LoadParameterization &        m_Loads;
+  std::vector<const DataTerm *> m_Terms;
+  std::vector<std::int32_t>     m_UnknownLabels;
+  std::size_t                   m_Inverted{ 0 };
+  bool                          m_InvertedKnown{ true };
+  bool                          m_ObservedSolves{ true };
+  bool                          m_ObserveState{ false }, m_ObserveAdjoint{ false };
+  std::vector<std::int32_t>     m_StateDofs, m_MaterialDofs;             // the observed dofs (FindObservedDofs())
+  std::vector<std::int32_t>     m_AdjointDofs, m_AdjointDofsConstrained; // AdjointDofs() and its constrained nodes
+  std::size_t                   m_Infeasible{ 0 };
+  double                        m_LastFeasibleValue{ 0.0 };
   std::unique_ptr<CompressionBarrier> m_Barrier;
 
   /** The last feasible evaluation. An inner solve ends by evaluating, now with the modulus gradient, the point
@@ -196,6 +197,8 @@ private:
   CurrentModuli() const;
   void
   FindObservedDofs();
+  const std::vector<std::int32_t> &
+  AdjointDofs();
   /** Solves at \a p (and the adjoint when \a adjoint) into m_Last; false when the model cannot reach p. */
   bool
   EvaluateAt(const std::vector<double> & p, bool adjoint);

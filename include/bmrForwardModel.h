@@ -114,8 +114,8 @@ public:
     (void)observedDofs;
     return TrySolveState(forces, prescribed, u);
   }
-  /** As SolveAdjoint(), but lambda need only be exact at the dofs \a observedDofs and at those
-   * ApplyTangentAtConstrained() reads; a model may leave the others 0. The default computes every dof. */
+  /** As SolveAdjoint(), but lambda need only be exact at the dofs \a observedDofs; a model may leave the others 0.
+   * The default computes every dof. */
   virtual std::vector<double>
   SolveObservedAdjoint(const std::vector<double> & g, const std::vector<std::int32_t> & observedDofs)
   {
@@ -125,6 +125,20 @@ public:
   /** K_T v at every dof (3N): the tangent applied to a nodal vector. */
   virtual std::vector<double>
   ApplyTangent(const std::vector<double> & v) const = 0;
+  /** The free dofs (3N indices) whose values ApplyTangentAtConstrained() reads for its values at the constrained
+   * \a nodes: what an observed adjoint (SolveObservedAdjoint()) must hold for the pull-back to those nodes. The
+   * default: every dof. */
+  virtual std::vector<std::int32_t>
+  CoupledFreeDofs(const std::vector<std::int32_t> & nodes) const
+  {
+    (void)nodes;
+    std::vector<std::int32_t> all(3 * GetMesh().GetNumberOfPoints());
+    for (std::size_t i = 0; i < all.size(); ++i)
+    {
+      all[i] = static_cast<std::int32_t>(i);
+    }
+    return all;
+  }
   /** K_T v at the constrained dofs for a \a v that vanishes there (an adjoint state, 3N); the values at the free
    * dofs are unspecified. The adjoint's pull-back to the prescribed displacements needs only these, which a
    * model may compute from its free-constrained block alone; the default applies the whole tangent. */
@@ -200,9 +214,12 @@ public:
                         const std::vector<double> &       prescribed,
                         const std::vector<std::int32_t> & observedDofs,
                         std::vector<double> &             u) override;
-  /** LinearElasticModel::Solve() observing \a observedDofs and the free dofs coupled to the constrained ones. */
+  /** LinearElasticModel::Solve() observing \a observedDofs. */
   std::vector<double>
   SolveObservedAdjoint(const std::vector<double> & g, const std::vector<std::int32_t> & observedDofs) override;
+  /** LinearElasticModel::GetCoupledFreeDegreesOfFreedom(). */
+  std::vector<std::int32_t>
+  CoupledFreeDofs(const std::vector<std::int32_t> & nodes) const override;
   std::vector<double>
   ApplyTangent(const std::vector<double> & v) const override;
   /** LinearElasticModel::ComputeCouplingForces(): K_cf v_f, bit for bit K v at the constrained dofs. */
@@ -228,8 +245,6 @@ public:
 private:
   const TetrahedralMesh &             m_Mesh;
   std::unique_ptr<LinearElasticModel> m_Model;
-  std::vector<std::int32_t>           m_CoupledDofs; // LinearElasticModel::GetCoupledFreeDegreesOfFreedom()
-  bool                                m_CoupledDofsCurrent{ false };
 };
 
 } // namespace bmr

@@ -192,9 +192,10 @@ public:
         const std::vector<double> &       prescribed,
         const std::vector<std::int32_t> & observedDofs);
 
-  /** The free dofs that ComputeCouplingForces() reads (3N indices, ascending): those coupled to a constrained one. */
+  /** The free dofs (3N indices, ascending) that ComputeCouplingForces() reads for its values at the constrained dofs
+   * of \a nodes: those coupled to one of them in K. */
   std::vector<std::int32_t>
-  GetCoupledFreeDegreesOfFreedom() const;
+  GetCoupledFreeDegreesOfFreedom(const std::vector<std::int32_t> & nodes) const;
 
   /** Khat_m u at every dof [mN per kPa]: the derivative of K(E) u with respect to
    * the modulus of material \a label, dK/dE_m u. */

@@ -66,7 +66,8 @@ public:
   virtual BoundaryLoad
   Direction(std::size_t j) const = 0;
   /** \f$\partial\Phi/\partial p\f$ from the sensitivities of Phi to the prescribed displacements (3N,
-   * constrained dofs) and to the forces (3N, free dofs), plus the prior's gradient. */
+   * constrained dofs; 0 at the held nodes, whose values do not depend on p) and to the forces (3N, free dofs), plus
+   * the prior's gradient. */
   virtual std::vector<double>
   PullBackGradient(const std::vector<double> & p,
                    const std::vector<double> & prescribedSensitivity,

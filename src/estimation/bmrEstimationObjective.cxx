@@ -23,6 +23,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <limits>
 
@@ -47,6 +48,11 @@ PullBackThroughLoads(ForwardModel &               model,
       const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
       prescribedSensitivity[dof] = g[dof] - Klambda[dof];
     }
+  }
+  // A held node's value does not depend on p; an observed adjoint does not hold what its sensitivity needs.
+  for (std::int32_t n : loads.GetHeldNodes())
+  {
+    std::fill_n(prescribedSensitivity.begin() + 3 * static_cast<std::ptrdiff_t>(n), 3, 0.0);
   }
   return loads.PullBackGradient(p, prescribedSensitivity, lambda);
 }
@@ -107,7 +113,7 @@ EstimationObjective::FindObservedDofs()
     }
     return dofs;
   };
-  m_AdjointDofs = dofsOf(materialNodes);
+  m_MaterialDofs = dofsOf(materialNodes);
   m_ObserveAdjoint = true;
   std::vector<std::int32_t> stateNodes = materialNodes;
   for (const DataTerm * term : m_Terms)
@@ -121,6 +127,26 @@ EstimationObjective::FindObservedDofs()
   }
   m_StateDofs = dofsOf(stateNodes);
   m_ObserveState = true;
+}
+
+/** The adjoint's observed dofs: the unknown materials' and those the pull-back reads for the load-controlled
+ * constrained nodes (a held node's prescribed value does not depend on p, so its sensitivity is not needed). Kept
+ * until the constrained nodes change (e.g. WallLoads::SetMotion()). */
+const std::vector<std::int32_t> &
+EstimationObjective::AdjointDofs()
+{
+  const std::vector<std::int32_t> & constrained = m_Loads.GetConstrainedNodes();
+  if (constrained != m_AdjointDofsConstrained || m_AdjointDofs.empty())
+  {
+    m_AdjointDofsConstrained = constrained;
+    const std::vector<std::int32_t> held = UniqueNodes(m_Loads.GetHeldNodes());
+    std::vector<std::int32_t>       loaded;
+    std::set_difference(constrained.begin(), constrained.end(), held.begin(), held.end(), std::back_inserter(loaded));
+    std::vector<std::int32_t> dofs = m_Model.CoupledFreeDofs(loaded);
+    dofs.insert(dofs.end(), m_MaterialDofs.begin(), m_MaterialDofs.end());
+    m_AdjointDofs = UniqueNodes(std::move(dofs));
+  }
+  return m_AdjointDofs;
 }
 
 void
@@ -197,10 +223,10 @@ EstimationObjective::EvaluateAt(const std::vector<double> & p, bool adjoint)
   m_Last.gradientP.clear();
   if (adjoint)
   {
-    // The pull-back reads the adjoint at the constrained dofs' neighbors (the model's part) and, when p sets
-    // forces, wherever they act (asked each time: a parameterization may switch, e.g. WallLoads::SetMotion()).
+    // When p sets forces the pull-back reads the adjoint wherever they act (asked each time: a parameterization may
+    // switch, e.g. WallLoads::SetMotion()).
     const bool observedAdjoint = m_ObservedSolves && m_ObserveAdjoint && !m_Loads.ReadsForceSensitivity();
-    m_Last.lambda = observedAdjoint ? m_Model.SolveObservedAdjoint(g, m_AdjointDofs) : m_Model.SolveAdjoint(g);
+    m_Last.lambda = observedAdjoint ? m_Model.SolveObservedAdjoint(g, AdjointDofs()) : m_Model.SolveAdjoint(g);
     m_Last.gradientP = PullBackThroughLoads(m_Model, m_Loads, p, g, m_Last.lambda);
   }
   m_Last.parameters = p;

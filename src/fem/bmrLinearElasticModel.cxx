@@ -927,7 +927,7 @@ LinearElasticModel::Solve(const std::vector<double> &       forces,
 }
 
 std::vector<std::int32_t>
-LinearElasticModel::GetCoupledFreeDegreesOfFreedom() const
+LinearElasticModel::GetCoupledFreeDegreesOfFreedom(const std::vector<std::int32_t> & nodes) const
 {
   Impl & d = *m_Impl;
   if (!d.couplingCurrent)
@@ -936,14 +936,19 @@ LinearElasticModel::GetCoupledFreeDegreesOfFreedom() const
     d.couplingCurrent = true;
   }
   std::vector<std::int32_t> coupled;
-  for (std::size_t i = 0; i < d.ndof; ++i)
+  for (const std::int32_t node : nodes)
   {
-    if (!d.constrained[i] && d.coupling.rowStart[i + 1] > d.coupling.rowStart[i])
+    for (std::size_t i = 3 * static_cast<std::size_t>(node); i < 3 * static_cast<std::size_t>(node) + 3; ++i)
     {
-      coupled.push_back(static_cast<std::int32_t>(i));
+      if (i < d.ndof && d.constrained[i])
+      {
+        coupled.insert(coupled.end(),
+                       d.coupling.column.begin() + d.coupling.rowStart[i],
+                       d.coupling.column.begin() + d.coupling.rowStart[i + 1]);
+      }
     }
   }
-  return coupled;
+  return UniqueNodes(std::move(coupled));
 }
 
 std::vector<double>

@@ -46,7 +46,6 @@ void
 LinearForwardModel::SetConstrainedNodes(const std::vector<std::int32_t> & nodes)
 {
   m_Model->SetDirichletConditions(nodes, {});
-  m_CoupledDofsCurrent = false;
 }
 
 void
@@ -105,14 +104,13 @@ LinearForwardModel::TrySolveObservedState(const std::vector<double> &       forc
 std::vector<double>
 LinearForwardModel::SolveObservedAdjoint(const std::vector<double> & g, const std::vector<std::int32_t> & observedDofs)
 {
-  if (!m_CoupledDofsCurrent)
-  {
-    m_CoupledDofs = m_Model->GetCoupledFreeDegreesOfFreedom();
-    m_CoupledDofsCurrent = true;
-  }
-  std::vector<std::int32_t> observed(observedDofs);
-  observed.insert(observed.end(), m_CoupledDofs.begin(), m_CoupledDofs.end());
-  return m_Model->Solve(g, std::vector<double>(g.size(), 0.0), observed);
+  return m_Model->Solve(g, std::vector<double>(g.size(), 0.0), observedDofs);
+}
+
+std::vector<std::int32_t>
+LinearForwardModel::CoupledFreeDofs(const std::vector<std::int32_t> & nodes) const
+{
+  return m_Model->GetCoupledFreeDegreesOfFreedom(nodes);
 }
 
 std::vector<double>
