@@ -50,6 +50,7 @@ struct BiomechanicalRegistration_EXPORT LoadSolution
  * \f[ \partial\Phi/\partial p = \Big(\frac{\partial\bar u}{\partial p}\Big)^T (g - K_T\lambda)_c
  *     + \Big(\frac{\partial f}{\partial p}\Big)^T \lambda + \nabla R, \qquad
  *     \partial\Phi/\partial \log E_m = -E_m\, \lambda^T \partial f_{int}/\partial E_m. \f]
+ * Both solves compute only the dofs the evaluation reads (SetObservedSolves(), on by default: the same numbers).
  * The parts are referenced, not owned; they must outlive the objective.
  * Units: u in mm; E in kPa; Phi in mm^2.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEstimation
