@@ -171,7 +171,6 @@ private:
   std::size_t                   m_Inverted{ 0 };
   bool                          m_InvertedKnown{ true };
   bool                          m_ObservedSolves{ true };
-  bool                          m_ObserveState{ false }, m_ObserveAdjoint{ false };
   std::vector<std::int32_t>     m_StateDofs, m_MaterialDofs;             // the observed dofs (FindObservedDofs())
   std::vector<std::int32_t>     m_AdjointDofs, m_AdjointDofsConstrained; // AdjointDofs() and its constrained nodes
   std::size_t                   m_Infeasible{ 0 };

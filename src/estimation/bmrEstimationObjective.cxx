@@ -114,7 +114,6 @@ EstimationObjective::FindObservedDofs()
     return dofs;
   };
   m_MaterialDofs = dofsOf(materialNodes);
-  m_ObserveAdjoint = true;
   std::vector<std::int32_t> stateNodes = materialNodes;
   for (const DataTerm * term : m_Terms)
   {
@@ -126,7 +125,6 @@ EstimationObjective::FindObservedDofs()
     stateNodes.insert(stateNodes.end(), nodes->begin(), nodes->end());
   }
   m_StateDofs = dofsOf(stateNodes);
-  m_ObserveState = true;
 }
 
 /** The adjoint's observed dofs: the unknown materials' and those the pull-back reads for the load-controlled
@@ -199,7 +197,7 @@ EstimationObjective::EvaluateAt(const std::vector<double> & p, bool adjoint)
 {
   m_Last.valid = false;
   const BoundaryLoad load = m_Loads.Apply(p);
-  const bool         observed = m_ObservedSolves && m_ObserveState;
+  const bool         observed = m_ObservedSolves && !m_StateDofs.empty();
   if (observed ? !m_Model.TrySolveObservedState(load.forces, load.prescribed, m_StateDofs, m_Last.u)
                : !m_Model.TrySolveState(load.forces, load.prescribed, m_Last.u))
   {
@@ -225,7 +223,7 @@ EstimationObjective::EvaluateAt(const std::vector<double> & p, bool adjoint)
   {
     // When p sets forces the pull-back reads the adjoint wherever they act (asked each time: a parameterization may
     // switch, e.g. WallLoads::SetMotion()).
-    const bool observedAdjoint = m_ObservedSolves && m_ObserveAdjoint && !m_Loads.ReadsForceSensitivity();
+    const bool observedAdjoint = m_ObservedSolves && !m_Barrier && !m_Loads.ReadsForceSensitivity();
     m_Last.lambda = observedAdjoint ? m_Model.SolveObservedAdjoint(g, AdjointDofs()) : m_Model.SolveAdjoint(g);
     m_Last.gradientP = PullBackThroughLoads(m_Model, m_Loads, p, g, m_Last.lambda);
   }
