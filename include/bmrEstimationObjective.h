@@ -97,7 +97,7 @@ public:
    * same bit for bit; on the demo pair the triangular solves then skip about half the factor. Off, every solve is
    * whole, as a caller counting inverted elements after every evaluation needs. Without effect when a data term
    * may read any node, or with a nonlinear model (whose barrier reads every element). Changing it drops the
-   * kept last evaluation. */
+   * kept last evaluation (setting the value it has keeps it). */
   void
   SetObservedSolves(bool observed);
   bool
@@ -105,7 +105,8 @@ public:
   {
     return m_ObservedSolves;
   }
-  /** The dofs (3N indices, ascending) of the state that observed solves compute; empty when every solve is whole. */
+  /** The dofs (3N indices, ascending) of the state that observed solves compute when they are on; empty when a data
+   * term may read any node or the model is nonlinear (every state solve whole). */
   const std::vector<std::int32_t> &
   GetObservedStateDofs() const
   {

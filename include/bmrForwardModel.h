@@ -220,6 +220,12 @@ public:
   /** LinearElasticModel::GetCoupledFreeDegreesOfFreedom(). */
   std::vector<std::int32_t>
   CoupledFreeDofs(const std::vector<std::int32_t> & nodes) const override;
+  /** The state solves (observed or whole) since construction; the other counts are 0. */
+  SolverWork
+  GetSolverWork() const override
+  {
+    return m_Work;
+  }
   std::vector<double>
   ApplyTangent(const std::vector<double> & v) const override;
   /** LinearElasticModel::ComputeCouplingForces(): K_cf v_f, bit for bit K v at the constrained dofs. */
@@ -245,6 +251,7 @@ public:
 private:
   const TetrahedralMesh &             m_Mesh;
   std::unique_ptr<LinearElasticModel> m_Model;
+  SolverWork                          m_Work;
 };
 
 } // namespace bmr

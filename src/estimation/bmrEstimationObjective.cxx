@@ -150,8 +150,11 @@ EstimationObjective::AdjointDofs()
 void
 EstimationObjective::SetObservedSolves(bool observed)
 {
-  m_ObservedSolves = observed;
-  m_Last.valid = false; // evaluated again, as asked
+  if (observed != m_ObservedSolves)
+  {
+    m_ObservedSolves = observed;
+    m_Last.valid = false; // evaluated again, as asked
+  }
 }
 
 EstimationObjective::~EstimationObjective() = default;
@@ -308,9 +311,12 @@ EstimationObjective::GetNumberOfInvertedElements()
 {
   if (!m_InvertedKnown)
   {
-    // The last state was solved at the observed dofs alone: the whole of it, once.
+    // The last state was solved at the observed dofs alone: the whole of it, once, at its moduli.
+    const std::vector<double> moduli = CurrentModuli();
+    SetYoungsModuli(m_Last.moduli);
     m_Inverted = CountInvertedElements(m_Model.GetMesh(), ComputeDisplacement(m_Last.parameters));
     m_InvertedKnown = true;
+    SetYoungsModuli(moduli);
   }
   return m_Inverted;
 }

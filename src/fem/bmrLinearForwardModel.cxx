@@ -81,6 +81,7 @@ LinearForwardModel::GetYoungsModulus(std::int32_t label) const
 std::vector<double>
 LinearForwardModel::SolveState(const std::vector<double> & forces, const std::vector<double> & prescribed)
 {
+  ++m_Work.stateSolves;
   return m_Model->Solve(forces, prescribed);
 }
 
@@ -97,6 +98,7 @@ LinearForwardModel::TrySolveObservedState(const std::vector<double> &       forc
                                           const std::vector<std::int32_t> & observedDofs,
                                           std::vector<double> &             u)
 {
+  ++m_Work.stateSolves;
   u = m_Model->Solve(forces, prescribed, observedDofs);
   return true;
 }

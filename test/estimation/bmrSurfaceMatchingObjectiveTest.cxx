@@ -129,9 +129,11 @@ CheckInfeasibleStart(bmr::SurfaceMatchingObjective & objective, const std::vecto
 
 /** The evaluation at \a d with observed solves, the default, equals the one with whole solves bit for bit: the
  * observed dofs (the surfaces' and the inclusion's nodes) are computed by the same operations. They must be fewer
- * than all, or nothing was skipped. The inverted elements are counted from the whole state either way. */
+ * than all, or nothing was skipped. The inverted elements are counted from the whole state either way (\a inverted
+ * of them expected). Asked again with the gradients, or after setting the value observed solves already have, the
+ * evaluation is reused: no state solve. */
 bool
-CheckObservedSolves(bmr::EstimationObjective & objective, const std::vector<double> & d)
+CheckObservedSolves(bmr::EstimationObjective & objective, const std::vector<double> & d, std::size_t expectedInverted)
 {
   const std::size_t   observed = objective.GetObservedStateDofs().size();
   const std::size_t   all = 3 * objective.GetForwardModel().GetMesh().GetNumberOfPoints();
@@ -145,12 +147,23 @@ CheckObservedSolves(bmr::EstimationObjective & objective, const std::vector<doub
     inverted[whole] = objective.GetNumberOfInvertedElements();
   }
   objective.SetObservedSolves(true);
+  const auto solves = [&objective] { return objective.GetForwardModel().GetSolverWork().stateSolves; };
+  const auto before = solves();
+  objective.Evaluate(d, &gp[0], nullptr);
+  const auto first = solves();
+  objective.SetObservedSolves(true);
+  objective.Evaluate(d, &gp[0], &ge[0]);
+  const bool reused = first == before + 1 && solves() == first;
   const bool equal = phi[0] == phi[1] && gp[0] == gp[1] && ge[0] == ge[1];
   std::cout << "observed solves: " << observed << " of " << all << " dofs; equal to whole solves bit for bit " << equal
             << std::endl;
   bool ok = bmr::test::Expect(observed > 0 && observed < all, "the state is observed at some dofs, not all");
   ok &= bmr::test::Expect(equal, "observed solves give the whole solves' value and gradients bit for bit");
-  ok &= bmr::test::Expect(inverted[0] == inverted[1], "the inverted elements are counted from the whole state");
+  ok &= bmr::test::Expect(inverted[0] == expectedInverted && inverted[1] == expectedInverted,
+                          "the inverted elements are counted from the whole state (" +
+                            bmr::test::ToString(inverted[0]) + " and " + bmr::test::ToString(inverted[1]) +
+                            ", expected " + bmr::test::ToString(expectedInverted) + ")");
+  ok &= bmr::test::Expect(reused, "an evaluation asked for again is reused, also after SetObservedSolves(true)");
   return ok;
 }
 
@@ -235,7 +248,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
     slopeD,
     0.1);
   ok &= CheckLogModulusTaylor("log E", objective, d, phi0, ge[0], 0.1);
-  ok &= CheckObservedSolves(objective, d);
+  ok &= CheckObservedSolves(objective, d, 0);
 
   // 3. Walls move along their normals: with every parameter 1, each cavity wall node moves by 1 mm along the
   // wall normal, which on this sphere points to the center (out of the tissue). The normals average face
@@ -281,6 +294,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
   ok &= bmr::test::Expect(invertedAtStart == 0,
                           "no inverted element at the start (got " + bmr::test::ToString(invertedAtStart) + ")");
   ok &= bmr::test::Expect(invertedCollapsed != 0, "inverted elements counted with the walls pushed through the cavity");
+  ok &= CheckObservedSolves(objective, std::vector<double>(d.size(), 3.0 * CavityRadius), invertedCollapsed);
 
   // 5. The same adjoint gradients with the neo-Hookean model (the scene chooses it; the prescribed wall motion
   // enters through the tangent, g - K_T lambda), and walls pushed through the cavity, which no neo-Hookean state
