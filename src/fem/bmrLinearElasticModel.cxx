@@ -252,15 +252,22 @@ struct LinearElasticModel::Impl
     return free;
   }
 
-  /** K_fc x_c at the free dofs (\a constrainedRows false) or K_cf x_f at the constrained ones (true). */
-  void
-  CouplingProduct(const std::vector<double> & x, bool constrainedRows, std::vector<double> & y)
+  /** The free-constrained block's pattern, built once per constrained set. */
+  const fem::CouplingRows &
+  Coupling()
   {
     if (!couplingCurrent)
     {
       coupling = fem::BuildCouplingRows(pattern, constrained);
       couplingCurrent = true;
     }
+    return coupling;
+  }
+  /** K_fc x_c at the free dofs (\a constrainedRows false) or K_cf x_f at the constrained ones (true). */
+  void
+  CouplingProduct(const std::vector<double> & x, bool constrainedRows, std::vector<double> & y)
+  {
+    Coupling();
     UpdateValues();
     fem::CouplingProduct(coupling, values, constrained, constrainedRows, x, y);
   }
@@ -929,12 +936,8 @@ LinearElasticModel::Solve(const std::vector<double> &       forces,
 std::vector<std::int32_t>
 LinearElasticModel::GetCoupledFreeDegreesOfFreedom(const std::vector<std::int32_t> & nodes) const
 {
-  Impl & d = *m_Impl;
-  if (!d.couplingCurrent)
-  {
-    d.coupling = fem::BuildCouplingRows(d.pattern, d.constrained);
-    d.couplingCurrent = true;
-  }
+  Impl &                    d = *m_Impl;
+  const fem::CouplingRows & coupling = d.Coupling();
   std::vector<std::int32_t> coupled;
   for (const std::int32_t node : nodes)
   {
@@ -943,8 +946,8 @@ LinearElasticModel::GetCoupledFreeDegreesOfFreedom(const std::vector<std::int32_
       if (i < d.ndof && d.constrained[i])
       {
         coupled.insert(coupled.end(),
-                       d.coupling.column.begin() + d.coupling.rowStart[i],
-                       d.coupling.column.begin() + d.coupling.rowStart[i + 1]);
+                       coupling.column.begin() + coupling.rowStart[i],
+                       coupling.column.begin() + coupling.rowStart[i + 1]);
       }
     }
   }
