@@ -233,7 +233,10 @@ DemoCommand()
   const auto result =
     itk::RegisterSegmentedPair(pair.movingLabels, pair.fixedLabels, pair.movingCT, pair.scene, settings, &run);
   run.stages.insert(run.stages.end(), result.state.stages.begin(), result.state.stages.end());
-  WriteRegistration(dir + "/register", result, settings, itk::RegistrationOutputs(), run);
+  // The demo's plot (scripts/plot_register.py) reads the sweep and the convergence history.
+  itk::RegistrationOutputs outputs;
+  outputs.history = outputs.sweep = true;
+  WriteRegistration(dir + "/register", result, settings, outputs, run);
   PrintOuterIterations(result);
 
   const auto   stated = result.modulusInterval.find("prostate");
@@ -261,7 +264,8 @@ DemoCommand()
   std::cout << "\nRegistration (" << result.state.mesh.GetNumberOfTetrahedra() << " tetrahedra):";
   PrintTimings(run.stages);
   std::cout << "\nWrote " << dir << "/{moving,fixed}_{ct,labels}.nrrd, scene.json, truth.json, landmarks_*.csv, and "
-            << dir << "/register/{field.nrrd, warped_ct.nrrd, warped_labels.nrrd, report.json}" << std::endl;
+            << dir << "/register/{field.nrrd, warped_ct.nrrd, warped_labels.nrrd, report.json, history.csv, sweep.csv}"
+            << std::endl;
   return EXIT_SUCCESS;
 }
 

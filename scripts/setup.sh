@@ -35,7 +35,7 @@ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING
 cmake --build "$build" -j "$jobs"
 
 case "$mode" in
-  demo) cd "$root" && "$build/bin/biomechreg" && /usr/bin/python3 "$root/scripts/plot_register.py" biomechreg-demo/register ;;
+  demo) cd "$root" && "$root/scripts/run_demo.sh" "$build" ;;
   test) cd "$build" && ctest -j2 --output-on-failure --timeout 1500 --no-tests=error ;;
   build) ;;
 esac
