@@ -45,6 +45,11 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
   u.quantiles = args.Choice("--uncertainty-quantiles", { "calibrated", "student" }) == "student"
                   ? itk::IntervalQuantilesEnum::Student
                   : itk::IntervalQuantilesEnum::Calibrated;
+  u.statedVoxelLimitMM = args.Number("--uncertainty-voxel-limit-mm", u.statedVoxelLimitMM);
+  if (!(u.statedVoxelLimitMM > 0.0) || !std::isfinite(u.statedVoxelLimitMM))
+  {
+    throw UsageError("--uncertainty-voxel-limit-mm must be a finite number > 0 (mm)");
+  }
   // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
   const std::pair<const char *, double *> scales[] = {
     { "--uncertainty-mesh-jitter", &u.meshJitter },           { "--uncertainty-shift-voxels", &u.shiftVoxels },
@@ -136,6 +141,7 @@ ParseRegistrationSettings(const Arguments & args)
   {
     throw UsageError("--mesh-scale must lie in [0.25, 4] (mesh sizes relative to the scene's)");
   }
+  s.interpolateSlices = args.Choice("--slice-interpolation", { "off", "on" }) == "on";
   ParseUncertaintySettings(args, s.uncertainty);
   e.maximumOuterIterations = args.Count("--max-outer-iterations", e.maximumOuterIterations, 1, 1000);
   e.outerGradientTolerance = args.Number("--outer-tolerance", e.outerGradientTolerance);
@@ -235,6 +241,12 @@ RegisterCommand(const Arguments & args)
   std::cout << "\n  recovered Young's moduli:";
   for (const auto & kv : result.youngsModulus)
   {
+    const auto interval = result.modulusInterval.find(kv.first);
+    if (interval != result.modulusInterval.end() && !interval->second.notDeterminedReason.empty())
+    {
+      std::cout << "  " << itk::ModulusIntervalText(kv.first, interval->second); // no number stated
+      continue;
+    }
     std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa"
               << itk::UncertaintyText(result, kv.first);
   }

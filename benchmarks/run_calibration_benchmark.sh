@@ -19,6 +19,10 @@
 #        APPEND=1 adds rows to it instead of starting it afresh; START=K skips the
 #        draws before pair K (to resume a run). FACET_SCALE=F multiplies the estimation scene's facet size and
 #        facet distance by F (the surface refinement of the mesh-convergence study, run_mesh_convergence.sh).
+#        SLICE_MM=T: clinical geometry instead of 1 mm voxels: slices of T mm, in-plane spacing drawn per pair from
+#        U(0.8, 1.2) mm, the same field of view (200 x 160 x 160 mm); OBLIQUE_DEG=A also rotates each pair's grids
+#        about z by an angle drawn from U(-A, A) degrees. Both draws come after the old ones, so SLICE_MM unset keeps
+#        the old draws of a seed. The rows record the spacing, the angle and the estimated state's inverted elements.
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
 set -euo pipefail
@@ -37,27 +41,37 @@ default_runs=calibration_runs
 [ "$design" = table31 ] && default_runs=table31_runs
 [ "$design" = pressure ] && default_runs=calibration_runs_pressure
 csv="$out/${RUNS_NAME:-$default_runs}.csv"
+header="tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles,spacing_mm,rotate_z_deg,inverted_elements,not_determined"
+if [ "${APPEND:-0}" = 1 ] && [ -s "$csv" ] && [ "$(head -1 "$csv")" != "$header" ]; then
+  echo "$csv has other columns than this script writes: APPEND=1 needs a file it wrote" >&2
+  exit 2
+fi
 if [ "${APPEND:-0}" != 1 ] || [ ! -s "$csv" ]; then
-  echo "tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles" > "$csv"
+  echo "$header" > "$csv"
 fi
 
 # The draws, one line per pair: E bladder rectum seed. Random: reproducible from SEED (Python's Mersenne
 # Twister). table31: the dissertation's rows (scenes A, walls 8/4 mm, and B, 5/6 mm, x 50..350 kPa), N
 # realizations of each, realization-major so that a run stopped early still has every row.
-/usr/bin/python3 - "$count" "$seed" "$design" > "$work/draws.txt" <<'PY'
+/usr/bin/python3 - "$count" "$seed" "$design" "${SLICE_MM:-}" "${OBLIQUE_DEG:-0}" > "$work/draws.txt" <<'PY'
 import math, random, sys
-n, seed, design = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]; rng = random.Random(seed)
+n, seed, design, slice_mm, oblique = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4], float(sys.argv[5])
+rng = random.Random(seed)
 if design == "table31":
     pairs = [(E, b, r) for _ in range(n) for b, r in ((8, 4), (5, 6)) for E in range(50, 351, 50)]
 else:
     pairs = [(math.exp(rng.uniform(math.log(30), math.log(500))), rng.uniform(3, 10), rng.uniform(2, 6))
              for _ in range(n)]
 for k, (E, b, r) in enumerate(pairs):
-    print(f"{E:.1f} {b:.2f} {r:.2f} {seed * 100 + k + 1}")
+    inplane, angle = 1.0, 0.0
+    if slice_mm:
+        inplane = rng.uniform(0.8, 1.2)
+        angle = rng.uniform(-oblique, oblique) if oblique > 0 else 0.0
+    print(f"{E:.1f} {b:.2f} {r:.2f} {seed * 100 + k + 1} {inplane:.4f} {angle:.2f}")
 PY
 
 k=0
-while read -r E bladder rectum s; do
+while read -r E bladder rectum s inplane angle; do
   k=$((k + 1))
   [ "$k" -lt "${START:-1}" ] && continue
   ph="$work/ph"
@@ -68,7 +82,12 @@ while read -r E bladder rectum s; do
   fi
   t0=$(date +%s.%N)
   # shellcheck disable=SC2086
-  "$bin" phantom --scene pelvis --size 200,160,160 --spacing 1,1,1 --true-E-kPa "$E" "${walls[@]}" \
+  grid=(--size 200,160,160 --spacing 1,1,1)
+  if [ -n "${SLICE_MM:-}" ]; then
+    grid=(--size "$(awk "BEGIN{printf \"%d,%d,%d\", 200 / $inplane + 0.5, 160 / $inplane + 0.5, 160 / $SLICE_MM + 0.5}")"
+          --spacing "$inplane,$inplane,$SLICE_MM" --rotate-z-deg "$angle")
+  fi
+  "$bin" phantom --scene pelvis "${grid[@]}" --true-E-kPa "$E" "${walls[@]}" \
     --seed "$s" $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
   if [ -n "${FACET_SCALE:-}" ]; then
     /usr/bin/python3 -c "import json, sys; p = sys.argv[1]; s = json.load(open(p)); m = s['mesh']
@@ -82,11 +101,11 @@ m['facet_size_mm'] *= float(sys.argv[2]); m['facet_distance_mm'] *= float(sys.ar
     --out "$work/reg" ${REGISTER_ARGS:-} > "$work/reg.log" 2>&1 || { echo "register failed: pair $k"; tail -3 "$work/reg.log"; continue; }
   t2=$(date +%s.%N)
   /usr/bin/python3 - "$work/reg/report.json" "$ph/truth.json" "$tag" "$k" "$E" "$bladder" "$rectum" "$s" \
-    "$(awk "BEGIN{print $t1 - $t0}")" "$(awk "BEGIN{print $t2 - $t1}")" >> "$csv" <<'PY'
+    "$(awk "BEGIN{print $t1 - $t0}")" "$(awk "BEGIN{print $t2 - $t1}")" "${grid[3]}" "$angle" >> "$csv" <<'PY'
 import json, sys
 rep = json.load(open(sys.argv[1])); truth = json.load(open(sys.argv[2]))
 num = lambda x: float("nan") if x is None else x  # a modulus not determined has no sigma
-tag, k, E, bladder, rectum, s, tph, treg = sys.argv[3:11]
+tag, k, E, bladder, rectum, s, tph, treg, spacing, angle = sys.argv[3:13]
 if "wall_motion_mm" in truth:  # the fillings the truth reached (pressure loads), not the draws
     bladder, rectum = (f'{truth["wall_motion_mm"][w]["max"]:.2f}' for w in ("bladder", "rectum"))
 i = rep["youngs_modulus_interval"]["prostate"]
@@ -98,7 +117,8 @@ print(f'{tag},{k},{truth["youngs_modulus_kPa"]["prostate"]:g},{bladder},{rectum}
       f'{int(i["upper_end_determined"])},{num(i["sigma_log_E"]):.4f},{num(i["log_bias"]):.4f},{len(i["resamples_kPa"])},{curv},'
       f'{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{tets},{float(tph):.1f},{float(treg):.1f},'
       f'{int(i.get("bias_corrected", True))},{";".join(f"{x:.3f}" for x in i["resamples_kPa"])},'
-      f'{i.get("quantiles", "student")}')
+      f'{i.get("quantiles", "student")},{spacing.replace(",", "x")},{angle},{rep.get("inverted_elements", "")},'
+      f'{int(bool(i.get("not_determined_reason")))}')
 PY
   tail -1 "$csv"
 done < "$work/draws.txt"

@@ -44,10 +44,12 @@ struct BiomechanicalRegistration_EXPORT CohortFractionResult
 struct BiomechanicalRegistration_EXPORT CohortPatientModulus
 {
   std::string       patient, material;
-  SummaryStatistics modulus;                ///< kPa; count 0 when no fraction is available
-  std::size_t       missing{ 0 };           ///< fractions without a report
-  std::size_t       undetermined{ 0 };      ///< fractions whose interval has an end the data do not determine
-  double            meanIntervalWidth{ 0 }; ///< mean width of the 68 % intervals [kPa], 0 without intervals
+  SummaryStatistics modulus;      ///< kPa; count 0 when no fraction is available
+  std::size_t       missing{ 0 }; ///< fractions without a report
+  std::size_t       undetermined{
+    0
+  }; ///< fractions whose interval has an end the data do not determine, or with no modulus stated
+  double meanIntervalWidth{ 0 }; ///< mean width of the 68 % intervals [kPa], 0 without intervals
 };
 
 /** The correlation of the per-patient mean modulus of \c material with a covariate, over the patients with at

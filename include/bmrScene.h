@@ -28,6 +28,17 @@
 
 namespace bmr {
 
+/** The largest label voxel side [mm] at which an estimated modulus is stated with an interval. The stated interval's
+ * coverage was shown on 1 mm phantoms; at 2-3 mm slices it was measured to miss the truth (docs/benchmarks.md,
+ * "Clinical geometry"), so above this limit the modulus is reported as not determined, with this reason, and the
+ * voxel warning says the same. The registration's fields are not affected. */
+constexpr double StatedModulusVoxelLimitMM = 1.5;
+
+/** The reason a modulus is not stated from label voxels of up to \a coarsestVoxel mm (> \a limit, by default
+ * StatedModulusVoxelLimitMM), in the words of both the warning and the report. */
+BiomechanicalRegistration_EXPORT std::string
+                                 VoxelLimitReason(double coarsestVoxel, double limit = StatedModulusVoxelLimitMM);
+
 /** What a label of the moving label map is in the simulation. */
 enum class LabelRoleEnum
 {
@@ -128,14 +139,13 @@ struct BiomechanicalRegistration_EXPORT Scene
   std::vector<std::string>
   Warnings() const;
 
-  /** Warnings about estimating a modulus from label images whose voxels are \a finestVoxel ..
-   * \a coarsestVoxel mm (the smallest and largest spacing of the moving and fixed label images); none
-   * when no label has the role unknown_material. The modulus rests on sub-voxel changes of the organs'
-   * shapes: it warns about voxels coarser than 1.5 mm and about a mesh whose surfaces may leave the labels'
-   * by more than half the finest voxel (mesh.facet_distance_mm). The errors behind both limits are measured
-   * in docs/benchmarks.md ("Extreme cases"). */
+  /** Warnings about estimating a modulus from label images whose smallest voxel side is \a finestVoxel mm; none
+   * when no label has the role unknown_material. The modulus rests on sub-voxel changes of the organs' shapes: a
+   * mesh whose surfaces may leave the labels' by more than half the finest voxel (mesh.facet_distance_mm) makes it
+   * unreliable. (Voxels coarser than StatedModulusVoxelLimitMM: the registration pipeline warns and states no
+   * modulus.) */
   std::vector<std::string>
-  EstimationWarnings(double finestVoxel, double coarsestVoxel) const;
+  EstimationWarnings(double finestVoxel) const;
 
   /** Labels with the role unknown_material, in scene order: the moduli an estimation recovers. */
   std::vector<const SceneLabel *>

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,10 @@ BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
  * turned inside out, where linear elasticity no longer describes the tissue. */
 BiomechanicalRegistration_EXPORT std::size_t
 CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement);
+
+/** The inverted elements (CountInvertedElements()) by their label; labels without one are absent. */
+BiomechanicalRegistration_EXPORT std::map<std::int32_t, std::size_t>
+InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> & displacement);
 
 /** Minimum/maximum dihedral angle and radius ratio over all elements. */
 BiomechanicalRegistration_EXPORT MeshQuality

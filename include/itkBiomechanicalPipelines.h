@@ -213,6 +213,11 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   double stepTolerance{ 0.01 };
   /** Half-widths from the calibration (default, rescans) or Student's t (IntervalQuantilesEnum). */
   IntervalQuantilesEnum quantiles{ IntervalQuantilesEnum::Calibrated };
+  /** The largest label voxel side [mm] at which a modulus is stated (default bmr::StatedModulusVoxelLimitMM, where
+   * coverage was shown). Above it the modulus is reported as not determined and no resample is computed. A study
+   * that measures coverage at coarser voxels (benchmarks/run_calibration_benchmark.sh) raises it; the run then
+   * warns that the interval is stated where its coverage was not shown. */
+  double statedVoxelLimitMM{ bmr::StatedModulusVoxelLimitMM };
 };
 
 /** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b
@@ -254,6 +259,9 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
   std::vector<double>   resampleModuli;             ///< kPa, in resample order
   std::string           method;                     ///< "rescan", "bootstrap", "curvature"
   std::string           quantiles;                  ///< "calibrated", "student" or "normal" (curvature)
+  /** Why no modulus is stated although the search found a fit (for example label voxels coarser than
+   * bmr::StatedModulusVoxelLimitMM); empty when the interval stands. Non-empty: both ends not determined. */
+  std::string notDeterminedReason;
 };
 
 struct MovingAnatomyMeshes;
@@ -268,6 +276,13 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
   UncertaintySettings    uncertainty;
   bool                   pushField{ false }; ///< also the push field (moving -> fixed) in state.push: 2-3 s more
+  /** Thick slices (ThickSlices(): 2-3 mm slices of a 1 mm in-plane CT): both scans' organs between their slices by
+   * shape-based interpolation (InterpolateLabelSlices()): the moving anatomy is meshed from its interpolated
+   * labels, the fixed organs' distance maps and the rescans' anatomy are those of the interpolated fixed labels.
+   * Without thick slices nothing changes. Off by default: on 10 phantom pairs at 1 x 1 x 3 mm it halved the
+   * inverted elements but made the modulus more biased (median |error| 91 % against 32 %; docs/benchmarks.md,
+   * "Clinical geometry"); the modulus is not stated at such slices either way (StatedModulusVoxelLimitMM). */
+  bool interpolateSlices{ false };
   /** The estimated state's per-element moduli, von Mises stress and Dirichlet flags in state.simulation, which
    * mesh.vtu holds; false leaves them empty (state.simulation then has the nodal displacement and force only). */
   bool elementState{ true };
@@ -316,8 +331,11 @@ struct BiomechanicalRegistration_EXPORT RegistrationResult
   BiomechanicalLabelImageType::Pointer   warpedLabels;        ///< nearest neighbor
   BiomechanicalCTImageType::Pointer      warpedCT;            ///< linear; null without a moving CT
   std::map<std::string, double>          dice;                ///< warped against fixed labels, by name
-  double                                 jacobianMinimum{ 0.0 };
-  double                                 jacobianNonPositiveFraction{ 0.0 };
+  /** Whether the organs were interpolated between thick slices (RegistrationSettings::interpolateSlices and
+   * a moving or fixed label image with ThickSlices()). */
+  bool   slicesInterpolated{ false };
+  double jacobianMinimum{ 0.0 };
+  double jacobianNonPositiveFraction{ 0.0 };
 };
 
 /** Standard deviation of log E above which RegisterSegmentedPair() warns: one sigma beyond the 10 % the

@@ -20,11 +20,13 @@
 
 #include "itkPhysicsDeformationFieldSource.h"
 #include "bmrDisplacementFieldRasterizer.h"
+#include "bmrTetrahedralMesh.h"
 #include "itkMultiThreaderBase.h"
 
 #include <algorithm>
 #include <memory>
 #include <numeric>
+#include <sstream>
 #include <type_traits>
 
 namespace itk {
@@ -117,8 +119,20 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
   m_NumberOfInvertedElements = rasterizer.GetNumberOfInvertedElements();
   if (m_NumberOfInvertedElements > 0)
   {
-    itkWarningMacro(<< m_NumberOfInvertedElements
-                    << " elements are inverted by the deformation; the pull-back is undefined inside them");
+    // Where (the pull-back, whose count is of the deformed mesh): the labels of the inverted elements, so that a
+    // user sees which tissue the deformation crushes.
+    std::ostringstream where;
+    if (kind == bmr::FieldKindEnum::PullBack)
+    {
+      for (const auto & [label, count] : bmr::InvertedElementsByLabel(mesh, mesh.displacement))
+      {
+        where << (where.tellp() > 0 ? ", " : " (") << "label " << label << ": " << count;
+      }
+      where << (where.tellp() > 0 ? ")" : "");
+    }
+    itkWarningMacro(<< m_NumberOfInvertedElements << " elements are inverted by the deformation" << where.str()
+                    << "; the field is undefined inside them and holds there the fill of the voxels the mesh does not "
+                       "cover");
   }
 
   // A field of double 3-vectors has the rasterizer's layout (3 doubles per voxel, index 0 fastest): it is

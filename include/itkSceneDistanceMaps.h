@@ -19,6 +19,7 @@
 #define itkSceneDistanceMaps_h
 
 #include "bmrScene.h"
+#include "itkSliceInterpolation.h"
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkImageRegionConstIterator.h"
 #include "itkRegionOfInterestImageFilter.h"
@@ -199,6 +200,33 @@ FaceDistanceMap(const TImage *             image,
   const auto boxMap = MaskAndComplementMap(crop->GetOutput(), lower, upper);
   return ExtendBeyondBox(boxMap->GetBufferPointer(), box, image);
 }
+/** FaceDistanceMap() of the mask of \a image's voxels in [lower, upper] after shape-based interpolation between
+ * its thick slices (InterpolateLabelSlices()): on the mask's box grown by \a exactWithinMM (the whole image when
+ * infinite), refined along the slice axis. The map is defined on that box only; beyond it a sampler holds the
+ * border's value, which is farther from the organ than the objective's surfaces reach. */
+template<typename TImage>
+typename Image<float, 3>::Pointer
+SliceInterpolatedFaceMap(const TImage *             image,
+                         typename TImage::PixelType lower,
+                         typename TImage::PixelType upper,
+                         double                     exactWithinMM)
+{
+  using MaskType = Image<unsigned char, 3>;
+  const ImageRegion<3> box = std::isfinite(exactWithinMM) ? PaddedMaskBox(image, lower, upper, exactWithinMM)
+                                                          : image->GetLargestPossibleRegion();
+  auto                 crop = RegionOfInterestImageFilter<TImage, TImage>::New();
+  crop->SetInput(image);
+  crop->SetRegionOfInterest(box);
+  auto mask = BinaryThresholdImageFilter<TImage, MaskType>::New();
+  mask->SetInput(crop->GetOutput());
+  mask->SetLowerThreshold(lower);
+  mask->SetUpperThreshold(upper);
+  mask->SetInsideValue(1);
+  mask->SetOutsideValue(0);
+  mask->Update();
+  const typename MaskType::ConstPointer refined = InterpolateLabelSlices(mask->GetOutput());
+  return MaskAndComplementMap(refined.GetPointer(), 1, 1);
+}
 } // namespace detail
 
 /** How far from an organ [mm] ComputeSceneDistanceMaps() computes its distance exactly by default: beyond the
@@ -224,6 +252,12 @@ constexpr double SceneDistanceExactWithinMM = 30.0;
  * bound of the distance (detail::FaceDistanceMap()); infinity computes every
  * voxel exactly.
  *
+ * Thick slices (ThickSlices(): 2-3 mm slices of a 1 mm in-plane CT): with \a interpolateSlices each
+ * organ's mask is first interpolated between its slices (InterpolateLabelSlices()) and the map is that of the
+ * interpolated mask, on the organ's box grown by \a exactWithinMM and refined along the slice axis
+ * (detail::SliceInterpolatedFaceMap()); the slice-thick terraces of the voxel faces would otherwise be read as
+ * surface motion of up to a slice. Without thick slices the maps are those above, whatever \a interpolateSlices.
+ *
  * Throws itk::ExceptionObject naming the label when an objective label does not
  * occur in \a labels, and when the image is empty.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationScene
@@ -232,7 +266,8 @@ template<typename TLabelImage>
 std::map<std::string, typename Image<float, 3>::Pointer>
 ComputeSceneDistanceMaps(const TLabelImage * labels,
                          const bmr::Scene &  scene,
-                         double              exactWithinMM = SceneDistanceExactWithinMM)
+                         double              exactWithinMM = SceneDistanceExactWithinMM,
+                         bool                interpolateSlices = false)
 {
   using MapType = Image<float, 3>;
   if (labels == nullptr || labels->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
@@ -259,7 +294,9 @@ ComputeSceneDistanceMaps(const TLabelImage * labels,
                                << ") is missing from the fixed label image");
     }
     const auto value = static_cast<typename TLabelImage::PixelType>(label->value);
-    maps[term.label] = detail::FaceDistanceMap(labels, value, value, exactWithinMM);
+    maps[term.label] = interpolateSlices && ThickSlices(labels).axis >= 0
+                         ? detail::SliceInterpolatedFaceMap(labels, value, value, exactWithinMM)
+                         : detail::FaceDistanceMap(labels, value, value, exactWithinMM);
   }
   return maps;
 }

@@ -69,6 +69,11 @@ ReadReport(const Json & report, const std::vector<std::string> & materials, Coho
     if (intervals.contains(m))
     {
       const Json & i = intervals.at(m);
+      if (!i.value("not_determined_reason", std::string()).empty())
+      {
+        r.determined[m] = false; // no modulus stated (e.g. from thick slices): not a value of the cohort
+        continue;
+      }
       r.modulus[m] = i.at("estimate_kPa").get<double>();
       r.interval68[m] = { { i.at("interval_68_kPa").at(0).get<double>(),
                             i.at("interval_68_kPa").at(1).get<double>() } };
@@ -125,6 +130,11 @@ SummarizePatient(const CohortStudy & study, const CohortPatient & patient, const
   for (std::size_t k : patient.fractions)
   {
     const CohortFractionResult & r = study.fractions[k];
+    if (r.available && !r.modulus.count(material) && r.determined.count(material))
+    {
+      ++s.undetermined; // registered, but no modulus stated
+      continue;
+    }
     if (!r.available || !r.modulus.count(material))
     {
       ++s.missing;

@@ -79,6 +79,7 @@ ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
   j["youngs_modulus_kPa"] = r.youngsModulus;
   j["gauge"] = { { "label", r.gaugeLabel }, { "youngs_modulus_kPa", r.gaugeModulus } };
   j["identifiable"] = r.estimation.identifiable;
+  j["slice_interpolation"] = r.slicesInterpolated;
   j["identifiability"] = r.estimation.identifiabilityMessage;
   j["youngs_modulus_uncertainty"] = uncertainty;
   Json intervals = Json::object();
@@ -103,6 +104,7 @@ ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
                             { "lower_end_determined", i.lowerDetermined },
                             { "upper_end_determined", i.upperDetermined },
                             { "statement", ModulusIntervalText(kv.first, i) },
+                            { "not_determined_reason", i.notDeterminedReason },
                             { "assumes", WallLawCaveat(motion) },
                             { "resamples_kPa", resamples } };
   }
@@ -404,7 +406,11 @@ ModulusIntervalText(const std::string & name, const ModulusInterval & i)
   const std::string source = i.method == "bootstrap" ? std::to_string(i.resampleModuli.size()) + " bootstrap resamples"
                              : i.method == "rescan"  ? std::to_string(i.resampleModuli.size()) + " rescans"
                                                      : std::string("curvature of Phi*");
-  if (!i.lowerDetermined && !i.upperDetermined)
+  if (!i.notDeterminedReason.empty())
+  {
+    os << " E not determined: " << i.notDeterminedReason << " (the fields use the fit, " << i.fit << " kPa)";
+  }
+  else if (!i.lowerDetermined && !i.upperDetermined)
   {
     os << " E not determined by the images within the search range " << i.interval95[0] << " to " << i.interval95[1]
        << " kPa (" << source << ")";

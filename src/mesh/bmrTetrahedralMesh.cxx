@@ -149,8 +149,8 @@ TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e)
          6.0;
 }
 
-std::size_t
-CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
+std::map<std::int32_t, std::size_t>
+InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
 {
   if (displacement.size() != mesh.points.size())
   {
@@ -158,7 +158,7 @@ CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & 
          "the displacement holds " + std::to_string(displacement.size()) + " values, expected " +
            std::to_string(mesh.points.size()));
   }
-  std::size_t count = 0;
+  std::map<std::int32_t, std::size_t> count;
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
     double x[4][3];
@@ -170,7 +170,21 @@ CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & 
         x[i][c] = mesh.points[3 * n + c] + displacement[3 * n + c];
       }
     }
-    count += !(Dot(Sub(x[1], x[0]), Cross(Sub(x[2], x[0]), Sub(x[3], x[0]))) > 0.0);
+    if (!(Dot(Sub(x[1], x[0]), Cross(Sub(x[2], x[0]), Sub(x[3], x[0]))) > 0.0))
+    {
+      ++count[e < mesh.labels.size() ? mesh.labels[e] : 0];
+    }
+  }
+  return count;
+}
+
+std::size_t
+CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
+{
+  std::size_t count = 0;
+  for (const auto & kv : InvertedElementsByLabel(mesh, displacement))
+  {
+    count += kv.second;
   }
   return count;
 }

@@ -141,10 +141,11 @@ PreserveVolume(IndicatorImageType * smooth, std::size_t voxels)
   }
 }
 
-/** An anatomy as a smooth function: each objective organ's indicator, cropped around the organs, smoothed by a
- * Gaussian (UncertaintySettings::smoothingVoxels) and shifted to preserve the organ's volume (PreserveVolume()), so
- * that its 0.5 level is a sub-voxel surface that can be revoxelized on any grid without resampling the staircase a
- * second time; an organ given as a probability image keeps that image. */
+/** An anatomy as a smooth function: each objective organ's indicator, cropped around the organs (and interpolated
+ * between thick slices when asked: InterpolateLabelSlices()), smoothed by a Gaussian
+ * (UncertaintySettings::smoothingVoxels of the crop's largest spacing) and shifted to preserve the organ's volume
+ * (PreserveVolume()), so that its 0.5 level is a sub-voxel surface that can be revoxelized on any grid without
+ * resampling the staircase a second time; an organ given as a probability image keeps that image. */
 struct SmoothAnatomy
 {
   std::vector<std::int32_t>                       values;
@@ -154,17 +155,21 @@ struct SmoothAnatomy
   SmoothAnatomy(const BiomechanicalLabelImageType * labels,
                 const bmr::Scene &                  scene,
                 double                              sigmaVoxels,
+                bool                                interpolateSlices,
                 const OrganProbabilityImages *      probabilities = nullptr)
     : values(ObjectiveValues(scene))
   {
-    auto crop = RegionOfInterestImageFilter<BiomechanicalLabelImageType, BiomechanicalLabelImageType>::New();
-    crop->SetInput(labels);
-    crop->SetRegionOfInterest(LabelBox(labels, values, 20.0));
-    crop->Update();
+    auto cropper = RegionOfInterestImageFilter<BiomechanicalLabelImageType, BiomechanicalLabelImageType>::New();
+    cropper->SetInput(labels);
+    cropper->SetRegionOfInterest(LabelBox(labels, values, 20.0));
+    cropper->Update();
+    const BiomechanicalLabelImageType::ConstPointer crop =
+      interpolateSlices ? InterpolateLabelSlices(cropper->GetOutput())
+                        : BiomechanicalLabelImageType::ConstPointer(cropper->GetOutput());
     double sigma = 0.0;
     for (unsigned int a = 0; a < 3; ++a)
     {
-      sigma = std::max(sigma, sigmaVoxels * labels->GetSpacing()[a]);
+      sigma = std::max(sigma, sigmaVoxels * crop->GetSpacing()[a]);
     }
     for (std::size_t o = 0; o < values.size(); ++o)
     {
@@ -179,7 +184,7 @@ struct SmoothAnatomy
         continue;
       }
       auto inside = BinaryThresholdImageFilter<BiomechanicalLabelImageType, IndicatorImageType>::New();
-      inside->SetInput(crop->GetOutput());
+      inside->SetInput(crop);
       inside->SetLowerThreshold(value);
       inside->SetUpperThreshold(value);
       inside->SetInsideValue(1.0f);
@@ -190,7 +195,7 @@ struct SmoothAnatomy
       smooth->Update();
       indicators.push_back(smooth->GetOutput());
       indicators.back()->DisconnectPipeline();
-      PreserveVolume(indicators.back(), VoxelCount(crop->GetOutput(), value));
+      PreserveVolume(indicators.back(), VoxelCount(crop.GetPointer(), value));
       interpolators.push_back(IndicatorInterpolatorType::New());
       interpolators.back()->SetInputImage(indicators.back());
     }
@@ -469,7 +474,8 @@ RevoxelizedMaps(const bmr::TetrahedralMesh *     deformed,
                 const bmr::GridGeometry &        grid,
                 const SmoothAnatomy &            anatomy,
                 const bmr::Scene &               scene,
-                const std::vector<std::string> & fractionOrgans)
+                const std::vector<std::string> & fractionOrgans,
+                bool                             interpolateSlices)
 {
   auto labels =
     MakeImageOnGrid<BiomechanicalLabelImageType>(grid, std::vector<std::int32_t>(grid.GetNumberOfVoxels(), 0));
@@ -519,7 +525,7 @@ RevoxelizedMaps(const bmr::TetrahedralMesh *     deformed,
     probabilities[scene.objective[f.first].label] = MakeImageOnGrid<BiomechanicalProbabilityImageType>(grid, f.second);
   }
   // The grid is a crop that reaches RescanMarginMM beyond the organs: each organ's map, exact that far, on its own box.
-  return ObjectiveDistanceMaps(labels, probabilities, scene, RescanMarginMM);
+  return ObjectiveDistanceMaps(labels, probabilities, scene, RescanMarginMM, interpolateSlices);
 }
 
 /** What the resamples revoxelize: the anatomy as a smooth function (the fixed one for the rescans, the moving one
@@ -536,9 +542,11 @@ MakeResampleSource(const EstimationSetup &             setup,
                    const BiomechanicalLabelImageType * fixedLabels)
 {
   const UncertaintySettings & u = setup.settings->uncertainty;
+  const bool                  interpolate = setup.settings->interpolateSlices;
   ResampleSource              source{ u.method == UncertaintyMethodEnum::Rescan
-                                        ? SmoothAnatomy(fixedLabels, *setup.scene, u.smoothingVoxels, setup.probabilities)
-                                        : SmoothAnatomy(movingLabels, *setup.scene, u.smoothingVoxels),
+                                        ? SmoothAnatomy(
+                               fixedLabels, *setup.scene, u.smoothingVoxels, interpolate, setup.probabilities)
+                                        : SmoothAnatomy(movingLabels, *setup.scene, u.smoothingVoxels, interpolate),
                          GridGeometryOf(fixedLabels) };
   const ImageRegion<3> box = LabelBox(fixedLabels, source.anatomy.values, RescanMarginMM);
   Point<double, 3>     corner;
@@ -557,7 +565,8 @@ DistanceMaps
 RescanMaps(const ResampleSource & source, const EstimationSetup & setup, Random & rng)
 {
   const bmr::GridGeometry grid = ResampleGrid(source.crop, rng, setup.settings->uncertainty);
-  return RevoxelizedMaps(nullptr, grid, source.anatomy, *setup.scene, setup.probabilityOrgans);
+  return RevoxelizedMaps(
+    nullptr, grid, source.anatomy, *setup.scene, setup.probabilityOrgans, setup.settings->interpolateSlices);
 }
 
 /** The moduli [kPa, unknowns' order] re-estimated from resample \a k: of the resimulated anatomy \a sim
@@ -619,7 +628,8 @@ Resample(unsigned int                        k,
       deformed.displacement = sim->model->SolveState(sim->forces, prescribed);
     }
     const bmr::GridGeometry grid = ResampleGrid(source->crop, rng, u);
-    maps = RevoxelizedMaps(&deformed, grid, source->anatomy, *setup.scene, setup.probabilityOrgans);
+    maps = RevoxelizedMaps(
+      &deformed, grid, source->anatomy, *setup.scene, setup.probabilityOrgans, setup.settings->interpolateSlices);
   }
   const auto          optimizer = RunEstimation(resample, maps, false, nullptr);
   std::vector<double> moduli;

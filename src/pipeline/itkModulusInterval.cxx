@@ -309,5 +309,13 @@ CurvatureInterval(double fit, double logSigma, const bmr::UnknownModulus & unkno
   return i;
 }
 
+void
+DeclareNotDetermined(ModulusInterval & interval, const bmr::UnknownModulus & unknown, const std::string & reason)
+{
+  interval.notDeterminedReason = reason;
+  interval.estimate = interval.fit;
+  JudgeBounds(interval, unknown, true, true);
+}
+
 } // namespace pipeline
 } // namespace itk

@@ -57,6 +57,7 @@ MovingAnatomyFingerprint(const BiomechanicalLabelImageType * labels,
   {
     hash = HashValue(value, hash);
   }
+  hash = HashValue(settings.interpolateSlices, hash);
   hash = HashValue(static_cast<int>(u.method), hash);
   hash = HashValue(u.resamples, hash);
   return HashValue(u.seed, hash);
@@ -88,13 +89,14 @@ MeshMovingAnatomy(const BiomechanicalLabelImageType * movingLabels,
   }
   const bmr::Scene scaled = ScaledMeshSizes(scene, settings.meshScale);
   scaled.Validate();
-  MovingAnatomyMeshes  meshes;
-  pipeline::StageClock clock(nullptr, meshes.stages);
-  meshes.fine = pipeline::MeshLabelImage(movingLabels, scaled, clock, "mesh (CGAL Mesh_3)");
+  MovingAnatomyMeshes                             meshes;
+  pipeline::StageClock                            clock(nullptr, meshes.stages);
+  const BiomechanicalLabelImageType::ConstPointer anatomy = pipeline::MeshedAnatomy(movingLabels, settings);
+  meshes.fine = pipeline::MeshLabelImage(anatomy, scaled, clock, "mesh (CGAL Mesh_3)");
   if (pipeline::UsesCoarseMesh(scaled, settings))
   {
-    meshes.coarse = pipeline::MeshLabelImage(
-      movingLabels, ScaledMeshSizes(scaled, settings.coarseFactor), clock, "coarse mesh (sweep)");
+    meshes.coarse =
+      pipeline::MeshLabelImage(anatomy, ScaledMeshSizes(scaled, settings.coarseFactor), clock, "coarse mesh (sweep)");
   }
   if (pipeline::UsesResampleMeshes(scaled, settings))
   {
@@ -105,7 +107,7 @@ MeshMovingAnatomy(const BiomechanicalLabelImageType * movingLabels,
     {
       std::mt19937_64 rng = pipeline::ResampleRandom(settings.uncertainty, k);
       meshes.resamples.push_back(pipeline::MeshLabelImage(
-        movingLabels, pipeline::ResampleMeshScene(scaled, settings.uncertainty, rng), quiet, "resample mesh"));
+        anatomy, pipeline::ResampleMeshScene(scaled, settings.uncertainty, rng), quiet, "resample mesh"));
     }
     clock.End(std::to_string(meshes.resamples.size()) + " meshes");
   }

@@ -256,13 +256,20 @@ MovingAnatomyFingerprint(const BiomechanicalLabelImageType * labels,
                          const bmr::Scene &                  scene,
                          const RegistrationSettings &        settings);
 
-/** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels, exact
- * within \a exactWithinMM of each organ (ComputeSceneDistanceMaps()). */
+/** The distance maps of the scene's objective organs: of \a probabilities where given, else of \a labels
+ * (interpolated between thick slices when \a interpolateSlices), exact within \a exactWithinMM of each organ
+ * (ComputeSceneDistanceMaps()). */
 std::map<std::string, Image<float, 3>::Pointer>
 ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const OrganProbabilityImages &      probabilities,
                       const bmr::Scene &                  scene,
-                      double                              exactWithinMM = SceneDistanceExactWithinMM);
+                      double                              exactWithinMM,
+                      bool                                interpolateSlices);
+
+/** The labels the moving anatomy is meshed from: \a labels interpolated between thick slices when \a settings
+ * ask for it (RegistrationSettings::interpolateSlices), else \a labels themselves. */
+BiomechanicalLabelImageType::ConstPointer
+MeshedAnatomy(const BiomechanicalLabelImageType * labels, const RegistrationSettings & settings);
 
 /** FEMElasticityOptimizer on \a setup with the distance maps \a maps; the curvature uncertainty only when
  * \a curvature; the observer (may be null) sees the inner solves. */
@@ -294,6 +301,10 @@ BootstrapInterval(double                        fit,
 /** The interval fit x exp(+-z sigma) of the curvature's \a logSigma (infinite: the whole search range). */
 ModulusInterval
 CurvatureInterval(double fit, double logSigma, const bmr::UnknownModulus & unknown);
+
+/** Withdraws \a interval's statement for \a reason: both ends not determined, the intervals the search range. */
+void
+DeclareNotDetermined(ModulusInterval & interval, const bmr::UnknownModulus & unknown, const std::string & reason);
 
 } // namespace pipeline
 } // namespace itk

@@ -81,20 +81,52 @@ CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed)
   }
 }
 
-/** The estimation warnings of the label images' voxel sizes (bmr::Scene::EstimationWarnings). */
-std::vector<std::string>
-VoxelWarnings(const bmr::Scene & scene, const ImageBase<3> * moving, const ImageBase<3> * fixed)
+/** The smallest and the largest voxel side [mm] of the moving and the fixed label images. */
+std::array<double, 2>
+VoxelRange(const ImageBase<3> * moving, const ImageBase<3> * fixed)
 {
-  double finest = std::numeric_limits<double>::infinity(), coarsest = 0.0;
+  std::array<double, 2> range{ { std::numeric_limits<double>::infinity(), 0.0 } };
   for (const ImageBase<3> * image : { moving, fixed })
   {
     for (unsigned int a = 0; a < 3; ++a)
     {
-      finest = std::min(finest, image->GetSpacing()[a]);
-      coarsest = std::max(coarsest, image->GetSpacing()[a]);
+      range[0] = std::min(range[0], image->GetSpacing()[a]);
+      range[1] = std::max(range[1], image->GetSpacing()[a]);
     }
   }
-  return scene.EstimationWarnings(finest, coarsest);
+  return range;
+}
+
+/** Whether a modulus is stated from label voxels of up to \a coarsest mm (UncertaintySettings::statedVoxelLimitMM). */
+bool
+StatesModulus(double coarsest, const UncertaintySettings & u)
+{
+  return coarsest <= u.statedVoxelLimitMM;
+}
+
+/** The warning that goes with the modulus's statement at label voxels of up to \a coarsest mm: not stated above the
+ * limit (the statement's own reason); stated, when an interval is made, beyond the geometry where coverage was shown
+ * when the limit was raised. */
+std::vector<std::string>
+VoxelLimitWarnings(const bmr::Scene & scene, double coarsest, const UncertaintySettings & u)
+{
+  if (scene.UnknownLabels().empty())
+  {
+    return {};
+  }
+  if (!StatesModulus(coarsest, u))
+  {
+    return { bmr::VoxelLimitReason(coarsest, u.statedVoxelLimitMM) + " (the registration itself is not affected)" };
+  }
+  if (coarsest <= bmr::StatedModulusVoxelLimitMM || u.method == UncertaintyMethodEnum::None)
+  {
+    return {};
+  }
+  std::ostringstream os;
+  os << "label voxels of up to " << coarsest << " mm: the modulus's interval is stated although its coverage was "
+     << "shown only at voxels of at most " << bmr::StatedModulusVoxelLimitMM
+     << " mm (UncertaintySettings::statedVoxelLimitMM raised to " << u.statedVoxelLimitMM << " mm)";
+  return { os.str() };
 }
 
 /** Warnings about what the images leave open: an end of the interval at a search bound, a 68 % interval wider
@@ -107,6 +139,10 @@ UncertaintyWarnings(const RegistrationResult & r)
   {
     const ModulusInterval & i = kv.second;
     const double            halfWidth = 0.5 * std::log(i.interval68[1] / i.interval68[0]);
+    if (!i.notDeterminedReason.empty())
+    {
+      continue; // not the images' doing: the voxel warning (VoxelLimitWarnings) says why, in the same words
+    }
     if (!i.lowerDetermined || !i.upperDetermined)
     {
       warnings.push_back("the images do not determine the modulus of \"" + kv.first +
@@ -171,6 +207,10 @@ CheckUncertaintySettings(const UncertaintySettings & u)
     {
       bmr::Fail("RegisterSegmentedPair", std::string("UncertaintySettings::") + name + " must be finite and >= 0");
     }
+  }
+  if (!(u.statedVoxelLimitMM > 0.0))
+  {
+    bmr::Fail("RegisterSegmentedPair", "UncertaintySettings::statedVoxelLimitMM must be > 0 [mm]");
   }
   if (u.meshJitter >= 0.9 || !(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
   {
@@ -249,19 +289,29 @@ StateIntervals(RegistrationResult &                r,
                const pipeline::EstimationSetup &   setup,
                const BiomechanicalLabelImageType * movingLabels,
                const BiomechanicalLabelImageType * fixedLabels,
+               double                              coarsestVoxel,
                pipeline::StageClock &              clock)
 {
   const UncertaintyMethodEnum method = setup.settings->uncertainty.method;
-  if (method == UncertaintyMethodEnum::None || r.unknowns.empty())
+  if (!StatesModulus(coarsestVoxel, setup.settings->uncertainty))
   {
-    return;
+    // Where coverage was not shown no number is stated, whatever the method: nothing to resample for.
+    for (const bmr::UnknownModulus & u : r.unknowns)
+    {
+      ModulusInterval & i = r.modulusInterval[u.name];
+      i.fit = r.youngsModulus.at(u.name);
+      i.method = "none";
+      pipeline::DeclareNotDetermined(
+        i, u, bmr::VoxelLimitReason(coarsestVoxel, setup.settings->uncertainty.statedVoxelLimitMM));
+    }
+    r.modulusUncertainty.clear(); // the curvature's sigma is a number too
   }
-  if ((method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan) &&
-      setup.settings->uncertainty.resamples > 0)
+  else if ((method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan) &&
+           setup.settings->uncertainty.resamples > 0 && !r.unknowns.empty())
   {
     r.modulusInterval = pipeline::BootstrapModuli(setup, r, movingLabels, fixedLabels, clock);
   }
-  else
+  else if (method != UncertaintyMethodEnum::None)
   {
     for (const bmr::UnknownModulus & u : r.unknowns)
     {
@@ -338,7 +388,8 @@ std::map<std::string, Image<float, 3>::Pointer>
 ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const OrganProbabilityImages &      probabilities,
                       const bmr::Scene &                  scene,
-                      double                              exactWithinMM)
+                      double                              exactWithinMM,
+                      bool                                interpolateSlices)
 {
   bmr::Scene fromLabels = scene;
   fromLabels.objective.clear();
@@ -349,12 +400,19 @@ ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
       fromLabels.objective.push_back(term);
     }
   }
-  auto maps = ComputeSceneDistanceMaps(labels, fromLabels, exactWithinMM);
+  auto maps = ComputeSceneDistanceMaps(labels, fromLabels, exactWithinMM, interpolateSlices);
   for (const auto & kv : probabilities)
   {
     maps[kv.first] = ComputeProbabilityDistanceMap(kv.second.GetPointer(), "fixed probability of \"" + kv.first + "\"");
   }
   return maps;
+}
+
+BiomechanicalLabelImageType::ConstPointer
+MeshedAnatomy(const BiomechanicalLabelImageType * labels, const RegistrationSettings & settings)
+{
+  return settings.interpolateSlices ? InterpolateLabelSlices(labels)
+                                    : BiomechanicalLabelImageType::ConstPointer(labels);
 }
 
 FEMElasticityOptimizer::Pointer
@@ -445,7 +503,11 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   RegistrationResult   r;
   pipeline::StageClock clock(observer, r.state.stages);
   clock.Warn(r.state.warnings, scene.Warnings());
-  clock.Warn(r.state.warnings, VoxelWarnings(scene, movingLabels, fixedLabels));
+  const std::array<double, 2> voxels = VoxelRange(movingLabels, fixedLabels);
+  r.slicesInterpolated =
+    settings.interpolateSlices && (ThickSlices(movingLabels).axis >= 0 || ThickSlices(fixedLabels).axis >= 0);
+  clock.Warn(r.state.warnings, scene.EstimationWarnings(voxels[0]));
+  clock.Warn(r.state.warnings, VoxelLimitWarnings(scene, voxels[1], settings.uncertainty));
 
   const MovingAnatomyMeshes * premeshed = settings.meshes;
   if (premeshed != nullptr &&
@@ -455,17 +517,21 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
               "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
               "(MeshMovingAnatomy)");
   }
+  // What is meshed (here, or by MeshMovingAnatomy() for premeshed, and by the interval's resamples): the moving
+  // labels, interpolated between thick slices when asked. The fields and warps keep the labels.
+  const BiomechanicalLabelImageType::ConstPointer anatomy = pipeline::MeshedAnatomy(movingLabels, settings);
   // The fine mesh (CGAL, one core) is made alongside the distance maps, the coarse mesh and the sweep.
   std::unique_ptr<pipeline::BackgroundMesh> fineMesh;
   if (premeshed == nullptr)
   {
-    fineMesh = std::make_unique<pipeline::BackgroundMesh>(movingLabels, scene);
+    fineMesh = std::make_unique<pipeline::BackgroundMesh>(anatomy.GetPointer(), scene);
   }
   // With a sweep to run, the estimation takes the fine mesh when the sweep is done (FEMElasticityOptimizer's mesh
   // source); without, it is taken before.
   const bool meshDuringSweep = fineMesh && fineMesh->Alongside() && pipeline::UsesCoarseMesh(scene, settings);
   clock.Begin("distance maps (fixed labels)");
-  const auto maps = pipeline::ObjectiveDistanceMaps(fixedLabels, fixedProbabilities, scene);
+  const auto maps = pipeline::ObjectiveDistanceMaps(
+    fixedLabels, fixedProbabilities, scene, SceneDistanceExactWithinMM, settings.interpolateSlices);
   clock.End(std::to_string(maps.size()) + " organs");
   // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
   bmr::TetrahedralMesh coarse;
@@ -479,7 +545,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     if (pipeline::UsesCoarseMesh(scene, settings))
     {
       coarse = pipeline::MeshLabelImage(
-        movingLabels, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
+        anatomy.GetPointer(), ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
     }
     if (!meshDuringSweep)
     {
@@ -492,15 +558,19 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
   // The fine solves take the second core unless the interval's prefetches (below) may run on it.
   const UncertaintyMethodEnum method = settings.uncertainty.method;
-  setup.fineSolveThreads =
-    method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan ? 1 : 2;
+  const bool                  resamples = StatesModulus(voxels[1], settings.uncertainty) &&
+                         (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
+  setup.fineSolveThreads = resamples ? 1 : 2;
   // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
   // the estimation's thread that takes the mesh when it is finished during the sweep.
   std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch;
   std::unique_ptr<pipeline::RescanMapsPrefetch>   rescanMaps;
   const auto                                      startPrefetches = [&]() {
-    prefetch = premeshed ? nullptr : StartResampleMeshes(movingLabels, scene, settings);
-    rescanMaps = StartRescanMaps(fixedLabels, setup);
+    if (resamples) // nothing is resampled where no modulus is stated
+    {
+      prefetch = premeshed ? nullptr : StartResampleMeshes(anatomy.GetPointer(), scene, settings);
+      rescanMaps = StartRescanMaps(fixedLabels, setup);
+    }
   };
   std::string                fineMeshDetail;
   const bmr::TetrahedralMesh estimationMesh = r.state.mesh; // empty when made during the sweep
@@ -526,7 +596,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
   setup.prefetch = prefetch.get();
   setup.rescanMaps = rescanMaps.get();
-  StateIntervals(r, setup, movingLabels, fixedLabels, clock);
+  StateIntervals(r, setup, anatomy.GetPointer(), fixedLabels, voxels[1], clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   DescribeState(r, scene, settings.elementState);

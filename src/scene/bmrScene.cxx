@@ -260,22 +260,24 @@ Scene::Warnings() const
   return warnings;
 }
 
+std::string
+VoxelLimitReason(double coarsestVoxel, double limit)
+{
+  std::ostringstream os;
+  os << "label voxels of up to " << coarsestVoxel << " mm: the modulus is reported as not determined, because the "
+     << "stated interval is made only from voxels of at most " << limit << " mm (its coverage was shown at 1 mm; "
+     << "at 2-3 mm slices it missed the truth)";
+  return os.str();
+}
+
 std::vector<std::string>
-Scene::EstimationWarnings(double finestVoxel, double coarsestVoxel) const
+Scene::EstimationWarnings(double finestVoxel) const
 {
   std::vector<std::string> warnings;
   if (std::none_of(
         labels.begin(), labels.end(), [](const SceneLabel & l) { return l.role == LabelRoleEnum::UnknownMaterial; }))
   {
     return warnings;
-  }
-  if (coarsestVoxel > 1.5)
-  {
-    std::ostringstream os;
-    os << "label voxels of up to " << coarsestVoxel
-       << " mm: the estimated modulus is unreliable above about 1.5 mm (it rests on sub-voxel shape changes; "
-          "the registration itself is not affected)";
-    warnings.push_back(os.str());
   }
   if (mesh.facetDistance > 0.5 * finestVoxel)
   {

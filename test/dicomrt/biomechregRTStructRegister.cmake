@@ -23,7 +23,9 @@ foreach(kind nrrd rtstruct)
   endif()
   execute_process(COMMAND ${CLI} ${common} --fixed-labels ${labels} --out ${OUT}/register_${kind}
     RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0 OR NOT out MATCHES "recovered Young's moduli:  inner [0-9.]+ kPa")
+  # The phantom's 2 mm voxels are above the limit where a modulus is stated: "inner E not determined", the fit in
+  # report.json.
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "recovered Young's moduli:  inner E not determined: label voxels of up to 2 mm")
     message(FATAL_ERROR "register with the ${kind} fixed labels: exit code ${rc}\n${out}\n${err}")
   endif()
   file(READ ${OUT}/register_${kind}/report.json report)

@@ -64,6 +64,7 @@ Interval(const itk::PhantomPair &                 pair,
   settings.uncertainty.resamples = 4;
   settings.uncertainty.threads = threads;
   settings.uncertainty.seed = seed;
+  settings.uncertainty.statedVoxelLimitMM = 2.5; // the 2 mm case below studies the interval's width there
   const itk::RegistrationResult r = itk::RegisterSegmentedPair(pair.movingLabels, fixed, nullptr, pair.scene, settings);
   const itk::ModulusInterval    i = r.modulusInterval.at("inner");
   std::cout << "  " << itk::ModulusIntervalText("inner", i) << " [" << threads << " threads, seed " << seed << "]"

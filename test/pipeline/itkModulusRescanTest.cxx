@@ -47,6 +47,7 @@ RescanSettings(double meshJitter, double stepTolerance, unsigned int threads)
   settings.uncertainty.resamples = 4;
   settings.uncertainty.meshJitter = meshJitter;
   settings.uncertainty.stepTolerance = stepTolerance;
+  settings.uncertainty.statedVoxelLimitMM = 2.5; // the 2 mm case below studies the rescans' spread there
   return settings;
 }
 
@@ -91,6 +92,15 @@ itkModulusRescanTest(int, char *[])
 
   const itk::ModulusInterval coarse = Rescan(pair, itk::test::Coarsened(pair.fixedLabels), 0.0, strictStep);
   Check(coarse.logSigma > fine.logSigma, "the rescans spread more on 2 mm fixed voxels than on 1 mm ones");
+  // At the default limit (1.5 mm) no modulus is stated from 2 mm voxels, and no rescan is computed for it.
+  itk::RegistrationSettings gated = RescanSettings(0.0, strictStep, 0);
+  gated.uncertainty.statedVoxelLimitMM = itk::UncertaintySettings().statedVoxelLimitMM;
+  const itk::RegistrationResult gatedResult =
+    itk::RegisterSegmentedPair(pair.movingLabels, itk::test::Coarsened(pair.fixedLabels), nullptr, pair.scene, gated);
+  const itk::ModulusInterval & notStated = gatedResult.modulusInterval.at("inner");
+  Check(!notStated.notDeterminedReason.empty() && !notStated.lowerDetermined && !notStated.upperDetermined &&
+          notStated.resampleModuli.empty() && gatedResult.modulusUncertainty.empty(),
+        "2 mm voxels at the default limit: not determined, with a reason, and no rescan computed");
 
   const double               jitter = itk::UncertaintySettings().meshJitter;
   const itk::ModulusInterval one = Rescan(pair, pair.fixedLabels, jitter);

@@ -1,0 +1,65 @@
+# biomechreg register on a pelvis phantom pair with clinical slices (1 x 1 x 3 mm, the fixed grid shifted by a
+# sub-voxel offset; a coarse truth mesh for speed):
+# - the run exits 0; the organs are not interpolated between slices by default (report.json: slice_interpolation
+#   false), and are with --slice-interpolation on;
+# - no modulus is stated from 3 mm voxels, where the interval's coverage was not shown: the statement says "not
+#   determined", both ends are undetermined, the reason names the 3 mm voxels, and the run's warning says the same
+#   thing (the warning and the statement must never disagree);
+# - raised by --uncertainty-voxel-limit-mm, the interval is stated and the warning then says that it is stated
+#   beyond the geometry where coverage was shown.
+# Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregThickSlicesCheck.cmake
+file(REMOVE_RECURSE ${OUT})
+set(P ${OUT}/phantom)
+execute_process(COMMAND ${CLI} phantom --scene pelvis --size 200,160,54 --spacing 1,1,3 --bladder-mm 8 --rectum-mm 4
+  --true-E-kPa 80 --fixed-grid-shift-voxels 0.5 --truth-mesh-scale 1.5 --out ${P}
+  RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "phantom failed: ${err}")
+endif()
+set(inputs --moving-ct ${P}/moving_ct.nrrd --moving-labels ${P}/moving_labels.nrrd --fixed-ct ${P}/fixed_ct.nrrd
+  --fixed-labels ${P}/fixed_labels.nrrd --scene ${P}/scene.json --outputs report)
+
+execute_process(COMMAND ${CLI} register ${inputs} --out ${OUT}/reg RESULT_VARIABLE rc OUTPUT_VARIABLE out
+  ERROR_VARIABLE err)
+message(STATUS "${out}${err}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "register at 1 x 1 x 3 mm: exit code ${rc}")
+endif()
+file(READ ${OUT}/reg/report.json report)
+string(JSON interpolated GET "${report}" slice_interpolation)
+string(JSON statement GET "${report}" youngs_modulus_interval prostate statement)
+string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
+string(JSON lowerOk GET "${report}" youngs_modulus_interval prostate lower_end_determined)
+string(JSON upperOk GET "${report}" youngs_modulus_interval prostate upper_end_determined)
+if(interpolated)
+  message(SEND_ERROR "report.json: slice_interpolation is ${interpolated} by default")
+endif()
+if(NOT statement MATCHES "not determined: label voxels of up to 3 mm" OR lowerOk OR upperOk)
+  message(SEND_ERROR "at 3 mm a modulus was stated: '${statement}' (determined ${lowerOk}/${upperOk})")
+endif()
+string(FIND "${out}${err}" "warning: ${reason}" at) # the reason holds brackets: a plain search, not a regex
+if(at EQUAL -1)
+  message(SEND_ERROR "the run's warning does not say what the statement says ('${reason}')")
+endif()
+
+execute_process(COMMAND ${CLI} register ${inputs} --uncertainty-voxel-limit-mm 3.5 --resamples 3 --slice-interpolation on
+  --out ${OUT}/raised
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "${out}${err}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "register with --uncertainty-voxel-limit-mm 3.5: exit code ${rc}")
+endif()
+file(READ ${OUT}/raised/report.json report)
+string(JSON interpolated GET "${report}" slice_interpolation)
+if(NOT interpolated)
+  message(SEND_ERROR "report.json: slice_interpolation is ${interpolated} with --slice-interpolation on")
+endif()
+string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
+string(JSON resamples LENGTH "${report}" youngs_modulus_interval prostate resamples_kPa)
+if(NOT reason STREQUAL "" OR NOT resamples EQUAL 3)
+  message(SEND_ERROR "with the limit raised the interval is not stated from 3 rescans ('${reason}', ${resamples})")
+endif()
+if(NOT "${out}${err}" MATCHES "warning: label voxels of up to 3 mm: the modulus's interval is stated although")
+  message(SEND_ERROR "with the limit raised the run does not warn that coverage was not shown at 3 mm")
+endif()
+message(STATUS "ok: at 3 mm no modulus is stated unless asked, and the warnings agree with the statements")
