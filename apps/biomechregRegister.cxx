@@ -241,14 +241,7 @@ RegisterCommand(const Arguments & args)
   std::cout << "\n  recovered Young's moduli:";
   for (const auto & kv : result.youngsModulus)
   {
-    const auto interval = result.modulusInterval.find(kv.first);
-    if (interval != result.modulusInterval.end() && !interval->second.notDeterminedReason.empty())
-    {
-      std::cout << "  " << itk::ModulusIntervalText(kv.first, interval->second); // no number stated
-      continue;
-    }
-    std::cout << "  " << kv.first << " " << std::fixed << std::setprecision(1) << kv.second << " kPa"
-              << itk::UncertaintyText(result, kv.first);
+    std::cout << "  " << itk::RecoveredModulusText(result, kv.first);
   }
   if (!result.modulusInterval.empty())
   {

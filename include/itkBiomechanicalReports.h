@@ -63,6 +63,12 @@ BiomechanicalRegistration_EXPORT std::string
 BiomechanicalRegistration_EXPORT std::string
                                  UncertaintyText(const RegistrationResult & result, const std::string & label);
 
+/** The recovered modulus \a label as a registration states it: "<label> <fit> kPa<UncertaintyText>", or, where no
+ * modulus is stated (ModulusInterval::notDeterminedReason), ModulusIntervalText() alone, with no number but the
+ * fit the fields use. \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT std::string
+                                 RecoveredModulusText(const RegistrationResult & result, const std::string & label);
+
 /** What the stated interval of a modulus is conditional on: the wall law \a motion of the estimation. The
  * rescans vary the voxelization and the mesh, not how the walls move, and on the phantoms the wall law moved
  * the modulus by more than the interval's width (docs/benchmarks.md, "Pressure-filled lumens"); one sentence

@@ -399,6 +399,19 @@ UncertaintyText(const RegistrationResult & result, const std::string & label)
 }
 
 std::string
+RecoveredModulusText(const RegistrationResult & result, const std::string & label)
+{
+  const auto interval = result.modulusInterval.find(label);
+  if (interval != result.modulusInterval.end() && !interval->second.notDeterminedReason.empty())
+  {
+    return ModulusIntervalText(label, interval->second);
+  }
+  std::ostringstream os;
+  os << label << " " << std::fixed << std::setprecision(1) << result.youngsModulus.at(label) << " kPa";
+  return os.str() + UncertaintyText(result, label);
+}
+
+std::string
 ModulusIntervalText(const std::string & name, const ModulusInterval & i)
 {
   std::ostringstream os;

@@ -215,6 +215,9 @@ struct EstimationSetup
   RescanMapsPrefetch * rescanMaps{ nullptr };
   /** FEMElasticityOptimizer::SetNumberOfFineSolveThreads(): 2 only when no other work runs beside the fit. */
   unsigned int fineSolveThreads{ 1 };
+  /** Whether the label voxels allow a stated modulus (UncertaintySettings::statedVoxelLimitMM): without, no
+   * uncertainty of it is computed, neither resamples nor the curvature. */
+  bool statesModulus{ true };
 };
 
 /** The objective organs' distance maps by name. */

@@ -129,6 +129,24 @@ VoxelLimitWarnings(const bmr::Scene & scene, double coarsest, const UncertaintyS
   return { os.str() };
 }
 
+/** What the label images' voxels mean for the registration: the warnings about them, whether the slices are
+ * interpolated (RegistrationResult::slicesInterpolated); returns the largest voxel side [mm]. */
+double
+ReadVoxels(RegistrationResult &                r,
+           pipeline::StageClock &              clock,
+           const bmr::Scene &                  scene,
+           const RegistrationSettings &        settings,
+           const BiomechanicalLabelImageType * movingLabels,
+           const BiomechanicalLabelImageType * fixedLabels)
+{
+  const std::array<double, 2> voxels = VoxelRange(movingLabels, fixedLabels);
+  r.slicesInterpolated =
+    settings.interpolateSlices && (ThickSlices(movingLabels).axis >= 0 || ThickSlices(fixedLabels).axis >= 0);
+  clock.Warn(r.state.warnings, scene.EstimationWarnings(voxels[0]));
+  clock.Warn(r.state.warnings, VoxelLimitWarnings(scene, voxels[1], settings.uncertainty));
+  return voxels[1];
+}
+
 /** Warnings about what the images leave open: an end of the interval at a search bound, a 68 % interval wider
  * than exp(+-0.1), or (curvature) no positive curvature at all. */
 std::vector<std::string>
@@ -226,7 +244,7 @@ Estimate(RegistrationResult &                                    r,
          const std::map<std::string, Image<float, 3>::Pointer> & maps,
          pipeline::StageClock &                                  clock)
 {
-  const bool curvature = setup.settings->uncertainty.method == UncertaintyMethodEnum::Curvature;
+  const bool curvature = setup.statesModulus && setup.settings->uncertainty.method == UncertaintyMethodEnum::Curvature;
   // Told to the observer as one stage (its progress: the inner solves), recorded as the optimizer's parts.
   PipelineObserver * observer = clock.GetObserver();
   const auto         start = bmr::SteadyClock::now();
@@ -293,7 +311,7 @@ StateIntervals(RegistrationResult &                r,
                pipeline::StageClock &              clock)
 {
   const UncertaintyMethodEnum method = setup.settings->uncertainty.method;
-  if (!StatesModulus(coarsestVoxel, setup.settings->uncertainty))
+  if (!setup.statesModulus)
   {
     // Where coverage was not shown no number is stated, whatever the method: nothing to resample for.
     for (const bmr::UnknownModulus & u : r.unknowns)
@@ -304,7 +322,6 @@ StateIntervals(RegistrationResult &                r,
       pipeline::DeclareNotDetermined(
         i, u, bmr::VoxelLimitReason(coarsestVoxel, setup.settings->uncertainty.statedVoxelLimitMM));
     }
-    r.modulusUncertainty.clear(); // the curvature's sigma is a number too
   }
   else if ((method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan) &&
            setup.settings->uncertainty.resamples > 0 && !r.unknowns.empty())
@@ -503,11 +520,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   RegistrationResult   r;
   pipeline::StageClock clock(observer, r.state.stages);
   clock.Warn(r.state.warnings, scene.Warnings());
-  const std::array<double, 2> voxels = VoxelRange(movingLabels, fixedLabels);
-  r.slicesInterpolated =
-    settings.interpolateSlices && (ThickSlices(movingLabels).axis >= 0 || ThickSlices(fixedLabels).axis >= 0);
-  clock.Warn(r.state.warnings, scene.EstimationWarnings(voxels[0]));
-  clock.Warn(r.state.warnings, VoxelLimitWarnings(scene, voxels[1], settings.uncertainty));
+  const double coarsestVoxel = ReadVoxels(r, clock, scene, settings, movingLabels, fixedLabels);
 
   const MovingAnatomyMeshes * premeshed = settings.meshes;
   if (premeshed != nullptr &&
@@ -558,8 +571,9 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
   // The fine solves take the second core unless the interval's prefetches (below) may run on it.
   const UncertaintyMethodEnum method = settings.uncertainty.method;
-  const bool                  resamples = StatesModulus(voxels[1], settings.uncertainty) &&
-                         (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
+  setup.statesModulus = StatesModulus(coarsestVoxel, settings.uncertainty);
+  const bool resamples =
+    setup.statesModulus && (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
   setup.fineSolveThreads = resamples ? 1 : 2;
   // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
   // the estimation's thread that takes the mesh when it is finished during the sweep.
@@ -596,7 +610,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
   setup.prefetch = prefetch.get();
   setup.rescanMaps = rescanMaps.get();
-  StateIntervals(r, setup, anatomy.GetPointer(), fixedLabels, voxels[1], clock);
+  StateIntervals(r, setup, anatomy.GetPointer(), fixedLabels, coarsestVoxel, clock);
   const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   DescribeState(r, scene, settings.elementState);
