@@ -61,7 +61,7 @@ struct GlobalOptions
   bool         version{ false };
   bool         quiet{ false };
   bool         verbose{ false };
-  unsigned int threads{ 0 }; ///< ITK's and OpenBLAS's threads; 0: their defaults
+  unsigned int threads{ 0 }; ///< the library's and ITK's threads (the BLAS runs on one); 0: all cores
 };
 
 /** On Linux with glibc: when GLIBC_TUNABLES does not set glibc.malloc.hugetlb, restarts the program (the same

@@ -19,11 +19,11 @@
 // warnings as one "warning: ..." line, the progress line on a terminal and the peak memory.
 #include "biomechregCommon.h"
 
+#include "bmrNumerics.h"
 #include "itkMultiThreaderBase.h"
 #include "itkOutputWindow.h"
 
 #include <cstdlib>
-#include <dlfcn.h>
 #include <mutex>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -79,18 +79,6 @@ protected:
   ConsoleOutputWindow() = default;
   ~ConsoleOutputWindow() override = default;
 };
-
-/** The setter of OpenBLAS's thread count, when the BLAS in use is OpenBLAS (it reads its environment
- * only when loaded, so setting OPENBLAS_NUM_THREADS here would be too late). */
-void
-SetBLASThreads(unsigned int threads)
-{
-  using Setter = void (*)(int);
-  if (auto set = reinterpret_cast<Setter>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-  {
-    set(static_cast<int>(threads));
-  }
-}
 
 } // namespace
 
@@ -326,10 +314,10 @@ ApplyGlobalOptions(const GlobalOptions & o)
     std::cout.rdbuf(&discard);
   }
   itk::OutputWindow::SetInstance(ConsoleOutputWindow::New());
+  bmr::ConfigureNumerics(); // the program owns its process: the BLAS on one thread, the same bits on any machine
   if (o.threads > 0)
   {
     itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(o.threads);
-    SetBLASThreads(o.threads);
   }
 }
 

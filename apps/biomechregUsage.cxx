@@ -25,7 +25,7 @@ namespace {
 
 // Options every subcommand takes (main() reads them before the subcommand's own).
 const char * const globalOptions =
-  "  global options: [--threads N (ITK and BLAS threads; default: all cores)] [--quiet (warnings and errors only)]\n"
+  "  global options: [--threads N (library and ITK threads; default: all cores)] [--quiet (warnings and errors only)]\n"
   "                  [--verbose (also every inner solve of the estimation)] [-h|--help] [--version]\n";
 
 const std::pair<const char *, const char *> commands[] = {

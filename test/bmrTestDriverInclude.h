@@ -22,10 +22,14 @@
 // factory: the image IO this module's tests use is registered through UseITK's
 // factory manager for the requested ITK components.
 #include "itkTestDriverInclude.h"
+#include "bmrNumerics.h"
 
+// The driver is a program and configures its process as biomechreg does (bmr::ConfigureNumerics()), so that the
+// tests' numbers are the CLI's; bmrLinearElasticModelTest checks that the library itself leaves the BLAS alone.
 inline int
 ProcessArgumentsOnly(int * ac, ArgumentStringType * av)
 {
+  bmr::ConfigureNumerics();
   return ProcessArguments(ac, av);
 }
 

@@ -72,25 +72,6 @@ ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
 }
 
 namespace {
-/** Runs the BLAS that CHOLMOD calls on one thread. A multithreaded OpenBLAS splits the supernodal
- * updates differently for different thread counts, and so rounds differently: the factorization, and with
- * it every field and estimate, would change with the machine's core count (measured: fields differing in
- * the last bits between OPENBLAS_NUM_THREADS=1 and 2). The symbol is looked up at run time, so any other
- * BLAS (reference, single-threaded) works unchanged. Determinism costs little here: the factorizations of
- * this project take well under a second and are reused for every solve. */
-void
-PinBlasToOneThread()
-{
-  static std::once_flag once;
-  std::call_once(once, [] {
-    using SetThreads = void (*)(int);
-    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-    {
-      set(1);
-    }
-  });
-}
-
 /** The OpenMP runtime's max-active-levels calls, looked up once at run time (null without an OpenMP runtime). */
 struct OpenMPLevels
 {
@@ -111,17 +92,16 @@ Levels()
 }
 } // namespace
 
-/** The BLAS on one thread (above), and the calling thread's OpenMP parallel regions on that thread alone.
- * Debian's CHOLMOD runs the copy loops of its supernodal factorization in teams of 4 OpenMP threads
- * (CHOLMOD_OMP_NUM_THREADS) whose idle workers spin. The estimation factorizes on two threads at once (the sweep's
- * coarse model and the fine one) beside the mesher, so on 2 cores those teams took CPU from the work that mattered:
- * `register` on the demo pair took 7.0-7.2 s with OMP_THREAD_LIMIT=1 against 7.6-7.9 s without (5 alternating
+/** The calling thread's OpenMP parallel regions on that thread alone (the BLAS's threads are the host's:
+ * bmr::ConfigureNumerics()). Debian's CHOLMOD runs the copy loops of its supernodal factorization in teams of 4 OpenMP
+ * threads (CHOLMOD_OMP_NUM_THREADS) whose idle workers spin. The estimation factorizes on two threads at once (the
+ * sweep's coarse model and the fine one) beside the mesher, so on 2 cores those teams took CPU from the work that
+ * mattered: `register` on the demo pair took 7.0-7.2 s with OMP_THREAD_LIMIT=1 against 7.6-7.9 s without (5 alternating
  * runs). The loops only copy, so the results are the same bit for bit. Max active levels 0 makes every parallel
  * region of the calling thread run on that thread alone; it is a per-thread setting, restored on exit so that a
  * program's own OpenMP on that thread is left as it was. */
 SingleThreadedCholmod::SingleThreadedCholmod()
 {
-  PinBlasToOneThread();
   if (Levels().get)
   {
     m_Previous = Levels().get();

@@ -51,10 +51,10 @@ VonMises(const double sigma[3][3]);
 std::string
 MaterialProblem(std::int32_t label, double youngsModulus, double poissonRatio);
 
-/** While it lives, CHOLMOD calls made on the calling thread run on that thread alone: the BLAS under them on one
- * thread (determinism; process-wide, from the first one on) and the thread's OpenMP parallel regions (CHOLMOD's copy
- * loops) serialized, the thread's previous OpenMP setting restored after. Wrap every CHOLMOD call in one (see the
- * definitions). */
+/** While it lives, the calling thread's OpenMP parallel regions (CHOLMOD's copy loops) run on that thread alone,
+ * the thread's previous OpenMP setting restored after; a per-thread setting, so the host process is left as it
+ * was (the BLAS's thread count is the program's choice: bmr::ConfigureNumerics()). Wrap every CHOLMOD call in one
+ * (see the definitions). */
 class SingleThreadedCholmod
 {
 public:

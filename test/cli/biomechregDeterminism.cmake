@@ -1,5 +1,6 @@
 # Determinism: the same inputs give bit-identical outputs with 1 and 2 threads (ITK's work units and
-# OpenBLAS's threads, through ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS and OPENBLAS_NUM_THREADS), for the joint
+# OpenBLAS's environment, through ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS and OPENBLAS_NUM_THREADS; biomechreg runs the BLAS
+# on one thread whatever the latter says: bmr::ConfigureNumerics), for the joint
 # estimation (`register`: fields, warped images, the recovered modulus, the rescan interval, whose resamples
 # run one at a time with 1 thread and two at once with 2, the default concurrency) and for the Demons baseline.
 # Run with: cmake -DCLI=<biomechreg> -DDIR=<spheres phantom dir> -DOUT=<scratch dir> -P biomechregDeterminism.cmake

@@ -16,9 +16,10 @@
  *
  *=========================================================================*/
 // Linear-elastic FEM core: patch test, scale invariance of u under E, F -> 10^k (E, F),
-// reaction forces in equilibrium, reuse of the factorization, CHOLMOD's OpenMP regions serialized on the solving
-// thread (and the thread's setting restored), and every error path.
+// reaction forces in equilibrium, reuse of the factorization, the host's BLAS threads left alone, CHOLMOD's OpenMP
+// regions serialized on the solving thread (and the thread's setting restored), and every error path.
 #include "bmrLinearElasticModel.h"
+#include "bmrNumerics.h"
 #include "bmrTestUtilities.h"
 
 #include <dlfcn.h>
@@ -184,6 +185,37 @@ SpreadForces(std::size_t count)
     forces[i] = std::sin(0.37 * static_cast<double>(i)) + 0.1 * static_cast<double>(i % 3);
   }
   return forces;
+}
+
+/** The library leaves the BLAS's thread count to its host (bmr::ConfigureNumerics() is the program's call, not the
+ * library's): a factorization and solve made while OpenBLAS runs 2 threads leave it at 2, and give the one-thread
+ * displacements to a relative 1e-12 (a partitioned BLAS only sums in another order; the factor's conditioning on a
+ * 16^3-node cube keeps that rounding far below it). Run first, before any other factorization of the process.
+ * Skipped without OpenBLAS. */
+bool
+CheckBlasLeftToHost()
+{
+  using bmr::test::Expect;
+  if (bmr::BlasThreads() < 0)
+  {
+    std::cout << "the BLAS is not OpenBLAS: its threads are not the library's to check" << std::endl;
+    return true;
+  }
+  const bmr::TetrahedralMesh mesh = bmr::test::StructuredCube(15, 1.0);
+  const auto                 solve = [&mesh] {
+    bmr::LinearElasticModel model(mesh, { { 1, { 10.0, 0.3 } } });
+    model.SetDirichletConditions(BottomNodes(mesh), {});
+    return model.Solve(SpreadForces(mesh.points.size()));
+  };
+  bmr::ConfigureNumerics({ 2 });
+  const std::vector<double> hosted = solve();
+  const int                 threadsAfter = bmr::BlasThreads();
+  bmr::ConfigureNumerics({ 1 });
+  const double difference = RelativeDifference(hosted, solve());
+  std::cout << "OpenBLAS threads after a solve with 2: " << threadsAfter << "; relative difference to one thread "
+            << difference << std::endl;
+  return Expect(threadsAfter == 2, "a solve leaves the host's BLAS thread count as it was") &&
+         Expect(difference <= 1e-12, "the host's BLAS threads change the displacements by rounding only");
 }
 
 /** The factorization (bmr::fem::SupernodalFactorizer) and the triangular solves (bmr::fem::SupernodalSolver) on two
@@ -416,7 +448,8 @@ bmrLinearElasticModelTest(int, char *[])
   using bmr::test::Expect;
   using bmr::test::ExpectException;
   using bmr::test::ToString;
-  bool ok = CheckSerialOpenMP(); // first: it counts the process's threads
+  bool ok = CheckBlasLeftToHost(); // first: a library that pinned the BLAS would do it at its first factorization
+  ok &= CheckSerialOpenMP();       // then: it counts the process's threads
   ok &= CheckTwoThreadSolves();
   ok &= CheckKeptFixedPartRefactorization();
   ok &= CheckObservedSolves();

@@ -15,12 +15,14 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-// ImageWarper: a known translation field on a linear ramp is exact; labels stay labels.
+// ImageWarper: a known translation field on a linear ramp is exact; labels stay labels and land where the field
+// says (a warp in the opposite direction would move them by twice the translation).
 #include "itkImageWarper.h"
 #include "bmrTestUtilities.h"
 #include "itkImageRegionIteratorWithIndex.h"
 #include "itkTestingMacros.h"
 
+#include <cmath>
 #include <set>
 
 int
@@ -51,15 +53,16 @@ itkImageWarperTest(int, char *[])
     it.Set(static_cast<float>(3.0 * p[0] - 2.0 * p[1] + p[2]));
     labels->SetPixel(it.GetIndex(), static_cast<unsigned char>(p[0] < 8 ? 1 : (p[1] < 12 ? 2 : 7)));
   }
-  // Field: translation by (2.5, -1.5, 1.0) mm, fixed -> moving.
+  // Field: translation by (2.3, -1.2, 0.7) mm, fixed -> moving; no component is a half voxel, so that nearest
+  // neighbour has no ties.
   auto field = FieldType::New();
   field->CopyInformation(image);
   field->SetRegions(image->GetLargestPossibleRegion());
   field->Allocate();
   FieldType::PixelType t;
-  t[0] = 2.5;
-  t[1] = -1.5;
-  t[2] = 1.0;
+  t[0] = 2.3;
+  t[1] = -1.2;
+  t[2] = 0.7;
   field->FillBuffer(t);
 
   using WarperType = itk::ImageWarper<ImageType, FieldType>;
@@ -81,7 +84,7 @@ itkImageWarperTest(int, char *[])
   {
     ImageType::PointType p;
     image->TransformIndexToPhysicalPoint(it.GetIndex(), p);
-    const double q[3] = { p[0] + 2.5, p[1] - 1.5, p[2] + 1.0 };
+    const double q[3] = { p[0] + t[0], p[1] + t[1], p[2] + t[2] };
     if (q[0] >= 0 && q[0] <= 23 && q[1] >= 0 && q[1] <= 28.5 && q[2] >= 0 && q[2] <= 18)
     {
       ++inside;
@@ -93,27 +96,54 @@ itkImageWarperTest(int, char *[])
   ok &= Expect(inside > 1000, "more than 1000 voxels map inside the image (got " + ToString(inside) + ")");
   ok &= Expect(worst < 1e-3, "linear ramp through a translation exact to 1e-3 (got max error " + ToString(worst) + ")");
 
-  // Labels: nearest neighbor and label-Gaussian both return only input labels.
+  // Labels: nearest neighbour and label-Gaussian return only input labels, each voxel the label found at p + t.
+  // Nearest neighbour is exact wherever p + t lies inside the image; label-Gaussian (sigma one voxel) wherever
+  // p + t is at least 3 mm from a boundary between labels (the planes x = 8 and, for x >= 8, y = 12).
+  const auto labelAt = [&](const double q[3]) {
+    LabelType::IndexType index;
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      index[a] = static_cast<itk::IndexValueType>(std::lround(q[a] / spacing[a]));
+    }
+    return static_cast<int>(labels->GetPixel(index));
+  };
   for (auto mode : { itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::NearestNeighbor,
                      itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::LabelGaussian })
   {
-    auto lw = itk::ImageWarper<LabelType, FieldType>::New();
+    const bool nearest = mode == itk::ImageWarper<LabelType, FieldType>::InterpolationEnum::NearestNeighbor;
+    auto       lw = itk::ImageWarper<LabelType, FieldType>::New();
     lw->SetInput(labels);
     lw->SetDisplacementField(field);
     lw->SetInterpolation(mode);
     lw->Update();
     std::set<int> seen;
+    std::size_t   checked = 0, misplaced = 0;
     for (itk::ImageRegionIteratorWithIndex<LabelType> it(lw->GetOutput(), labels->GetLargestPossibleRegion());
          !it.IsAtEnd();
          ++it)
     {
       seen.insert(it.Get());
+      LabelType::PointType p;
+      labels->TransformIndexToPhysicalPoint(it.GetIndex(), p);
+      const double q[3] = { p[0] + t[0], p[1] + t[1], p[2] + t[2] };
+      const bool   inside = q[0] >= 0 && q[0] <= 23 && q[1] >= 0 && q[1] <= 28.5 && q[2] >= 0 && q[2] <= 18;
+      const bool   nearBoundary = std::abs(q[0] - 8.0) < 3.0 || (q[0] >= 5.0 && std::abs(q[1] - 12.0) < 3.0);
+      if (inside && (nearest || !nearBoundary))
+      {
+        ++checked;
+        misplaced += static_cast<int>(it.Get()) != labelAt(q) ? 1 : 0;
+      }
     }
     const bool preserved = seen == std::set<int>({ 0, 1, 2, 7 });
-    std::cout << "label interpolation " << static_cast<int>(mode) << " preserves labels: " << preserved << std::endl;
+    std::cout << "label interpolation " << static_cast<int>(mode) << ": labels preserved " << preserved << ", "
+              << misplaced << " of " << checked << " voxels with another label than at p + t" << std::endl;
     ok &= Expect(preserved,
                  "label interpolation " + ToString(static_cast<int>(mode)) +
                    " returns exactly the labels {0, 1, 2, 7} (got " + ToString(seen.size()) + " distinct values)");
+    ok &=
+      Expect(checked > 500 && misplaced == 0,
+             "label interpolation " + ToString(static_cast<int>(mode)) + " puts every checked voxel's label where " +
+               "the field says (" + ToString(misplaced) + " of " + ToString(checked) + " misplaced)");
   }
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
