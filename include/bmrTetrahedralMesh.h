@@ -97,9 +97,23 @@ BiomechanicalRegistration_EXPORT std::vector<std::int32_t>
 BiomechanicalRegistration_EXPORT std::size_t
 CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement);
 
+/** The inverted elements of one label, and where they lie: how many of them have a node on each other label (an
+ * element of it, or an excluded region beyond a boundary face, such as a hollow organ's lumen): the organs the
+ * crushed tissue lies against. */
+struct BiomechanicalRegistration_EXPORT InvertedElements
+{
+  std::size_t                         count{ 0 };
+  std::map<std::int32_t, std::size_t> touching; ///< other label -> inverted elements with a node on it
+};
+
 /** The inverted elements (CountInvertedElements()) by their label; labels without one are absent. */
-BiomechanicalRegistration_EXPORT std::map<std::int32_t, std::size_t>
+BiomechanicalRegistration_EXPORT std::map<std::int32_t, InvertedElements>
 InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> & displacement);
+
+/** "label 1: 2081, of which 1650 against label 3 and 410 against label 4; label 2: 3" (InvertedElementsByLabel()),
+ * for a warning that says where the deformation crushes tissue; "" without an inverted element. */
+BiomechanicalRegistration_EXPORT std::string
+                                 InvertedElementsText(const std::map<std::int32_t, InvertedElements> & inverted);
 
 /** Minimum/maximum dihedral angle and radius ratio over all elements. */
 BiomechanicalRegistration_EXPORT MeshQuality

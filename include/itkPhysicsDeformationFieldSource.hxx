@@ -119,18 +119,13 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
   m_NumberOfInvertedElements = rasterizer.GetNumberOfInvertedElements();
   if (m_NumberOfInvertedElements > 0)
   {
-    // Where (the pull-back, whose count is of the deformed mesh): the labels of the inverted elements, so that a
-    // user sees which tissue the deformation crushes.
-    std::ostringstream where;
-    if (kind == bmr::FieldKindEnum::PullBack)
-    {
-      for (const auto & [label, count] : bmr::InvertedElementsByLabel(mesh, mesh.displacement))
-      {
-        where << (where.tellp() > 0 ? ", " : " (") << "label " << label << ": " << count;
-      }
-      where << (where.tellp() > 0 ? ")" : "");
-    }
-    itkWarningMacro(<< m_NumberOfInvertedElements << " elements are inverted by the deformation" << where.str()
+    // Where (the pull-back, whose count is of the deformed mesh): the labels of the inverted elements and of the
+    // organs they lie against, so that a user sees which tissue the deformation crushes, and where.
+    const std::string where =
+      kind == bmr::FieldKindEnum::PullBack
+        ? " (" + bmr::InvertedElementsText(bmr::InvertedElementsByLabel(mesh, mesh.displacement)) + ")"
+        : std::string();
+    itkWarningMacro(<< m_NumberOfInvertedElements << " elements are inverted by the deformation" << where
                     << "; the field is undefined inside them and holds there the fill of the voxels the mesh does not "
                        "cover");
   }

@@ -149,8 +149,56 @@ TetrahedronVolume(const TetrahedralMesh & mesh, std::size_t e)
          6.0;
 }
 
-std::map<std::int32_t, std::size_t>
-InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
+namespace {
+/** Whether element \a e has a volume <= 0 once its nodes are moved by \a displacement. */
+bool
+IsInverted(const TetrahedralMesh & mesh, const std::vector<double> & displacement, std::size_t e)
+{
+  double x[4][3];
+  for (int i = 0; i < 4; ++i)
+  {
+    const std::size_t n = static_cast<std::size_t>(mesh.tetrahedra[4 * e + i]);
+    for (int c = 0; c < 3; ++c)
+    {
+      x[i][c] = mesh.points[3 * n + c] + displacement[3 * n + c];
+    }
+  }
+  return !(Dot(Sub(x[1], x[0]), Cross(Sub(x[2], x[0]), Sub(x[3], x[0]))) > 0.0);
+}
+
+/** The labels around each node (ascending, without repeats): of the elements that hold it, and of the excluded
+ * regions beyond the boundary faces that hold it (a hollow organ's lumen, a bone left out of the mesh). */
+std::vector<std::vector<std::int32_t>>
+LabelsAroundNodes(const TetrahedralMesh & mesh)
+{
+  std::vector<std::vector<std::int32_t>> around(mesh.GetNumberOfPoints());
+  const auto                             add = [&around](std::int32_t node, std::int32_t label) {
+    std::vector<std::int32_t> & labels = around[static_cast<std::size_t>(node)];
+    if (std::find(labels.begin(), labels.end(), label) == labels.end())
+    {
+      labels.insert(std::upper_bound(labels.begin(), labels.end(), label), label);
+    }
+  };
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
+  {
+    for (int i = 0; i < 4; ++i)
+    {
+      add(mesh.tetrahedra[4 * e + i], e < mesh.labels.size() ? mesh.labels[e] : 0);
+    }
+  }
+  for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
+  {
+    for (int i = 0; mesh.boundaryFaceLabels[f] != 0 && i < 3; ++i) // 0: the outside of the meshed domain
+    {
+      add(mesh.boundaryFaces[3 * f + i], mesh.boundaryFaceLabels[f]);
+    }
+  }
+  return around;
+}
+
+/** Throws unless \a displacement has 3 values per node of \a mesh. */
+void
+CheckDisplacementSize(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
 {
   if (displacement.size() != mesh.points.size())
   {
@@ -158,33 +206,76 @@ InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> 
          "the displacement holds " + std::to_string(displacement.size()) + " values, expected " +
            std::to_string(mesh.points.size()));
   }
-  std::map<std::int32_t, std::size_t> count;
+}
+} // namespace
+
+std::map<std::int32_t, InvertedElements>
+InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
+{
+  CheckDisplacementSize(mesh, displacement);
+  std::map<std::int32_t, InvertedElements> inverted;
+  std::vector<std::vector<std::int32_t>>   around; // made at the first inverted element only
   for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
-    double x[4][3];
+    if (!IsInverted(mesh, displacement, e))
+    {
+      continue;
+    }
+    if (around.empty())
+    {
+      around = LabelsAroundNodes(mesh);
+    }
+    const std::int32_t        label = e < mesh.labels.size() ? mesh.labels[e] : 0;
+    std::vector<std::int32_t> others;
     for (int i = 0; i < 4; ++i)
     {
-      const std::size_t n = static_cast<std::size_t>(mesh.tetrahedra[4 * e + i]);
-      for (int c = 0; c < 3; ++c)
+      for (std::int32_t other : around[static_cast<std::size_t>(mesh.tetrahedra[4 * e + i])])
       {
-        x[i][c] = mesh.points[3 * n + c] + displacement[3 * n + c];
+        if (other != label && std::find(others.begin(), others.end(), other) == others.end())
+        {
+          others.push_back(other);
+        }
       }
     }
-    if (!(Dot(Sub(x[1], x[0]), Cross(Sub(x[2], x[0]), Sub(x[3], x[0]))) > 0.0))
+    InvertedElements & of = inverted[label];
+    ++of.count;
+    for (std::int32_t other : others)
     {
-      ++count[e < mesh.labels.size() ? mesh.labels[e] : 0];
+      ++of.touching[other];
     }
   }
-  return count;
+  return inverted;
+}
+
+std::string
+InvertedElementsText(const std::map<std::int32_t, InvertedElements> & inverted)
+{
+  std::ostringstream text;
+  for (const auto & [label, of] : inverted)
+  {
+    text << (text.tellp() > 0 ? "; " : "") << "label " << label << ": " << of.count;
+    std::size_t k = 0;
+    for (const auto & [other, count] : of.touching)
+    {
+      text << (k == 0                        ? ", of which "
+               : k + 1 == of.touching.size() ? " and "
+                                             : ", ")
+           << count << " against label " << other;
+      ++k;
+    }
+  }
+  return text.str();
 }
 
 std::size_t
 CountInvertedElements(const TetrahedralMesh & mesh, const std::vector<double> & displacement)
 {
+  // Counted alone: the estimation asks at every trial point, and where they lie is only for the report.
+  CheckDisplacementSize(mesh, displacement);
   std::size_t count = 0;
-  for (const auto & kv : InvertedElementsByLabel(mesh, displacement))
+  for (std::size_t e = 0; e < mesh.GetNumberOfTetrahedra(); ++e)
   {
-    count += kv.second;
+    count += IsInverted(mesh, displacement, e) ? 1 : 0;
   }
   return count;
 }

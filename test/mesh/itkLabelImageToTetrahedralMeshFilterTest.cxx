@@ -16,7 +16,8 @@
  *
  *=========================================================================*/
 // CGAL meshing of label images in physical space: anisotropic and oblique grids,
-// excluded labels kept as walls, shared interfaces, determinism, quality, errors.
+// excluded labels kept as walls, shared interfaces, determinism, quality, errors; and where a deformation inverts
+// elements (bmr::InvertedElementsByLabel).
 #include "itkLabelImageToTetrahedralMeshFilter.h"
 #include "bmrTestUtilities.h"
 #include "itkImageRegionIteratorWithIndex.h"
@@ -357,13 +358,45 @@ CheckFacetBoundsPerLabel()
   return ok;
 }
 
+/** Three unit tetrahedra: A (label 1) and B (label 3) share a face, C (label 1) stands apart with a boundary face
+ * against an excluded region of label 4 (a lumen). A displacement that turns A and C inside out (one node each, a
+ * node of neither B) gives label 1: 2 inverted, one against label 3 and one against label 4, nothing of label 3;
+ * exact counts. */
+bool
+CheckInvertedElementsByLabel()
+{
+  using bmr::test::Expect;
+  bmr::TetrahedralMesh mesh;
+  mesh.points = { 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1, 10, 0, 0, 11, 0, 0, 10, 1, 0, 10, 0, 1 };
+  mesh.tetrahedra = { 0, 1, 2, 3, 1, 2, 3, 4, 5, 6, 7, 8 };
+  mesh.labels = { 1, 3, 1 };
+  mesh.boundaryFaces = { 5, 7, 6, 0, 2, 1 }; // C's face on z = 0 (a lumen beyond), A's on z = 0 (the outside)
+  mesh.boundaryFaceLabels = { 4, 0 };
+  std::vector<double> u(mesh.points.size(), 0.0);
+  bool                ok = Expect(bmr::InvertedElementsByLabel(mesh, u).empty(), "no element inverted at rest");
+  u[0] = u[1] = u[2] = 1.0; // node 0 to (1, 1, 1): A inside out
+  u[3 * 8 + 2] = -2.0;      // node 8 to (10, 0, -1): C inside out
+  const auto inverted = bmr::InvertedElementsByLabel(mesh, u);
+  const auto one = inverted.find(1);
+  ok &= Expect(inverted.size() == 1 && one != inverted.end() && one->second.count == 2,
+               "two elements of label 1 inverted, none of label 3");
+  ok &=
+    Expect(one != inverted.end() && one->second.touching == std::map<std::int32_t, std::size_t>{ { 3, 1 }, { 4, 1 } },
+           "one of them against label 3, one against the excluded label 4, none against the outside (0)");
+  const std::string text = bmr::InvertedElementsText(inverted);
+  std::cout << "inverted: " << text << std::endl;
+  ok &= Expect(text == "label 1: 2, of which 1 against label 3 and 1 against label 4", "the text says where: " + text);
+  ok &= Expect(bmr::CountInvertedElements(mesh, u) == 2, "two inverted in all");
+  return ok;
+}
+
 int
 itkLabelImageToTetrahedralMeshFilterTest(int, char *[])
 {
   using FilterType = itk::LabelImageToTetrahedralMeshFilter<LabelImageType>;
   using bmr::test::Expect;
   using bmr::test::ToString;
-  bool                        ok = true;
+  bool                        ok = CheckInvertedElementsByLabel();
   const std::array<double, 3> C{ { 40.0, -25.0, 110.0 } };
   auto                        image = MakeImage(C);
 
