@@ -107,7 +107,7 @@ struct BiomechanicalRegistration_EXPORT SceneLoad
 
 /** \brief A scene: what each label is, what carries loads, what is matched.
  *
- * Read from JSON (see README, "Scene files"). Every key is checked: an unknown
+ * Read from JSON (see docs/scenes.md). Every key is checked: an unknown
  * key, a wrong type, nu >= 0.5, E <= 0, a reference to an undefined label, or a
  * scene with nothing to hold it against rigid-body motion is rejected with an
  * itk::ExceptionObject naming the entry.
