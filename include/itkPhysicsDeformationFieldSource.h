@@ -158,6 +158,11 @@ protected:
   PrintSelf(std::ostream & os, Indent indent) const override;
 
 private:
+  /** One warning: how many elements the deformation inverts and, with \a locate (the pull-back, whose count is of
+   * the deformed mesh), where: their labels and what they lie against (bmr::InvertedElementsByLabel()). */
+  void
+  WarnInvertedElements(const bmr::TetrahedralMesh & mesh, bool locate) const;
+
   FieldDirectionEnum m_FieldDirection{ FieldDirectionEnum::FixedToMoving };
   bool               m_FillOutside{ true };
   unsigned int       m_FillCoarsening{ 4 };

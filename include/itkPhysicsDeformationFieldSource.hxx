@@ -103,6 +103,19 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateOutputInformation()
 
 template<typename TOutputImage>
 void
+PhysicsDeformationFieldSource<TOutputImage>::WarnInvertedElements(const bmr::TetrahedralMesh & mesh, bool locate) const
+{
+  // So that a user sees which tissue the deformation crushes, and against which organ.
+  const std::string where =
+    locate ? " (" + bmr::InvertedElementsText(bmr::InvertedElementsByLabel(mesh, mesh.displacement)) + ")"
+           : std::string();
+  itkWarningMacro(<< m_NumberOfInvertedElements << " elements are inverted by the deformation" << where
+                  << "; the field is undefined inside them and holds there the fill of the voxels the mesh does not "
+                     "cover");
+}
+
+template<typename TOutputImage>
+void
 PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
 {
   OutputImageType * output = this->GetOutput();
@@ -119,15 +132,7 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
   m_NumberOfInvertedElements = rasterizer.GetNumberOfInvertedElements();
   if (m_NumberOfInvertedElements > 0)
   {
-    // Where (the pull-back, whose count is of the deformed mesh): the labels of the inverted elements and of the
-    // organs they lie against, so that a user sees which tissue the deformation crushes, and where.
-    const std::string where =
-      kind == bmr::FieldKindEnum::PullBack
-        ? " (" + bmr::InvertedElementsText(bmr::InvertedElementsByLabel(mesh, mesh.displacement)) + ")"
-        : std::string();
-    itkWarningMacro(<< m_NumberOfInvertedElements << " elements are inverted by the deformation" << where
-                    << "; the field is undefined inside them and holds there the fill of the voxels the mesh does not "
-                       "cover");
+    this->WarnInvertedElements(mesh, kind == bmr::FieldKindEnum::PullBack);
   }
 
   // A field of double 3-vectors has the rasterizer's layout (3 doubles per voxel, index 0 fastest): it is
