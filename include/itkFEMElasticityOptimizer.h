@@ -21,6 +21,7 @@
 #include "BiomechanicalRegistrationExport.h"
 #include "bmrElasticityEstimator.h"
 #include "itkImage.h"
+#include "itkMultiThreaderBase.h"
 #include "itkProcessObject.h"
 #include "itkTetrahedralMeshObject.h"
 
@@ -174,11 +175,11 @@ public:
   itkSetMacro(LimitElementInversion, bool);
   itkGetConstMacro(LimitElementInversion, bool);
   itkBooleanMacro(LimitElementInversion);
-  /** Threads for the fine model's triangular solves (default 2; never more than
-   * MultiThreaderBase::GetGlobalDefaultNumberOfThreads()). The fine stage is otherwise serial, so a second core
-   * is idle unless other work runs beside the optimizer (then set 1). The estimate is the same bit for bit
-   * whatever the number (bmr::LinearElasticModel::SetNumberOfSolveThreads()). */
-  itkSetClampMacro(NumberOfFineSolveThreads, unsigned int, 1, 2);
+  /** Threads for the fine model's factorizations and triangular solves (default, and never more than,
+   * MultiThreaderBase::GetGlobalDefaultNumberOfThreads(): all cores unless the program says otherwise). Set fewer
+   * when other work runs beside the optimizer. The estimate is the same bit for bit whatever the number
+   * (bmr::LinearElasticModel::SetNumberOfSolveThreads()). */
+  itkSetClampMacro(NumberOfFineSolveThreads, unsigned int, 1, NumericTraits<unsigned int>::max());
   itkGetConstMacro(NumberOfFineSolveThreads, unsigned int);
   /** Trial points rejected by LimitElementInversion over the last Update(). */
   itkGetConstMacro(NumberOfRejectedSteps, SizeValueType);
@@ -325,7 +326,7 @@ private:
   double                        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
   bool                          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
   bool                          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
-  unsigned int                  m_NumberOfFineSolveThreads{ 2 };
+  unsigned int                  m_NumberOfFineSolveThreads{ MultiThreaderBase::GetGlobalDefaultNumberOfThreads() };
   double                        m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
   double                        m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
   double                        m_WallRegularization{ bmr::WallLoadSettings{}.regularization };

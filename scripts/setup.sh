@@ -12,7 +12,7 @@ build="${BUILD_DIR:-$root/build}"
 jobs="${JOBS:-$(nproc)}"
 
 packages=(build-essential cmake ninja-build libinsighttoolkit5-dev libvtk9-dev libeigen3-dev libcgal-dev
-  libgdcm-dev libfftw3-dev libsuitesparse-dev libopenblas-dev libmetis-dev nlohmann-json3-dev time python3-matplotlib python3-numpy
+  libgdcm-dev libfftw3-dev libsuitesparse-dev libopenblas-dev libmetis-dev libtbb-dev nlohmann-json3-dev time python3-matplotlib python3-numpy
   snakemake plastimatch dicom3tools)
 missing=()
 for p in "${packages[@]}"; do

@@ -17,144 +17,27 @@
  *=========================================================================*/
 #include "bmrSupernodalFactorize.h"
 
+#include "bmrDenseTiles.h"
+#include "bmrParallel.h"
 #include "bmrSupernodes.h"
 
 #include <algorithm>
-#include <atomic>
-#include <memory>
-#include <numeric>
-#include <system_error>
-#include <thread>
 #include <utility>
-
-// LAPACK and BLAS (Fortran interface), as CHOLMOD declares them.
-extern "C" {
-void
-dpotrf_(const char * uplo, const int * n, double * a, const int * lda, int * info);
-void
-dtrsm_(const char *   side,
-       const char *   uplo,
-       const char *   transa,
-       const char *   diag,
-       const int *    m,
-       const int *    n,
-       const double * alpha,
-       const double * a,
-       const int *    lda,
-       double *       b,
-       const int *    ldb);
-void
-dsyrk_(const char *   uplo,
-       const char *   trans,
-       const int *    n,
-       const int *    k,
-       const double * alpha,
-       const double * a,
-       const int *    lda,
-       const double * beta,
-       double *       c,
-       const int *    ldc);
-void
-dgemm_(const char *   transa,
-       const char *   transb,
-       const int *    m,
-       const int *    n,
-       const int *    k,
-       const double * alpha,
-       const double * a,
-       const int *    lda,
-       const double * b,
-       const int *    ldb,
-       const double * beta,
-       double *       c,
-       const int *    ldc);
-}
 
 namespace bmr {
 namespace fem {
-namespace {
-
-/** Tiles of the dense root separator: 192 x 192 (a dgemm of 7 M multiply-adds, ~0.3 ms: fine enough to share a
- * 2316-column root among two threads, coarse enough for the BLAS to run at its speed). */
-constexpr int TileSize = 192;
-
-
-/** L_kk = chol(A_kk) in place (lower); 0, or LAPACK's info (> 0: the leading minor of that order is not positive). */
-int
-FactorDiagonal(int k, double * a, int ld)
-{
-  int info = 0;
-  dpotrf_("L", &k, a, &ld, &info);
-  return info;
-}
-
-/** B <- B L^-T for the rows x k block B below the k x k factor L. */
-void
-SolveBelow(int rows, int k, const double * l, int ld, double * b, int ldb)
-{
-  const double one = 1.0;
-  dtrsm_("R", "L", "T", "N", &rows, &k, &one, l, &ld, b, &ldb);
-}
-
-/** C <- beta C + alpha A A^T (lower triangle) for the n x k block A. */
-void
-SymmetricUpdate(int n, int k, double alpha, const double * a, int lda, double beta, double * c, int ldc)
-{
-  dsyrk_("L", "N", &n, &k, &alpha, a, &lda, &beta, c, &ldc);
-}
-
-/** C <- C - A B^T for the m x k block A and the n x k block B. */
-void
-SubtractProduct(int m, int n, int k, const double * a, int lda, const double * b, int ldb, double * c, int ldc)
-{
-  const double minusOne = -1.0, one = 1.0;
-  dgemm_("N", "T", &m, &n, &k, &minusOne, a, &lda, b, &ldb, &one, c, &ldc);
-}
-
-/** task(0), ..., task(count - 1), each once, on \a threads threads (2 at most); the tasks must be independent. */
-template<typename TTask>
-void
-RunTasks(int count, unsigned threads, const TTask & task)
-{
-  std::atomic<int> next{ 0 };
-  const auto       work = [&next, &task, count]() {
-    for (int i = next.fetch_add(1); i < count; i = next.fetch_add(1))
-    {
-      task(i);
-    }
-  };
-  std::thread helper;
-  if (threads >= 2 && count > 1)
-  {
-    try
-    {
-      helper = std::thread(work);
-    }
-    catch (const std::system_error &)
-    {
-      // No thread to be had: the same tasks on this one.
-    }
-  }
-  work();
-  if (helper.joinable())
-  {
-    helper.join();
-  }
-}
-
-} // namespace
 
 bool
-SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
-                                   cholmod_common &                  common,
-                                   int                               n,
-                                   const int *                       columnStarts,
-                                   const int *                       rowIndices,
-                                   const std::vector<std::int32_t> * bins)
+SupernodalFactorizer::SetStructure(cholmod_factor *                               factor,
+                                   cholmod_common &                               common,
+                                   int                                            n,
+                                   const int *                                    columnStarts,
+                                   const int *                                    rowIndices,
+                                   const std::vector<std::vector<std::int32_t>> & bins)
 {
   m_Factor = nullptr;
   if (factor == nullptr || !factor->is_super || factor->itype != CHOLMOD_INT || factor->dtype != CHOLMOD_DOUBLE ||
-      factor->n != static_cast<std::size_t>(n) || factor->nsuper == 0)
+      factor->n != static_cast<std::size_t>(n) || factor->nsuper == 0 || bins.empty())
   {
     return false;
   }
@@ -169,25 +52,22 @@ SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
   }
   const Supernodes L(*factor);
   const auto       nsuper = static_cast<std::int32_t>(factor->nsuper);
-  std::vector<int> owner(nsuper, 2); // bin 0, bin 1, or the top (2)
-  for (int b = 0; b < 2; ++b)
+  const int        topPart = static_cast<int>(bins.size());
+  std::vector<int> owner(nsuper, topPart); // a bin, or the top
+  m_Bin = bins;
+  for (int b = 0; b < topPart; ++b)
   {
-    m_Bin[b] = bins[b];
     for (const std::int32_t s : m_Bin[b])
     {
       owner[s] = b;
     }
   }
   m_Top.clear();
-  m_AccumulatorAt.assign(nsuper, -1);
-  std::int64_t accumulated = 0;
   for (std::int32_t s = 0; s < nsuper; ++s)
   {
-    if (owner[s] == 2)
+    if (owner[s] == topPart)
     {
       m_Top.push_back(s);
-      m_AccumulatorAt[s] = accumulated;
-      accumulated += static_cast<std::int64_t>(L.BlockSize(s));
     }
   }
   m_SupernodeOf.assign(n, 0);
@@ -201,25 +81,58 @@ SupernodalFactorizer::SetStructure(cholmod_factor *                  factor,
     m_Factor = nullptr;
     return false;
   }
-  // Not written here: bin 1 zeroes the accumulator in every factorization, beside bin 0, and the dsyrk overwrites
-  // the update workspaces (first writes cost page faults). Each workspace holds its part's largest update, so that
-  // it is allocated once per analysis (the top uses bin 0's).
-  std::size_t largest[2] = { 0, 0 }; // rows below the diagonal block
+  FindPulls(owner);
+  // The workspaces hold their part's largest update, so that each is allocated once per analysis.
+  m_LargestBelow[0] = m_LargestBelow[1] = 0;
   for (std::int32_t s = 0; s < nsuper; ++s)
   {
-    std::size_t & part = largest[owner[s] == 1 ? 1 : 0];
+    std::size_t & part = m_LargestBelow[owner[s] == topPart ? 1 : 0];
     part = std::max(part, static_cast<std::size_t>(L.Rows(s) - L.Columns(s)));
   }
-  for (int b = 0; b < 2; ++b)
-  {
-    m_Update[b].reset(new double[std::max<std::size_t>(largest[b] * largest[b], 1)]);
-    m_Relative[b].assign(largest[b], 0);
-  }
-  m_Accumulator.reset(new double[static_cast<std::size_t>(accumulated)]);
-  m_AccumulatorSize = static_cast<std::size_t>(accumulated);
+  m_BinWork.clear();
+  m_PullWork.clear();
+  m_TopUpdate.clear();
   m_Entries = static_cast<std::size_t>(columnStarts[n]);
   SetVaryingEntries({});
   return true;
+}
+
+/** For each bin supernode d, where its rows below reach the top (m_TopRowsFrom: its ancestors in the bin come
+ * first, their columns precede the top's), and for each top supernode t the bin supernodes whose rows reach its
+ * columns, with the range of those rows (m_Pulls, ascending in d). */
+void
+SupernodalFactorizer::FindPulls(const std::vector<int> & owner)
+{
+  const Supernodes L(*m_Factor);
+  const auto       nsuper = static_cast<std::int32_t>(m_Factor->nsuper);
+  const int        topPart = static_cast<int>(m_Bin.size());
+  m_TopRowsFrom.assign(nsuper, 0);
+  m_Pulls.assign(nsuper, {});
+  for (std::int32_t d = 0; d < nsuper; ++d)
+  {
+    const int   rowsBelow = L.Rows(d) - L.Columns(d);
+    const int * below = L.rows + L.rowsAt[d] + L.Columns(d);
+    int         j = 0;
+    while (j < rowsBelow && owner[m_SupernodeOf[below[j]]] != topPart)
+    {
+      ++j;
+    }
+    m_TopRowsFrom[d] = j;
+    if (owner[d] == topPart)
+    {
+      continue;
+    }
+    while (j < rowsBelow)
+    {
+      const std::int32_t t = m_SupernodeOf[below[j]];
+      const int          begin = j;
+      while (j < rowsBelow && below[j] < L.first[t + 1])
+      {
+        ++j;
+      }
+      m_Pulls[t].push_back({ d, begin, j });
+    }
+  }
 }
 
 void
@@ -260,6 +173,7 @@ SupernodalFactorizer::SplitByVariation(std::vector<char> varies)
     }
   }
   m_VaryingShare = all > 0.0 ? varying / all : 0.0;
+  m_Varies = varies;
   const auto split = [&varies](const std::vector<std::int32_t> & part,
                                std::vector<std::int32_t> &       fixed,
                                std::vector<std::int32_t> &       varying) {
@@ -270,16 +184,20 @@ SupernodalFactorizer::SplitByVariation(std::vector<char> varies)
       (varies[s] ? varying : fixed).push_back(s);
     }
   };
-  split(m_Bin[0], m_FixedBin[0], m_VaryingBin[0]);
-  split(m_Bin[1], m_FixedBin[1], m_VaryingBin[1]);
+  m_FixedBin.resize(m_Bin.size());
+  m_VaryingBin.resize(m_Bin.size());
+  for (std::size_t b = 0; b < m_Bin.size(); ++b)
+  {
+    split(m_Bin[b], m_FixedBin[b], m_VaryingBin[b]);
+  }
   split(m_Top, m_FixedTop, m_VaryingTop);
   m_FixedPartKept = false;
 }
 
 /** Where each entry of A goes in L: column min(i', j'), row max(i', j') of the permuted matrix, in the block of
- * that column's supernode (the row found by bisection in the supernode's ascending row list), and which part owns
- * that block, so that each bin writes only its own. False when an entry lies outside L's pattern (not CHOLMOD's
- * analysis of this matrix). */
+ * that column's supernode (the row found by bisection in the supernode's ascending row list), and the entries of
+ * each part (the bins, then the top), so that each bin writes only its own blocks. False when an entry lies outside L's
+ * pattern (not CHOLMOD's analysis of this matrix). */
 bool
 SupernodalFactorizer::PlaceEntries(int                      n,
                                    const int *              columnStarts,
@@ -295,7 +213,7 @@ SupernodalFactorizer::PlaceEntries(int                      n,
   }
   const auto entries = static_cast<std::size_t>(columnStarts[n]);
   m_Position.resize(entries);
-  m_Owner.resize(entries);
+  m_EntriesOf.assign(m_Bin.size() + 1, {});
   m_EntrySupernode.resize(entries);
   for (int j = 0; j < n; ++j)
   {
@@ -311,24 +229,21 @@ SupernodalFactorizer::PlaceEntries(int                      n,
         return false;
       }
       m_Position[p] = L.valuesAt[s] + (column - L.first[s]) * L.Rows(s) + static_cast<int>(at - rows);
-      m_Owner[p] = static_cast<char>(owner[s]);
+      m_EntriesOf[owner[s]].push_back(static_cast<std::size_t>(p));
       m_EntrySupernode[p] = s;
     }
   }
   return true;
 }
 
-/** Writes A's entries of \a part (bin 0, bin 1, the top: 2) into L. */
+/** Writes A's entries of \a part (a bin, or the top: the number of bins) into L. */
 void
 SupernodalFactorizer::PlaceValues(int part, const double * values)
 {
   const Supernodes L(*m_Factor);
-  for (std::size_t p = 0; p < m_Position.size(); ++p)
+  for (const std::size_t p : m_EntriesOf[part])
   {
-    if (m_Owner[p] == part)
-    {
-      L.values[m_Position[p]] = values[p];
-    }
+    L.values[m_Position[p]] = values[p];
   }
 }
 
@@ -374,9 +289,12 @@ int
 SupernodalFactorizer::Factorize(const double * fixedValues, const double * varyingValues, unsigned threads)
 {
   m_FixedPartKept = false;
-  const int n = static_cast<int>(m_Factor->n);
-  const int column = FactorizeParts(m_FixedBin, m_FixedTop, fixedValues, threads);
-  if (column < n || (m_VaryingTop.empty() && m_VaryingBin[0].empty() && m_VaryingBin[1].empty()))
+  const int  n = static_cast<int>(m_Factor->n);
+  const int  column = FactorizeParts(m_FixedBin, m_FixedTop, fixedValues, false, threads);
+  const bool noneVaries =
+    m_VaryingTop.empty() &&
+    std::all_of(m_VaryingBin.begin(), m_VaryingBin.end(), [](const auto & bin) { return bin.empty(); });
+  if (column < n || noneVaries)
   {
     return column;
   }
@@ -410,16 +328,22 @@ SupernodalFactorizer::FactorizeVarying(const double * varyingValues, unsigned th
       L.values[m_Position[p]] += varyingValues[p];
     }
   }
-  return FactorizeParts(m_VaryingBin, m_VaryingTop, nullptr, threads);
+  return FactorizeParts(m_VaryingBin, m_VaryingTop, nullptr, true, threads);
 }
 
 /** Copies the varying supernodes' blocks into m_KeptBlocks, or back (\a restore). */
 void
 SupernodalFactorizer::KeepVaryingBlocks(bool restore)
 {
-  const Supernodes L(*m_Factor);
-  std::size_t      size = 0;
-  for (const auto * part : { &m_VaryingBin[0], &m_VaryingBin[1], &m_VaryingTop })
+  const Supernodes                               L(*m_Factor);
+  std::size_t                                    size = 0;
+  std::vector<const std::vector<std::int32_t> *> parts;
+  for (const auto & bin : m_VaryingBin)
+  {
+    parts.push_back(&bin);
+  }
+  parts.push_back(&m_VaryingTop);
+  for (const auto * part : parts)
   {
     for (const std::int32_t s : *part)
     {
@@ -428,7 +352,7 @@ SupernodalFactorizer::KeepVaryingBlocks(bool restore)
   }
   m_KeptBlocks.resize(size);
   double * kept = m_KeptBlocks.data();
-  for (const auto * part : { &m_VaryingBin[0], &m_VaryingBin[1], &m_VaryingTop })
+  for (const auto * part : parts)
   {
     for (const std::int32_t s : *part)
     {
@@ -445,14 +369,16 @@ SupernodalFactorizer::KeepVaryingBlocks(bool restore)
   }
 }
 
-/** The supernodes \a bins (each a subsequence of that bin's) side by side, then \a top in order. With \a values,
- * every block is first set to A's entries (\a values) and the accumulated updates of bin 1 are subtracted from every
- * top block; without, the blocks hold what they hold and only \a top's receive them. */
+/** The supernodes \a bins (each a subsequence of that bin's) side by side, the top blocks' pulls, then \a top in
+ * order. With \a values, every block is first set to A's entries and every top block pulls (the fixed pass);
+ * without, the blocks hold what they hold and only \a top's pull. Pulled are the bin supernodes of this pass: the
+ * varying (\a varyingPass) or the others. */
 int
-SupernodalFactorizer::FactorizeParts(const std::vector<std::int32_t> * bins,
-                                     const std::vector<std::int32_t> & top,
-                                     const double *                    values,
-                                     unsigned                          threads)
+SupernodalFactorizer::FactorizeParts(const std::vector<std::vector<std::int32_t>> & bins,
+                                     const std::vector<std::int32_t> &              top,
+                                     const double *                                 values,
+                                     bool                                           varyingPass,
+                                     unsigned                                       threads)
 {
   const Supernodes L(*m_Factor);
   const int        n = static_cast<int>(m_Factor->n);
@@ -462,49 +388,26 @@ SupernodalFactorizer::FactorizeParts(const std::vector<std::int32_t> * bins,
     {
       std::fill(L.Block(s), L.Block(s) + L.BlockSize(s), 0.0);
     }
-    PlaceValues(2, values);
+    PlaceValues(static_cast<int>(m_Bin.size()), values);
   }
-  int         failed[2] = { n, n };
-  const auto  runBin = [this, bins, values, &failed](int bin) { failed[bin] = FactorizeBin(bin, bins[bin], values); };
-  std::thread helper;
-  if (threads >= 2 && !m_Bin[0].empty() && !m_Bin[1].empty())
+  const int        count = static_cast<int>(bins.size());
+  std::vector<int> failed(count, n);
+  for (unsigned w = 0; w < ParallelWorkers(count, threads); ++w)
   {
-    try
-    {
-      helper = std::thread(runBin, 1);
-    }
-    catch (const std::system_error &)
-    {
-      // No thread to be had: the same work in sequence.
-    }
+    WorkspaceFor(m_BinWork, w, m_LargestBelow[0] * m_LargestBelow[0], m_LargestBelow[0]);
   }
-  runBin(0);
-  if (helper.joinable())
+  ParallelFor(count, threads, [&](int bin, int worker) {
+    failed[bin] = FactorizeBin(bin, bins[bin], values, m_BinWork[worker]);
+  });
+  const int firstFailed = *std::min_element(failed.begin(), failed.end());
+  if (firstFailed < n)
   {
-    helper.join();
+    return firstFailed;
   }
-  else
-  {
-    runBin(1);
-  }
-  if (std::min(failed[0], failed[1]) < n)
-  {
-    return std::min(failed[0], failed[1]);
-  }
-  for (const std::int32_t s : values != nullptr ? m_Top : top)
-  {
-    double *       block = L.Block(s);
-    const double * accumulated = m_Accumulator.get() + m_AccumulatorAt[s];
-    const auto     size = L.BlockSize(s);
-    for (std::size_t e = 0; e < size; ++e)
-    {
-      block[e] -= accumulated[e];
-    }
-  }
+  PullBinUpdates(values != nullptr ? m_Top : top, varyingPass, threads);
   for (const std::int32_t s : top)
   {
-    const bool dense = L.Rows(s) == L.Columns(s) && L.Columns(s) > 2 * TileSize;
-    const int  column = dense ? FactorizeDenseRoot(s, threads) : FactorizeSupernode(s, 0);
+    const int column = FactorizeTopSupernode(s, threads);
     if (column < n)
     {
       return column;
@@ -514,9 +417,35 @@ SupernodalFactorizer::FactorizeParts(const std::vector<std::int32_t> * bins,
   return n;
 }
 
+/** The workspace of \a worker in \a pool, made (once) with room for \a updateSize values and \a rows rows. */
+SupernodalFactorizer::Workspace &
+SupernodalFactorizer::WorkspaceFor(std::vector<Workspace> & pool,
+                                   std::size_t              worker,
+                                   std::size_t              updateSize,
+                                   std::size_t              rows)
+{
+  if (pool.size() <= worker)
+  {
+    pool.resize(worker + 1);
+  }
+  Workspace & work = pool[worker];
+  if (work.update.size() < updateSize)
+  {
+    work.update.resize(updateSize);
+  }
+  if (work.relative.size() < rows)
+  {
+    work.relative.resize(rows);
+  }
+  return work;
+}
+
 /** With \a values, the bin's blocks from A; then \a supernodes (of this bin) in order (children before parents). */
 int
-SupernodalFactorizer::FactorizeBin(int bin, const std::vector<std::int32_t> & supernodes, const double * values)
+SupernodalFactorizer::FactorizeBin(int                               bin,
+                                   const std::vector<std::int32_t> & supernodes,
+                                   const double *                    values,
+                                   Workspace &                       work)
 {
   const Supernodes L(*m_Factor);
   if (values != nullptr)
@@ -527,14 +456,10 @@ SupernodalFactorizer::FactorizeBin(int bin, const std::vector<std::int32_t> & su
     }
     PlaceValues(bin, values);
   }
-  if (bin == 1)
-  {
-    std::fill(m_Accumulator.get(), m_Accumulator.get() + m_AccumulatorSize, 0.0);
-  }
   const int n = static_cast<int>(m_Factor->n);
   for (const std::int32_t s : supernodes)
   {
-    const int column = FactorizeSupernode(s, bin);
+    const int column = FactorizeBinSupernode(s, work);
     if (column < n)
     {
       return column;
@@ -543,12 +468,13 @@ SupernodalFactorizer::FactorizeBin(int bin, const std::vector<std::int32_t> & su
   return n;
 }
 
-/** L_ss = chol(B_ss), L_rs = B_rs L_ss^-T, and the update L_rs L_rs^T of the ancestors (Scatter()). */
+/** L_ss = chol(B_ss), L_rs = B_rs L_ss^-T, and the update L_rs L_rs^T of the ancestors in the bin: its columns
+ * before m_TopRowsFrom[s] (dsyrk over those rows, dgemm for the rows below them), scattered into their blocks. */
 int
-SupernodalFactorizer::FactorizeSupernode(std::int32_t s, int bin)
+SupernodalFactorizer::FactorizeBinSupernode(std::int32_t s, Workspace & work)
 {
   const Supernodes L(*m_Factor);
-  const int        k = L.Columns(s), m = L.Rows(s), b = m - k;
+  const int        k = L.Columns(s), m = L.Rows(s), b = m - k, inBin = m_TopRowsFrom[s];
   double *         block = L.Block(s);
   const int        info = FactorDiagonal(k, block, m);
   if (info != 0)
@@ -558,28 +484,144 @@ SupernodalFactorizer::FactorizeSupernode(std::int32_t s, int bin)
   if (b > 0)
   {
     SolveBelow(b, k, block, m, block + k, m);
-    double * update = m_Update[bin].get(); // b x b fits: SetStructure()
-    SymmetricUpdate(b, k, 1.0, block + k, m, 0.0, update, b);
-    Scatter(s, update, bin);
+  }
+  if (inBin > 0)
+  {
+    double * update = work.update.data(); // b x b fits: SetStructure()
+    SymmetricUpdate(inBin, k, 1.0, block + k, m, 0.0, update, b);
+    if (b > inBin)
+    {
+      MultiplyTransposed(b - inBin, inBin, k, 1.0, block + k + inBin, m, block + k, m, 0.0, update + inBin, b);
+    }
+    ScatterColumns(s, update, 0, inBin, work.relative.data());
   }
   return static_cast<int>(m_Factor->n);
 }
 
-/** Subtracts the b x b update C (lower triangle) of supernode s from the blocks of its ancestors: the columns of C
- * that fall in one ancestor t at a time, each row placed by its position in t's row list. Bin 1 adds its updates
- * of the top into the accumulator instead. */
+/** Each block of \a top pulls the updates of its bin descendants of this pass, in tiles of its columns side by
+ * side. */
 void
-SupernodalFactorizer::Scatter(std::int32_t s, const double * update, int bin)
+SupernodalFactorizer::PullBinUpdates(const std::vector<std::int32_t> & top, bool varyingPass, unsigned threads)
+{
+  const Supernodes                 L(*m_Factor);
+  std::vector<std::pair<int, int>> tasks; // (index in top, first column of the tile)
+  for (std::size_t i = 0; i < top.size(); ++i)
+  {
+    if (m_Pulls[top[i]].empty())
+    {
+      continue;
+    }
+    for (int c = 0; c < L.Columns(top[i]); c += TileSize)
+    {
+      tasks.emplace_back(static_cast<int>(i), c);
+    }
+  }
+  for (unsigned w = 0; w < ParallelWorkers(static_cast<int>(tasks.size()), threads); ++w)
+  {
+    WorkspaceFor(m_PullWork, w, m_LargestBelow[0] * TileSize, m_LargestBelow[0]);
+  }
+  ParallelFor(static_cast<int>(tasks.size()), threads, [&](int task, int worker) {
+    const auto [index, column] = tasks[task];
+    const std::int32_t t = top[index];
+    PullColumns(t, column, std::min(column + TileSize, L.Columns(t)), varyingPass, m_PullWork[worker]);
+  });
+}
+
+/** Columns [firstColumn, endColumn) of top supernode t minus, for each bin descendant d of this pass in ascending
+ * order, L_{r,d} L_{j,d}^T: j the rows of d in those columns, r those and every row of d after them (one dgemm). */
+void
+SupernodalFactorizer::PullColumns(std::int32_t t, int firstColumn, int endColumn, bool varyingPass, Workspace & work)
+  const
+{
+  const Supernodes L(*m_Factor);
+  const int *      rowsOfT = L.rows + L.rowsAt[t];
+  const int        ld = L.Rows(t);
+  double *         target = L.Block(t);
+  for (const Pull & pull : m_Pulls[t])
+  {
+    const std::int32_t d = pull.from;
+    if ((m_Varies.empty() ? false : m_Varies[d] != 0) != varyingPass)
+    {
+      continue;
+    }
+    const int   k = L.Columns(d), m = L.Rows(d), b = m - k;
+    const int * below = L.rows + L.rowsAt[d] + k;
+    const int   j0 =
+      static_cast<int>(std::lower_bound(below + pull.begin, below + pull.end, L.first[t] + firstColumn) - below);
+    const int j1 = static_cast<int>(std::lower_bound(below + j0, below + pull.end, L.first[t] + endColumn) - below);
+    if (j0 == j1)
+    {
+      continue;
+    }
+    const int      rows = b - j0, columns = j1 - j0;
+    const double * lower = L.Block(d) + k + j0;
+    double *       product = work.update.data(); // rows x columns fits: PullBinUpdates()
+    MultiplyTransposed(rows, columns, k, 1.0, lower, m, lower, m, 0.0, product, rows);
+    int * relative = work.relative.data();
+    for (int i = j0, q = 0; i < b; ++i, ++q)
+    {
+      while (rowsOfT[q] != below[i]) // present: UpdatesFit()
+      {
+        ++q;
+      }
+      relative[i - j0] = q;
+    }
+    for (int j = j0; j < j1; ++j)
+    {
+      double *       column = target + static_cast<std::size_t>(below[j] - L.first[t]) * ld;
+      const double * c = product + static_cast<std::size_t>(j - j0) * rows;
+      for (int i = j - j0; i < rows; ++i)
+      {
+        column[relative[i]] -= c[i];
+      }
+    }
+  }
+}
+
+/** A top supernode in tiles: its panel (FactorizePanelInTiles()), then its update of its ancestors in tiles
+ * (OuterProductInTiles()) scattered in tiles of its columns, side by side (each column of C into one target). */
+int
+SupernodalFactorizer::FactorizeTopSupernode(std::int32_t s, unsigned threads)
+{
+  const Supernodes L(*m_Factor);
+  const int        k = L.Columns(s), m = L.Rows(s), b = m - k;
+  double *         block = L.Block(s);
+  const int        info = FactorizePanelInTiles(block, k, m, threads);
+  if (info != 0)
+  {
+    return L.first[s] + std::max(info, 1) - 1;
+  }
+  if (b == 0)
+  {
+    return static_cast<int>(m_Factor->n);
+  }
+  m_TopUpdate.resize(std::max(m_TopUpdate.size(), m_LargestBelow[1] * m_LargestBelow[1]));
+  OuterProductInTiles(block + k, m, b, k, m_TopUpdate.data(), threads);
+  const int tiles = (b + TileSize - 1) / TileSize;
+  for (unsigned w = 0; w < ParallelWorkers(tiles, threads); ++w)
+  {
+    WorkspaceFor(m_PullWork, w, 0, m_LargestBelow[1]);
+  }
+  ParallelFor(tiles, threads, [&](int tile, int worker) {
+    ScatterColumns(
+      s, m_TopUpdate.data(), tile * TileSize, std::min(b, (tile + 1) * TileSize), m_PullWork[worker].relative.data());
+  });
+  return static_cast<int>(m_Factor->n);
+}
+
+/** Subtracts columns [begin, end) of the b x b update C (lower triangle, leading dimension b) of supernode s from
+ * the blocks of its ancestors: the columns that fall in one ancestor t at a time, each row placed by its position
+ * in t's row list (\a relative: room for b rows). */
+void
+SupernodalFactorizer::ScatterColumns(std::int32_t s, const double * update, int begin, int end, int * relative) const
 {
   const Supernodes L(*m_Factor);
   const int        b = L.Rows(s) - L.Columns(s);
   const int *      below = L.rows + L.rowsAt[s] + L.Columns(s);
-  int *            relative = m_Relative[bin].data(); // b fit: SetStructure()
-  for (int j = 0; j < b;)
+  for (int j = begin; j < end;)
   {
     const std::int32_t t = m_SupernodeOf[below[j]];
     const int *        rows = L.rows + L.rowsAt[t];
-    const int          ld = L.Rows(t);
     for (int i = j, q = 0; i < b; ++i, ++q)
     {
       while (rows[q] != below[i]) // present: UpdatesFit()
@@ -588,76 +630,18 @@ SupernodalFactorizer::Scatter(std::int32_t s, const double * update, int bin)
       }
       relative[i] = q;
     }
-    const bool accumulate = bin == 1 && m_AccumulatorAt[t] >= 0; // bin 1 and a top supernode
-    double *   target = accumulate ? m_Accumulator.get() + m_AccumulatorAt[t] : L.Block(t);
-    for (; j < b && below[j] < L.first[t + 1]; ++j)
+    const int ld = L.Rows(t);
+    double *  target = L.Block(t);
+    for (; j < end && below[j] < L.first[t + 1]; ++j)
     {
       double *       column = target + static_cast<std::size_t>(below[j] - L.first[t]) * ld;
       const double * c = update + static_cast<std::size_t>(j) * b;
-      if (accumulate)
+      for (int i = j; i < b; ++i)
       {
-        for (int i = j; i < b; ++i)
-        {
-          column[relative[i]] += c[i];
-        }
-      }
-      else
-      {
-        for (int i = j; i < b; ++i)
-        {
-          column[relative[i]] -= c[i];
-        }
+        column[relative[i]] -= c[i];
       }
     }
   }
-}
-
-/** The dense root (no rows below its diagonal block) in tiles, right-looking: for each tile column kt, the
- * diagonal tile's factor, the tiles below it solved (one task each), then the trailing tiles (i >= j > kt) updated
- * (one task each). The tasks of a step are independent and each one BLAS call: the same result on any thread. */
-int
-SupernodalFactorizer::FactorizeDenseRoot(std::int32_t s, unsigned threads)
-{
-  const Supernodes L(*m_Factor);
-  const int        k = L.Columns(s), ld = L.Rows(s), tiles = (k + TileSize - 1) / TileSize;
-  double *         a = L.Block(s);
-  const auto       tile = [a, ld](int i, int j) {
-    return a + static_cast<std::size_t>(j) * TileSize * ld + static_cast<std::size_t>(i) * TileSize;
-  };
-  const auto                       width = [k](int i) { return std::min(TileSize, k - i * TileSize); };
-  std::vector<std::pair<int, int>> trailing;
-  for (int kt = 0; kt < tiles; ++kt)
-  {
-    const int info = FactorDiagonal(width(kt), tile(kt, kt), ld);
-    if (info != 0)
-    {
-      return L.first[s] + kt * TileSize + std::max(info, 1) - 1;
-    }
-    RunTasks(tiles - kt - 1, threads, [&](int task) {
-      const int it = kt + 1 + task;
-      SolveBelow(width(it), width(kt), tile(kt, kt), ld, tile(it, kt), ld);
-    });
-    trailing.clear();
-    for (int jt = kt + 1; jt < tiles; ++jt)
-    {
-      for (int it = jt; it < tiles; ++it)
-      {
-        trailing.emplace_back(it, jt);
-      }
-    }
-    RunTasks(static_cast<int>(trailing.size()), threads, [&](int task) {
-      const auto [it, jt] = trailing[task];
-      if (it == jt)
-      {
-        SymmetricUpdate(width(it), width(kt), -1.0, tile(it, kt), ld, 1.0, tile(it, it), ld);
-      }
-      else
-      {
-        SubtractProduct(width(it), width(jt), width(kt), tile(it, kt), ld, tile(jt, kt), ld, tile(it, jt), ld);
-      }
-    });
-  }
-  return static_cast<int>(m_Factor->n);
 }
 
 } // namespace fem

@@ -17,13 +17,12 @@
  *=========================================================================*/
 #include "bmrSupernodalSolve.h"
 
+#include "bmrParallel.h"
 #include "bmrSupernodes.h"
 
 #include <algorithm>
 #include <cstring>
 #include <limits>
-#include <system_error>
-#include <thread>
 
 namespace bmr {
 namespace fem {
@@ -191,23 +190,31 @@ struct SupernodeTree
   }
 };
 
-/** Candidate subtrees (by root) dealt to two bins, largest first, each to the lighter bin (ties to bin 0). */
+/** Candidate subtrees (by root) dealt to \a bins bins, largest first, each to the lightest bin (ties to the lowest
+ * bin). */
 struct Deal
 {
   std::vector<std::pair<std::int32_t, int>> binOf;
-  double                                    load[2]{ 0.0, 0.0 };
+  std::vector<double>                       load;
+
+  double
+  Heaviest() const
+  {
+    return *std::max_element(load.begin(), load.end());
+  }
 };
 
 Deal
-DealSubtrees(std::vector<std::int32_t> candidates, const SupernodeTree & tree)
+DealSubtrees(std::vector<std::int32_t> candidates, const SupernodeTree & tree, int bins)
 {
   std::sort(candidates.begin(), candidates.end(), [&tree](std::int32_t a, std::int32_t b) {
     return tree.subtree[a] != tree.subtree[b] ? tree.subtree[a] > tree.subtree[b] : a < b;
   });
   Deal deal;
+  deal.load.assign(bins, 0.0);
   for (const std::int32_t c : candidates)
   {
-    const int bin = deal.load[1] < deal.load[0] ? 1 : 0;
+    const int bin = static_cast<int>(std::min_element(deal.load.begin(), deal.load.end()) - deal.load.begin());
     deal.load[bin] += tree.subtree[c];
     deal.binOf.emplace_back(c, bin);
   }
@@ -241,14 +248,14 @@ SupernodalSolver::SetFactor(const cholmod_factor * factor)
     m_PermutedRow[perm != nullptr ? perm[k] : k] = static_cast<std::int32_t>(k);
   }
   m_Y.assign(n, 0.0);
-  m_Shared[0].assign(n, 0.0);
-  m_Shared[1].assign(n, 0.0);
+  m_Shared.assign(NumberOfBins, std::vector<double>(n, 0.0));
   return true;
 }
 
 /** Starting from the roots as candidate subtrees, moves the largest candidate's root into the top, one at a time
- * (64 moves at most: a few levels of nested dissection), deals the candidates to the bins after each move, and
- * keeps the cut with the least estimated critical path: the top's size plus the heavier bin's. */
+ * (256 moves at most: a few levels of nested dissection), deals the candidates to the bins after each move, and
+ * keeps the cut with the least estimated critical path with every bin on a thread of its own: the top's size plus
+ * the heaviest bin's. */
 void
 SupernodalSolver::CutTree()
 {
@@ -261,10 +268,10 @@ SupernodalSolver::CutTree()
   double                    bestCost = std::numeric_limits<double>::infinity();
   std::size_t               bestMoves = 0;
   Deal                      best;
-  for (int round = 0; round <= 64 && !candidates.empty(); ++round)
+  for (int round = 0; round <= 256 && !candidates.empty(); ++round)
   {
-    Deal         deal = DealSubtrees(candidates, tree);
-    const double cost = topSize + std::max(deal.load[0], deal.load[1]);
+    Deal         deal = DealSubtrees(candidates, tree, NumberOfBins);
+    const double cost = topSize + deal.Heaviest();
     if (cost < bestCost)
     {
       bestCost = cost;
@@ -296,8 +303,7 @@ SupernodalSolver::CutTree()
     owner[root] = bin;
   }
   m_Top.clear();
-  m_Bin[0].clear();
-  m_Bin[1].clear();
+  m_Bin.assign(NumberOfBins, {});
   m_TopColumns.clear();
   m_ColumnInTop.assign(m_Factor->n, 0);
   for (std::int32_t s = nsuper - 1; s >= 0; --s)
@@ -326,7 +332,12 @@ SupernodalSolver::CutTree()
   {
     total += v;
   }
-  m_ParallelShare = total > 0.0 ? (best.load[0] + best.load[1]) / total : 0.0;
+  double dealt = 0.0;
+  for (const double load : best.load)
+  {
+    dealt += load;
+  }
+  m_ParallelShare = total > 0.0 ? dealt / total : 0.0;
 }
 
 /** y_s <- L_ss^-1 y_s and the update -L_rs y_s of the rows r below the diagonal block, in a workspace v = (y_s, 0)
@@ -425,25 +436,25 @@ SupernodalSolver::BackwardSupernode(std::int32_t s, std::vector<double> & work)
 }
 
 void
-SupernodalSolver::ForwardBin(int bin)
+SupernodalSolver::ForwardBin(int bin, int worker)
 {
   for (const std::int32_t s : m_Bin[bin])
   {
     if (m_Reached[s])
     {
-      ForwardSupernode(s, m_Shared[bin].data(), m_Work[bin]);
+      ForwardSupernode(s, m_Shared[bin].data(), m_Work[worker]);
     }
   }
 }
 
 void
-SupernodalSolver::BackwardBin(int bin)
+SupernodalSolver::BackwardBin(int bin, int worker)
 {
   for (auto it = m_Bin[bin].rbegin(); it != m_Bin[bin].rend(); ++it)
   {
     if (m_Needed[*it])
     {
-      BackwardSupernode(*it, m_Work[bin]);
+      BackwardSupernode(*it, m_Work[worker]);
     }
   }
 }
@@ -458,32 +469,16 @@ SupernodalSolver::MarkWithAncestors(std::int32_t s, std::vector<char> & marks) c
   }
 }
 
-/** Bin 1 on a second thread while this one does bin 0, or both here: the same operations either way. */
+/** The bins side by side on \a threads threads, or one after the other: the same operations either way. */
 void
-SupernodalSolver::RunBins(void (SupernodalSolver::*pass)(int), unsigned threads)
+SupernodalSolver::RunBins(void (SupernodalSolver::*pass)(int, int), unsigned threads)
 {
-  if (threads >= 2 && !m_Bin[0].empty() && !m_Bin[1].empty())
+  const int bins = static_cast<int>(m_Bin.size());
+  if (m_Work.size() < ParallelWorkers(bins, threads))
   {
-    std::thread worker;
-    try
-    {
-      worker = std::thread(pass, this, 1);
-    }
-    catch (const std::system_error &)
-    {
-      // No thread to be had: the same work in sequence.
-    }
-    (this->*pass)(0);
-    if (worker.joinable())
-    {
-      worker.join();
-      return;
-    }
-    (this->*pass)(1);
-    return;
+    m_Work.resize(ParallelWorkers(bins, threads));
   }
-  (this->*pass)(0);
-  (this->*pass)(1);
+  ParallelFor(bins, threads, [this, pass](int bin, int worker) { (this->*pass)(bin, worker); });
 }
 
 void
@@ -523,10 +518,11 @@ SupernodalSolver::Run(const double * b, double * x, unsigned threads, const std:
   RunBins(&SupernodalSolver::ForwardBin, threads);
   for (const std::int32_t r : m_TopColumns)
   {
-    m_Y[r] += m_Shared[0][r];
-    m_Y[r] += m_Shared[1][r];
-    m_Shared[0][r] = 0.0;
-    m_Shared[1][r] = 0.0;
+    for (std::vector<double> & shared : m_Shared)
+    {
+      m_Y[r] += shared[r];
+      shared[r] = 0.0;
+    }
   }
   for (const std::int32_t s : m_Top)
   {

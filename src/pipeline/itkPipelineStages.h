@@ -213,7 +213,8 @@ struct EstimationSetup
   const std::vector<bmr::TetrahedralMesh> * resampleMeshes{ nullptr };
   /** The rescans' distance maps, made while the fit runs (may be null: each rescan makes its own). */
   RescanMapsPrefetch * rescanMaps{ nullptr };
-  /** FEMElasticityOptimizer::SetNumberOfFineSolveThreads(): 2 only when no other work runs beside the fit. */
+  /** FEMElasticityOptimizer::SetNumberOfFineSolveThreads(): fewer than the budget when other work runs beside the
+   * fit (a resample's estimation: one, beside the others). */
   unsigned int fineSolveThreads{ 1 };
   /** Whether the label voxels allow a stated modulus (UncertaintySettings::statedVoxelLimitMM): without, no
    * uncertainty of it is computed, neither resamples nor the curvature. */

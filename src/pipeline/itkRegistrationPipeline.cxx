@@ -569,12 +569,13 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     nullptr, {}, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans, &fixedProbabilities
   };
   setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
-  // The fine solves take the second core unless the interval's prefetches (below) may run on it.
+  // The fine solves take every core but the one the interval's prefetches (below) may run on.
   const UncertaintyMethodEnum method = settings.uncertainty.method;
   setup.statesModulus = StatesModulus(coarsestVoxel, settings.uncertainty);
   const bool resamples =
     setup.statesModulus && (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
-  setup.fineSolveThreads = resamples ? 1 : 2;
+  const unsigned threads = MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  setup.fineSolveThreads = resamples ? std::max(1U, threads - 1) : threads;
   // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
   // the estimation's thread that takes the mesh when it is finished during the sweep.
   std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch;
