@@ -131,16 +131,16 @@ public:
   void
   SetRefactorizationThreshold(double fraction);
 
-  /** The factorizations and triangular solves of every Solve() on up to \a threads threads (2 used at most;
-   * default 1): the factor's elimination tree is cut into the ancestors of everything and two halves of about
-   * equal size below them, factorized and solved side by side, and the dense root separator is factorized in tiles
-   * shared by the threads. The displacements are the same bit for bit whatever the number (each value is computed
-   * by the same operations in the same order); only the time changes. Use 2 when a core is otherwise idle during
-   * the solves, 1 when other work runs beside them. 0 is taken as 1. */
+  /** The factorizations and triangular solves of every Solve() on up to \a threads threads (default 1; 0 is taken
+   * as 1): the factor's elimination tree is cut into a fixed number of bins of subtrees, factorized and solved side
+   * by side, and their ancestors, each factorized in tiles shared by the threads. The displacements are the same
+   * bit for bit whatever the number (the cut does not depend on it, and each value is computed by the same
+   * operations in the same order); only the time changes. The threads come from TBB's pool, shared with the
+   * host. */
   void
   SetNumberOfSolveThreads(unsigned threads);
-  /** The fraction of the current factor's entries in the two halves that the solve threads take side by side (the
-   * rest, the ancestors of both, is solved by one thread); 0 before the first factorization. */
+  /** The fraction of the current factor's entries in the bins that the solve threads take side by side (the rest,
+   * their ancestors, is solved by one thread); 0 before the first factorization. */
   double
   GetParallelSolveShare() const;
   /** Whether the current analysis is factorized by the project's tree-cut supernodal factorization (the default
@@ -148,6 +148,10 @@ public:
    * the first factorization. */
   bool
   UsesTreeCutFactorization() const;
+  /** CHOLMOD's own factorization and solves (one thread) instead of the tree-cut ones, for every later
+   * factorization: the reference the tree-cut factorization is tested against. Default false. */
+  void
+  SetReferenceFactorization(bool useCholmod);
 
   /** Assembles K_ff and factorizes it; checks the model first.
    *

@@ -81,6 +81,7 @@ struct LinearElasticModel::Impl
   bool                                        triangularCut{ false };    // its tree cut for the current analysis
   bool                                        ownFactorization{ false }; // factorizer set for the current analysis
   bool                                        triangularReady{ false };  // and the factor computed
+  bool                                        referenceOnly{ false };    // CHOLMOD's factorization and solves
   unsigned                                    solveThreads{ 1 };
   bool                                        analyzed{ false };
   bool                                        factorized{ false };
@@ -201,7 +202,7 @@ struct LinearElasticModel::Impl
     {
       cholmod_change_factor(CHOLMOD_REAL, true, true, true, true, factor, &solver.cholmod());
     }
-    triangularCut = triangular.SetFactor(factor);
+    triangularCut = !referenceOnly && triangular.SetFactor(factor);
     Kff.makeCompressed();
     ownFactorization = triangularCut && factorizer.SetStructure(factor,
                                                                 solver.cholmod(),
@@ -777,6 +778,17 @@ bool
 LinearElasticModel::UsesTreeCutFactorization() const
 {
   return m_Impl->triangularReady && m_Impl->ownFactorization;
+}
+
+void
+LinearElasticModel::SetReferenceFactorization(bool useCholmod)
+{
+  if (m_Impl->referenceOnly != useCholmod)
+  {
+    m_Impl->referenceOnly = useCholmod;
+    m_Impl->triangularCut = false; // the next factorization cuts (or not) again
+    m_Impl->factorized = false;
+  }
 }
 
 double
