@@ -33,6 +33,7 @@
 // Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
 // written to temporary names and renamed when complete.
 #include "biomechregCommon.h"
+#include "bmrTaskTrace.h"
 #include "itkBiomechanicalReports.h"
 #include "itkMultiThreaderBase.h"
 #include "itkVersion.h"
@@ -41,6 +42,7 @@
 #include <cmath>
 #include <filesystem>
 #include <future>
+#include <memory>
 
 namespace {
 using namespace bmrcli;
@@ -291,6 +293,40 @@ WritePhantom(const std::string &          out,
 }
 } // namespace bmrcli
 
+namespace bmrcli {
+
+/** Records the parallel work (bmr::TaskTrace) into \a path, when given, until the command returns. */
+class TaskTraceFile
+{
+public:
+  explicit TaskTraceFile(std::string path)
+    : m_Path(std::move(path))
+    , m_Trace(m_Path.empty() ? nullptr : std::make_unique<bmr::TaskTrace>())
+  {}
+  ~TaskTraceFile()
+  {
+    try
+    {
+      if (m_Trace)
+      {
+        m_Trace->Write(m_Path);
+      }
+    }
+    catch (const std::exception & e)
+    {
+      std::cerr << "biomechreg: error: " << e.what() << std::endl;
+    }
+  }
+  TaskTraceFile(const TaskTraceFile &) = delete;
+  TaskTraceFile &
+  operator=(const TaskTraceFile &) = delete;
+
+private:
+  std::string                     m_Path;
+  std::unique_ptr<bmr::TaskTrace> m_Trace;
+};
+} // namespace bmrcli
+
 int
 main(int argc, char * argv[])
 {
@@ -300,7 +336,8 @@ main(int argc, char * argv[])
     std::vector<std::string> args(argv + 1, argv + argc);
     const GlobalOptions      global = TakeGlobalOptions(args);
     ApplyGlobalOptions(global);
-    const std::string command = args.empty() ? std::string() : args.front();
+    const TaskTraceFile trace(global.taskTrace);
+    const std::string   command = args.empty() ? std::string() : args.front();
     if (global.version || command == "version")
     {
       std::cout << "biomechreg " << BMR_VERSION << " (ITKBiomechanicalRegistration; ITK "

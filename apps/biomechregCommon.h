@@ -62,6 +62,7 @@ struct GlobalOptions
   bool         quiet{ false };
   bool         verbose{ false };
   unsigned int threads{ 0 }; ///< the library's and ITK's threads (the BLAS runs on one); 0: all cores
+  std::string  taskTrace;    ///< where to write the parallel work's trace (bmr::TaskTrace); empty: none
 };
 
 /** On Linux with glibc: when GLIBC_TUNABLES does not set glibc.malloc.hugetlb, restarts the program (the same
@@ -73,7 +74,7 @@ struct GlobalOptions
 void
 RestartWithHugePageMalloc(char * argv[]);
 
-/** Removes --help/-h, --version, --quiet/-q, --verbose/-v and --threads N from \a args. */
+/** Removes --help/-h, --version, --quiet/-q, --verbose/-v, --threads N and --task-trace FILE from \a args. */
 GlobalOptions
 TakeGlobalOptions(std::vector<std::string> & args);
 /** Verbosity, thread counts, and ITK's output window (warnings as one "warning: ..." line). */

@@ -291,6 +291,14 @@ TakeGlobalOptions(std::vector<std::string> & args)
       }
       o.threads = static_cast<unsigned int>(n);
     }
+    else if (a == "--task-trace")
+    {
+      if (i + 1 == args.size())
+      {
+        throw UsageError("option --task-trace needs a file");
+      }
+      o.taskTrace = args[++i];
+    }
     else
     {
       rest.push_back(a);

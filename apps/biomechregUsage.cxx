@@ -26,7 +26,8 @@ namespace {
 // Options every subcommand takes (main() reads them before the subcommand's own).
 const char * const globalOptions =
   "  global options: [--threads N (library and ITK threads; default: all cores)] [--quiet (warnings and errors only)]\n"
-  "                  [--verbose (also every inner solve of the estimation)] [-h|--help] [--version]\n";
+  "                  [--verbose (also every inner solve of the estimation)] [-h|--help] [--version]\n"
+  "                  [--task-trace FILE (CSV of the parallel work, for benchmarks/replay_task_trace.py)]\n";
 
 const std::pair<const char *, const char *> commands[] = {
   { "phantom",

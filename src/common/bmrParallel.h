@@ -23,8 +23,8 @@
 
 namespace bmr {
 
-/** \brief task(i, worker) for i = 0, ..., count - 1, each once, on at most \a threads threads; returns when all are
- * done.
+/** \brief The region \a name: task(i, worker) for i = 0, ..., count - 1, each once, on at most \a threads threads;
+ * returns when all are done.
  *
  * The tasks must be independent (each writes only its own data), so that what they compute does not depend on
  * which thread runs which, nor on how many there are: a caller keeps its results the same for any thread budget by
@@ -33,9 +33,10 @@ namespace bmr {
  *
  * The threads come from TBB's pool in an arena of \a threads slots, the calling thread one of them, so that calls
  * from several threads of a host (a resample pool, a Python thread) share the pool instead of multiplying threads;
- * nothing process-wide is set. One thread (or one task) runs them here in order, without TBB. */
+ * nothing process-wide is set. One thread (or one task) runs them here in order, without TBB. A bmr::TaskTrace, while
+ * one records, gets the region (\a name) and each task's span. */
 void
-ParallelFor(int count, unsigned threads, const std::function<void(int task, int worker)> & task);
+ParallelFor(const char * name, int count, unsigned threads, const std::function<void(int task, int worker)> & task);
 
 /** The number of worker slots ParallelFor() uses for \a count tasks on \a threads threads. */
 unsigned

@@ -1,6 +1,7 @@
 #include "itkFEMElasticityOptimizer.h"
 
 #include "bmrMemoryWarmUp.h"
+#include "bmrTaskTrace.h"
 #include "itkGridGeometryConversion.h"
 #include "itkMultiThreaderBase.h"
 
@@ -15,8 +16,8 @@ namespace itk {
 namespace {
 // The most memory the waiting main thread faults in for the fine factorization [bytes]: on the default 140k mesh
 // of the demo pair the fine factor (79k free dofs, 31.5M entries in L) is 252 MB, the part a change of the
-// prostate's modulus refactorizes is kept at 84 MB (bmr::LinearElasticModel::Factorize), and the root's
-// accumulator, the update workspaces and K_ff's values split by label take about 100 MB more.
+// prostate's modulus refactorizes is kept at 84 MB (bmr::LinearElasticModel::Factorize), and the
+// update workspaces and K_ff's values split by label take about 100 MB more.
 constexpr std::size_t FineFactorWarmUpBytes = std::size_t{ 480 } << 20;
 
 std::shared_ptr<const bmr::SignedDistanceSampler>
@@ -54,8 +55,10 @@ public:
     , m_StartModuliKnown(m_StartModuli.get_future())
     , m_ObjectiveKnown(m_Objective.get_future())
   {
-    m_Made = std::async(std::launch::async,
-                        [this, make = std::move(make), solveThreads]() { return this->Make(make, solveThreads); });
+    m_Made = std::async(std::launch::async, [this, make = std::move(make), solveThreads]() {
+      const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "fine objective alongside");
+      return this->Make(make, solveThreads);
+    });
   }
   /** Should the sweep throw, the second thread learns there is nothing to factorize; m_Made then joins it. */
   ~FineObjectiveInMaking() { TellStartModuli({}); }
@@ -76,6 +79,8 @@ public:
   std::shared_ptr<bmr::SurfaceMatchingObjective>
   Take()
   {
+    // On a trace, the start loads computed while waiting count as hidden behind the other thread's work.
+    const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "fine objective alongside");
     TellStartModuli({}); // a sweep without a bracket has told nothing
     if (m_Made.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
     {

@@ -150,7 +150,7 @@ FactorizePanelInTiles(double * block, int k, int rows, unsigned threads)
     {
       return kt * TileSize + info;
     }
-    ParallelFor(tiles.rowTiles - kt - 1, threads, [&](int task, int) {
+    ParallelFor("panel: tiles below", tiles.rowTiles - kt - 1, threads, [&](int task, int) {
       const int it = kt + 1 + task;
       SolveBelow(tiles.Height(it), width, at(kt, kt), rows, at(it, kt), rows);
     });
@@ -162,7 +162,7 @@ FactorizePanelInTiles(double * block, int k, int rows, unsigned threads)
         trailing.emplace_back(it, jt);
       }
     }
-    ParallelFor(static_cast<int>(trailing.size()), threads, [&](int task, int) {
+    ParallelFor("panel: trailing tiles", static_cast<int>(trailing.size()), threads, [&](int task, int) {
       const auto [it, jt] = trailing[task];
       if (it == jt)
       {
@@ -190,7 +190,7 @@ OuterProductInTiles(const double * b, int ldb, int n, int k, double * c, unsigne
       lower.emplace_back(it, jt);
     }
   }
-  ParallelFor(static_cast<int>(lower.size()), threads, [&](int task, int) {
+  ParallelFor("update: tiles", static_cast<int>(lower.size()), threads, [&](int task, int) {
     const auto [it, jt] = lower[task];
     const int i0 = it * TileSize, j0 = jt * TileSize;
     const int height = std::min(TileSize, n - i0), width = std::min(TileSize, n - j0);

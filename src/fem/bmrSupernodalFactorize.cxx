@@ -396,7 +396,7 @@ SupernodalFactorizer::FactorizeParts(const std::vector<std::vector<std::int32_t>
   {
     WorkspaceFor(m_BinWork, w, m_LargestBelow[0] * m_LargestBelow[0], m_LargestBelow[0]);
   }
-  ParallelFor(count, threads, [&](int bin, int worker) {
+  ParallelFor("factorize: bins", count, threads, [&](int bin, int worker) {
     failed[bin] = FactorizeBin(bin, bins[bin], values, m_BinWork[worker]);
   });
   const int firstFailed = *std::min_element(failed.begin(), failed.end());
@@ -520,7 +520,7 @@ SupernodalFactorizer::PullBinUpdates(const std::vector<std::int32_t> & top, bool
   {
     WorkspaceFor(m_PullWork, w, m_LargestBelow[0] * TileSize, m_LargestBelow[0]);
   }
-  ParallelFor(static_cast<int>(tasks.size()), threads, [&](int task, int worker) {
+  ParallelFor("factorize: pulls", static_cast<int>(tasks.size()), threads, [&](int task, int worker) {
     const auto [index, column] = tasks[task];
     const std::int32_t t = top[index];
     PullColumns(t, column, std::min(column + TileSize, L.Columns(t)), varyingPass, m_PullWork[worker]);
@@ -602,7 +602,7 @@ SupernodalFactorizer::FactorizeTopSupernode(std::int32_t s, unsigned threads)
   {
     WorkspaceFor(m_PullWork, w, 0, m_LargestBelow[1]);
   }
-  ParallelFor(tiles, threads, [&](int tile, int worker) {
+  ParallelFor("factorize: scatter", tiles, threads, [&](int tile, int worker) {
     ScatterColumns(
       s, m_TopUpdate.data(), tile * TileSize, std::min(b, (tile + 1) * TileSize), m_PullWork[worker].relative.data());
   });

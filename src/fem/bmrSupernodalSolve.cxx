@@ -471,14 +471,14 @@ SupernodalSolver::MarkWithAncestors(std::int32_t s, std::vector<char> & marks) c
 
 /** The bins side by side on \a threads threads, or one after the other: the same operations either way. */
 void
-SupernodalSolver::RunBins(void (SupernodalSolver::*pass)(int, int), unsigned threads)
+SupernodalSolver::RunBins(void (SupernodalSolver::*pass)(int, int), unsigned threads, const char * name)
 {
   const int bins = static_cast<int>(m_Bin.size());
   if (m_Work.size() < ParallelWorkers(bins, threads))
   {
     m_Work.resize(ParallelWorkers(bins, threads));
   }
-  ParallelFor(bins, threads, [this, pass](int bin, int worker) { (this->*pass)(bin, worker); });
+  ParallelFor(name, bins, threads, [this, pass](int bin, int worker) { (this->*pass)(bin, worker); });
 }
 
 void
@@ -515,7 +515,7 @@ SupernodalSolver::Run(const double * b, double * x, unsigned threads, const std:
       MarkWithAncestors(m_SupernodeOf[m_PermutedRow[row]], m_Needed);
     }
   }
-  RunBins(&SupernodalSolver::ForwardBin, threads);
+  RunBins(&SupernodalSolver::ForwardBin, threads, "solve: forward bins");
   for (const std::int32_t r : m_TopColumns)
   {
     for (std::vector<double> & shared : m_Shared)
@@ -538,7 +538,7 @@ SupernodalSolver::Run(const double * b, double * x, unsigned threads, const std:
       BackwardSupernode(*it, m_Work[0]);
     }
   }
-  RunBins(&SupernodalSolver::BackwardBin, threads);
+  RunBins(&SupernodalSolver::BackwardBin, threads, "solve: backward bins");
   for (std::size_t k = 0; k < n; ++k)
   {
     x[perm != nullptr ? perm[k] : k] = m_Needed[m_SupernodeOf[k]] ? m_Y[k] : 0.0;

@@ -103,7 +103,7 @@ private:
   void
   BackwardBin(int bin, int worker);
   void
-  RunBins(void (SupernodalSolver::*pass)(int, int), unsigned threads);
+  RunBins(void (SupernodalSolver::*pass)(int, int), unsigned threads, const char * name);
   void
   ForwardSupernode(std::int32_t s, double * shared, std::vector<double> & work);
   void

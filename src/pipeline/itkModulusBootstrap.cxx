@@ -19,6 +19,9 @@
 // revoxelize, re-estimate) and the rescan (revoxelize the fixed anatomy itself, re-mesh, re-estimate).
 #include "itkPipelineStages.h"
 
+#include "bmrParallel.h"
+#include "bmrTaskTrace.h"
+
 #include "bmrDisplacementFieldRasterizer.h"
 #include "bmrError.h"
 #include "bmrSimulation.h"
@@ -653,6 +656,7 @@ ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * m
   : m_Meshes(u.resamples)
 {
   m_Thread = std::thread([this, movingLabels, scene, u]() {
+    const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "resample meshes alongside");
     for (unsigned int k = 0; k < u.resamples && !m_Stop; ++k)
     {
       try
@@ -688,6 +692,7 @@ ResampleMeshPrefetch::Stop()
 std::vector<bmr::TetrahedralMesh>
 ResampleMeshPrefetch::Finish()
 {
+  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "resample meshes alongside");
   Stop();
   return std::move(m_Meshes);
 }
@@ -695,6 +700,7 @@ ResampleMeshPrefetch::Finish()
 RescanMapsPrefetch::RescanMapsPrefetch(const BiomechanicalLabelImageType * fixedLabels, const EstimationSetup & setup)
 {
   m_Maps = std::async(std::launch::async, [this, fixedLabels, setup]() {
+    const bmr::TracedSpan       span(bmr::TracedSpan::Kind::Background, "rescan maps alongside");
     const ResampleSource        source = MakeResampleSource(setup, nullptr, fixedLabels);
     const UncertaintySettings & u = setup.settings->uncertainty;
     std::vector<DistanceMaps>   maps;
@@ -720,6 +726,7 @@ RescanMapsPrefetch::~RescanMapsPrefetch()
 std::vector<DistanceMaps>
 RescanMapsPrefetch::Finish()
 {
+  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "rescan maps alongside");
   return m_Maps.get();
 }
 
@@ -746,49 +753,40 @@ BootstrapModuli(const EstimationSetup &             setup,
   std::vector<bmr::TetrahedralMesh> prefetched =
     setup.prefetch ? setup.prefetch->Finish()
                    : (setup.resampleMeshes ? *setup.resampleMeshes : std::vector<bmr::TetrahedralMesh>());
+  // The resamples side by side on the thread budget, each with an equal share of it for its own solves (the
+  // estimate does not depend on either count).
+  const unsigned int threads = ResampleThreads(u);
+  EstimationSetup    pooled = setup;
+  pooled.fineSolveThreads = std::max(1U, threads / std::max(1U, std::min(threads, u.resamples)));
   std::vector<std::vector<double>> moduli(u.resamples);
   std::vector<std::string>         failures(u.resamples);
-  std::atomic<unsigned int>        next{ 0 };
   unsigned int                     finished = 0;
-  std::mutex                       progress; // the observer hears one worker at a time
-  const auto                       work = [&]() {
-    for (unsigned int k = next++; k < u.resamples; k = next++)
+  std::mutex                       progress; // the observer hears one resample at a time
+  bmr::ParallelFor("interval: resamples", static_cast<int>(u.resamples), threads, [&](int task, int) {
+    const auto k = static_cast<unsigned int>(task);
+    try
     {
-      try
-      {
-        moduli[k] = Resample(k,
-                             k < prefetched.size() && !prefetched[k].points.empty() ? &prefetched[k] : nullptr,
-                             setup,
-                             sim.get(),
-                             source.get(),
-                             k < premadeMaps.size() ? &premadeMaps[k] : nullptr,
-                             r,
-                             movingLabels);
-      }
-      catch (const std::exception & e)
-      {
-        failures[k] = e.what();
-      }
-      const std::lock_guard<std::mutex> lock(progress);
-      if (clock.GetObserver() != nullptr)
-      {
-        ++finished;
-        clock.GetObserver()->Progress(double(finished) / u.resamples,
-                                      std::to_string(finished) + " of " + std::to_string(u.resamples) + " done");
-      }
+      moduli[k] = Resample(k,
+                           k < prefetched.size() && !prefetched[k].points.empty() ? &prefetched[k] : nullptr,
+                           pooled,
+                           sim.get(),
+                           source.get(),
+                           k < premadeMaps.size() ? &premadeMaps[k] : nullptr,
+                           r,
+                           movingLabels);
     }
-  };
-  const unsigned int       threads = ResampleThreads(u);
-  std::vector<std::thread> workers;
-  for (unsigned int t = 1; t < std::min(threads, u.resamples); ++t)
-  {
-    workers.emplace_back(work);
-  }
-  work();
-  for (auto & w : workers)
-  {
-    w.join();
-  }
+    catch (const std::exception & e)
+    {
+      failures[k] = e.what();
+    }
+    const std::lock_guard<std::mutex> lock(progress);
+    if (clock.GetObserver() != nullptr)
+    {
+      ++finished;
+      clock.GetObserver()->Progress(double(finished) / u.resamples,
+                                    std::to_string(finished) + " of " + std::to_string(u.resamples) + " done");
+    }
+  });
   clock.End();
 
   std::vector<std::string>               warnings;

@@ -18,6 +18,7 @@
 // The forward pipeline: label map -> mesh -> FEM -> displacement fields.
 #include "itkPipelineStages.h"
 
+#include "bmrTaskTrace.h"
 #include "itkLabelImageToTetrahedralMeshFilter.h"
 #include "itkPhysicsDeformationFieldSource.h"
 #include "itkMultiThreaderBase.h"
@@ -103,7 +104,10 @@ BackgroundMesh::BackgroundMesh(const BiomechanicalLabelImageType * labels, const
 {
   if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
   {
-    m_Made = std::async(std::launch::async, [this]() { return Make(m_Labels, m_Scene); });
+    m_Made = std::async(std::launch::async, [this]() {
+      const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "fine mesh alongside");
+      return Make(m_Labels, m_Scene);
+    });
   }
 }
 
@@ -145,7 +149,8 @@ BackgroundMesh::Take(StageClock & clock, const std::string & stage)
 bmr::TetrahedralMesh
 BackgroundMesh::TakeAlongside(std::string & detail)
 {
-  Made made = m_Made.get();
+  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "fine mesh alongside");
+  Made                  made = m_Made.get();
   detail = made.detail;
   m_Seconds = made.seconds;
   return std::move(made.mesh);
