@@ -23,6 +23,7 @@ a measured run before reading the others.
 Usage: replay_task_trace.py TRACE.csv [P ...]   (prints one line per P: predicted seconds)
 """
 import csv
+import gzip
 import heapq
 import sys
 from collections import defaultdict
@@ -32,7 +33,7 @@ class Trace:
     def __init__(self, path):
         self.regions, self.tasks, self.backgrounds, self.waits = {}, {}, [], []
         self.end, self.main = 0.0, 0
-        with open(path) as f:
+        with (gzip.open(path, "rt") if path.endswith(".gz") else open(path)) as f:
             for row in csv.DictReader(f):
                 kind = row["kind"]
                 start, end = float(row["start_s"]), float(row["end_s"])

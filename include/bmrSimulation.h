@@ -123,8 +123,8 @@ SetElementMaterials(const TetrahedralMesh &                            mesh,
                     ForwardSimulation &                                simulation);
 
 /** Solves the scene's forward problem on \a mesh (made by MeshSceneLabels) with the scene's model; the linear
- * model factorizes and solves on \a threads threads (2 used at most: LinearElasticModel::SetNumberOfSolveThreads;
- * the displacements are the same bit for bit whatever the number). */
+ * model factorizes and solves on \a threads threads (LinearElasticModel::SetNumberOfSolveThreads; the
+ * displacements are the same bit for bit whatever the number). */
 BiomechanicalRegistration_EXPORT ForwardSimulation
 SimulateScene(const Scene & scene, const TetrahedralMesh & mesh, unsigned threads = 1);
 

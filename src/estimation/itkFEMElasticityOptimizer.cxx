@@ -398,6 +398,9 @@ FEMElasticityOptimizer::GenerateData()
   if (sweeps)
   {
     coarseObjective = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
+    // The sweep's solves take the budget but the core that makes the fine objective alongside.
+    const unsigned int threads = this->FineSolveThreads();
+    coarseObjective->GetForwardModel().SetNumberOfSolveThreads(alongside ? std::max(1U, threads - 1) : threads);
   }
   bmr::ElasticityEstimator estimator(
     [&]() -> bmr::EstimationObjective & {

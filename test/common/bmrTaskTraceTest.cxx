@@ -68,9 +68,8 @@ ReadTrace(const std::string & path)
   return rows;
 }
 
-/** A solve on three threads under a trace: every region has a known name and budget min(3, its tasks) (1 with no
- * task), every
- * task lies inside its region (times within 1 ms: the region's clock is read before and after its tasks), the
+/** A solve on three threads under a trace: every region's budget is min(3, its tasks) (1 with no task), every task
+ * lies inside its region (times within 1 ms: the region's clock is read before and after its tasks), the
  * triangular solves' regions have one task per bin (8), and the forward and backward solves come in pairs. */
 bool
 CheckRecording(const std::string & path)
