@@ -531,7 +531,6 @@ SupernodalFactorizer::PullBinUpdates(const std::vector<std::int32_t> & top, bool
  * order, L_{r,d} L_{j,d}^T: j the rows of d in those columns, r those and every row of d after them (one dgemm). */
 void
 SupernodalFactorizer::PullColumns(std::int32_t t, int firstColumn, int endColumn, bool varyingPass, Workspace & work)
-  const
 {
   const Supernodes L(*m_Factor);
   const int *      rowsOfT = L.rows + L.rowsAt[t];
@@ -540,7 +539,7 @@ SupernodalFactorizer::PullColumns(std::int32_t t, int firstColumn, int endColumn
   for (const Pull & pull : m_Pulls[t])
   {
     const std::int32_t d = pull.from;
-    if ((m_Varies.empty() ? false : m_Varies[d] != 0) != varyingPass)
+    if ((!m_Varies.empty() && m_Varies[d] != 0) != varyingPass)
     {
       continue;
     }
@@ -613,7 +612,7 @@ SupernodalFactorizer::FactorizeTopSupernode(std::int32_t s, unsigned threads)
  * the blocks of its ancestors: the columns that fall in one ancestor t at a time, each row placed by its position
  * in t's row list (\a relative: room for b rows). */
 void
-SupernodalFactorizer::ScatterColumns(std::int32_t s, const double * update, int begin, int end, int * relative) const
+SupernodalFactorizer::ScatterColumns(std::int32_t s, const double * update, int begin, int end, int * relative)
 {
   const Supernodes L(*m_Factor);
   const int        b = L.Rows(s) - L.Columns(s);

@@ -159,11 +159,11 @@ private:
   void
   PullBinUpdates(const std::vector<std::int32_t> & top, bool varyingPass, unsigned threads);
   void
-  PullColumns(std::int32_t t, int firstColumn, int endColumn, bool varyingPass, Workspace & work) const;
+  PullColumns(std::int32_t t, int firstColumn, int endColumn, bool varyingPass, Workspace & work);
   int
   FactorizeTopSupernode(std::int32_t s, unsigned threads);
   void
-  ScatterColumns(std::int32_t s, const double * update, int begin, int end, int * relative) const;
+  ScatterColumns(std::int32_t s, const double * update, int begin, int end, int * relative);
   void
   KeepVaryingBlocks(bool restore);
   Workspace &

@@ -655,22 +655,28 @@ ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * m
                                            const UncertaintySettings &         u)
   : m_Meshes(u.resamples)
 {
-  m_Thread = std::thread([this, movingLabels, scene, u]() {
+  // Beside the fit, which keeps two cores busy at most: the meshes side by side on the rest of the budget (one
+  // after the other on a small machine); each resample's mesh is drawn from its own random stream.
+  const unsigned int threads = ResampleThreads(u) > 2 ? ResampleThreads(u) - 2 : 1;
+  m_Thread = std::thread([this, movingLabels, scene, u, threads]() {
     const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "resample meshes alongside");
-    for (unsigned int k = 0; k < u.resamples && !m_Stop; ++k)
-    {
+    bmr::ParallelFor("resample meshes", static_cast<int>(u.resamples), threads, [&](int k, int) {
+      if (m_Stop)
+      {
+        return;
+      }
       try
       {
         std::vector<PipelineStage> untimed;
         StageClock                 quiet(nullptr, untimed);
-        Random                     rng = ResampleRandom(u, k);
+        Random                     rng = ResampleRandom(u, static_cast<unsigned int>(k));
         m_Meshes[k] = MeshLabelImage(movingLabels, ResampleMeshScene(scene, u, rng), quiet, "resample mesh");
       }
       catch (const std::exception &)
       {
         // Left empty: the resample meshes again and reports the failure where it belongs.
       }
-    }
+    });
   });
 }
 

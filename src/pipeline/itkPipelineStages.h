@@ -158,12 +158,13 @@ ResampleRandom(const UncertaintySettings & u, unsigned int k)
 bmr::Scene
 ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, std::mt19937_64 & rng);
 
-/** \brief The resamples' fine meshes, made on a second thread while the fit runs.
+/** \brief The resamples' fine meshes, made on another thread while the fit runs.
  *
- * The fit factorizes and solves on one core (the BLAS is pinned to one thread for determinism), so a second
- * core idles for its ~10 s. The resamples' meshes depend only on the moving labels, the scene and the resample's
- * random numbers (ResampleMeshScene()), not on the fit: meshed here first, they are the same meshes the
- * resamples would make, and the results do not change. */
+ * The fit keeps about two cores busy (its solves' bins and tiles, between serial steps), and the mesher is serial.
+ * The resamples' meshes depend only on the moving labels, the scene and the resample's random numbers
+ * (ResampleMeshScene()), not on the fit: meshed here first, side by side on the budget beyond two cores (one after
+ * the other on a smaller machine), they are the same meshes the resamples would make, and the results do not
+ * change. */
 class ResampleMeshPrefetch
 {
 public:
