@@ -264,6 +264,13 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
   std::string notDeterminedReason;
 };
 
+/** One line stating the modulus of \a name: "E = 92.1 kPa (68 %: 80.3-105.6 kPa, 95 %: ...)" when both ends are
+ * determined, "E >= 220 kPa (95 %), the upper end not determined by the images" when the interval reaches the
+ * upper search bound (likewise "E <= " for the lower one), "not determined by the images" when both.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT std::string
+ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
+
 struct MovingAnatomyMeshes;
 
 /** Settings of RegisterSegmentedPair(); the defaults are biomechreg register's.

@@ -32,13 +32,6 @@ BiomechanicalRegistration_EXPORT std::string
                                                         const RegistrationSettings &       settings,
                                                         const std::vector<PipelineStage> & wallTimes);
 
-/** One line stating the modulus of \a name: "E = 92.1 kPa (68 %: 80.3-105.6 kPa, 95 %: ...)" when both ends are
- * determined, "E >= 220 kPa (95 %), the upper end not determined by the images" when the interval reaches the
- * upper search bound (likewise "E <= " for the lower one), "not determined by the images" when both.
- * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
-BiomechanicalRegistration_EXPORT std::string
-                                 ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
-
 /** The inner solves \a records as CSV, one row each (E [kPa] per unknown in \a unknownNames, Phi* [mm^2],
  * |dPhi/dp|, dPhi* / dlogE [mm^2] per unknown, inner iterations, wall time [s]). \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO

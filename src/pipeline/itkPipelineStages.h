@@ -19,6 +19,7 @@
 #define itkPipelineStages_h
 
 // Stages shared by the pipelines (private to src/pipeline).
+#include "bmrRandom.h"
 #include "itkBiomechanicalPipelines.h"
 #include "itkFEMElasticityOptimizer.h"
 #include "itkImageWarper.h"
@@ -36,13 +37,7 @@
 namespace itk {
 namespace pipeline {
 
-/** A uniform number in [lo, hi) from \a rng's raw integers: std::mt19937_64's sequence is fixed by the standard,
- * its distributions are not, so the same seed gives the same number on every platform. */
-inline double
-Uniform(std::mt19937_64 & rng, double lo, double hi)
-{
-  return lo + (hi - lo) * (double(rng() >> 11) / double(std::uint64_t(1) << 53));
-}
+using bmr::Uniform; // bmrRandom.h
 
 /** Times the stages of a pipeline into a list and tells the observer. */
 class StageClock

@@ -20,7 +20,6 @@
 #include "itkMultiThreaderBase.h"
 
 #include "bmrError.h"
-#include "itkBiomechanicalReports.h"
 #include "itkFEMElasticityOptimizer.h"
 #include "itkRegistrationQualityMeasures.h"
 #include "itkSceneDistanceMaps.h"

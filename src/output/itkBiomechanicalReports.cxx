@@ -411,38 +411,4 @@ RecoveredModulusText(const RegistrationResult & result, const std::string & labe
   return os.str() + UncertaintyText(result, label);
 }
 
-std::string
-ModulusIntervalText(const std::string & name, const ModulusInterval & i)
-{
-  std::ostringstream os;
-  os << std::setprecision(3) << name;
-  const std::string source = i.method == "bootstrap" ? std::to_string(i.resampleModuli.size()) + " bootstrap resamples"
-                             : i.method == "rescan"  ? std::to_string(i.resampleModuli.size()) + " rescans"
-                                                     : std::string("curvature of Phi*");
-  if (!i.notDeterminedReason.empty())
-  {
-    os << " E not determined: " << i.notDeterminedReason << " (the fields use the fit, " << i.fit << " kPa)";
-  }
-  else if (!i.lowerDetermined && !i.upperDetermined)
-  {
-    os << " E not determined by the images within the search range " << i.interval95[0] << " to " << i.interval95[1]
-       << " kPa (" << source << ")";
-  }
-  else if (!i.upperDetermined)
-  {
-    os << " E >= " << i.interval95[0] << " kPa (95 %), the upper end not determined by the images (" << source << ")";
-  }
-  else if (!i.lowerDetermined)
-  {
-    os << " E <= " << i.interval95[1] << " kPa (95 %), the lower end not determined by the images (" << source << ")";
-  }
-  else
-  {
-    os << " E = " << i.estimate << " kPa (68 %: " << i.interval68[0] << " to " << i.interval68[1]
-       << " kPa, 95 %: " << i.interval95[0] << " to " << i.interval95[1] << " kPa; " << source << ", fit " << i.fit
-       << " kPa" << (i.biasCorrected ? ", corrected for the resamples' bias" : "") << ")";
-  }
-  return os.str();
-}
-
 } // namespace itk

@@ -20,10 +20,10 @@
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
 #include "bmrLandmarks.h"
+#include "bmrRandom.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkBiomechanicalReports.h"
 #include "itkBiomechanicalWriters.h"
-#include "itkPipelineStages.h"
 
 #include <cmath>
 #include <iomanip>
@@ -42,8 +42,8 @@ double
 StandardNormal(std::mt19937_64 & rng)
 {
   // Box-Muller on the raw integers: the same numbers on every standard library.
-  const double u1 = 1.0 - pipeline::Uniform(rng, 0.0, 1.0);
-  const double u2 = pipeline::Uniform(rng, 0.0, 1.0);
+  const double u1 = 1.0 - bmr::Uniform(rng, 0.0, 1.0);
+  const double u2 = bmr::Uniform(rng, 0.0, 1.0);
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * 3.14159265358979323846 * u2);
 }
 
@@ -53,12 +53,12 @@ DrawAnatomy(std::mt19937_64 & rng, bmr::PelvisClearance & clearance)
   for (unsigned int attempt = 0; attempt < MaximumAnatomyDraws; ++attempt)
   {
     bmr::PelvisAnatomy a;
-    a.prostateScale = pipeline::Uniform(rng, 0.85, 1.2);
-    a.bladderScale = pipeline::Uniform(rng, 0.85, 1.1);
-    a.rectumRadius = pipeline::Uniform(rng, 11.0, 14.0);
+    a.prostateScale = bmr::Uniform(rng, 0.85, 1.2);
+    a.bladderScale = bmr::Uniform(rng, 0.85, 1.1);
+    a.rectumRadius = bmr::Uniform(rng, 11.0, 14.0);
     for (double & d : a.offset)
     {
-      d = pipeline::Uniform(rng, -3.0, 3.0);
+      d = bmr::Uniform(rng, -3.0, 3.0);
     }
     clearance = bmr::MeasurePelvisClearance(a);
     if (clearance.organToOrgan >= MinimumOrganGap && clearance.organToBoneOrOutline >= MinimumBoneOrOutline)
@@ -106,7 +106,7 @@ DrawPhantomCohort(const PhantomCohortSettings & s)
     std::ostringstream   name;
     name << "P" << std::setw(2) << std::setfill('0') << p;
     patient.name = name.str();
-    patient.stage = s.stages[0] + int(std::floor(pipeline::Uniform(rng, 0.0, 1.0) * (s.stages[1] - s.stages[0] + 1)));
+    patient.stage = s.stages[0] + int(std::floor(bmr::Uniform(rng, 0.0, 1.0) * (s.stages[1] - s.stages[0] + 1)));
     patient.stage = std::min(patient.stage, s.stages[1]);
     patient.prostateE = std::round(s.stageMedianE[patient.stage - 1] * std::exp(s.logSpread * StandardNormal(rng)));
     patient.anatomy = DrawAnatomy(rng, patient.clearance);
@@ -117,8 +117,8 @@ DrawPhantomCohort(const PhantomCohortSettings & s)
       fraction.organs = patient.anatomy;
       fraction.planningSeed = patientSeed;
       fraction.seed = patientSeed * 100 + f;
-      fraction.bladderMM = std::round(100.0 * pipeline::Uniform(rng, s.bladderMM[0], s.bladderMM[1])) / 100.0;
-      fraction.rectumMM = std::round(100.0 * pipeline::Uniform(rng, s.rectumMM[0], s.rectumMM[1])) / 100.0;
+      fraction.bladderMM = std::round(100.0 * bmr::Uniform(rng, s.bladderMM[0], s.bladderMM[1])) / 100.0;
+      fraction.rectumMM = std::round(100.0 * bmr::Uniform(rng, s.rectumMM[0], s.rectumMM[1])) / 100.0;
       patient.fractions.push_back(fraction);
     }
     cohort.push_back(patient);
