@@ -145,8 +145,8 @@ FillOutsideHarmonic(const GridGeometry &     grid,
 
 /** Advises the kernel to back the whole 2 MiB blocks of a buffer not yet written with transparent huge
  * pages (Linux, where THP is "madvise" by default; elsewhere nothing). A hint only: values are unaffected.
- * Why: a field of 5 M voxels is 123 MB; faulting it in 4 KiB pages costs ~0.4 s on a virtual machine
- * (about 12 us per fault), more than the rasterization itself. */
+ * Why: a field is hundreds of MB, and on a virtual machine faulting it in 4 KiB pages can cost more than the
+ * rasterization itself. */
 BiomechanicalRegistration_EXPORT void
 AdviseHugePages(void * data, std::size_t bytes);
 

@@ -123,11 +123,10 @@ public:
   /** After the moduli change by at most \a fraction each (relative, since the last factorization), Solve() does not
    * refactorize: it runs conjugate gradients on K_ff(E) preconditioned with that factorization, which converge to
    * the direct solve's accuracy (1e-13 of |u|) in about four iterations, each a pair of triangular solves and a
-   * product with K_ff: cheaper than a factorization for the few solves an estimator's last, small steps in E need
-   * (on the demo's 105k-tetrahedron mesh, 57k free dofs, the fit's last step of 0.2 % in E took 0.24 s instead of
-   * 0.98 s). Above 0.3 % each solve needs about five iterations or more, and a step of 0.8 % on the 140k mesh
-   * (79k free dofs) took 0.99 s for seven solves against 0.55 s for the refactorization. It refactorizes when 8
-   * iterations do not converge. 0 refactorizes on every change. Default 0.003. */
+   * product with K_ff: cheaper than a factorization for the few solves an estimator's last, small steps in E need.
+   * Above 0.3 % each solve needs about five iterations or more, and a refactorization becomes the cheaper
+   * (measurements: docs/estimation.md). It refactorizes when 8 iterations do not converge. 0 refactorizes on every
+   * change. Default 0.003. */
   void
   SetRefactorizationThreshold(double fraction);
 
@@ -159,10 +158,10 @@ public:
    * part of the factor they reach: the supernodes holding entries of their elements and the ancestors of those in
    * the elimination tree. The rest, which depends on the other labels alone, is kept from the factorization that
    * first saw those labels change (or, for the first factorization, change since the model was built), as are its
-   * updates of the recomputed part. On the 140k-tetrahedron pelvis a change of the prostate's modulus recomputes
-   * half of the multiply-adds (0.27-0.31 s instead of 0.48-0.53 s on 2 cores). The factor holds the same sums as a
-   * whole factorization in another order; it is the same bit for bit on one thread or two and for the same moduli
-   * whichever factorizations came before, once the changing labels are known. */
+   * updates of the recomputed part. On the default pelvis mesh a change of the prostate's modulus recomputes
+   * about half of the multiply-adds. The factor holds the same sums as a whole factorization in another order; it
+   * is the same bit for bit on any number of threads and for the same moduli whichever factorizations came
+   * before, once the changing labels are known. */
   void
   Factorize();
   /** The fraction of a whole factorization's multiply-adds that the last Factorize() computed: 1 for a whole one,

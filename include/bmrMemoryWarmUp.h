@@ -32,12 +32,10 @@ namespace bmr {
 /** \brief Faults fresh memory in on an idle thread for a large allocation that another thread is about to make.
  *
  * On a virtual machine that hands freed memory back to its host (free page reporting), the first write to a page
- * the process has not used costs far more than the write: on the 2-core test machine 320 MiB took 0.52-0.58 s on
- * one thread (about 1.7 ms per MiB) against 0.007 s once faulted in. Memory a process releases stays with the
- * guest for a while before it is reported, and is cheap to fault in again: 320 MiB warmed on one thread and
- * released took 0.045-0.062 s to allocate and write on another within 0.1-1 s, 0.33 s after 3 s. The estimation's
- * first fine factorization writes a new factor of about 160 MiB (demo pair) while the main thread waits for it;
- * warmed by the waiting thread, that factorization took 0.75-0.81 s instead of 1.07-1.13 s.
+ * the process has not used costs far more than the write itself (about a hundredfold). Memory a process releases
+ * stays with the guest for a while before it is reported, and is cheap to fault in again. The estimation's first
+ * fine factorization writes a new factor of a few hundred MiB while the main thread waits for it; warmed by the
+ * waiting thread, that factorization is faster (measurements: docs/estimation.md).
  *
  * WarmWhileOpen() (on the idle thread) writes fresh memory chunk by chunk until Close() is called or the cap is
  * reached and holds it until Close(); Close() (on the thread about to allocate) stops the warming and returns once

@@ -57,9 +57,8 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
   std::map<std::int32_t, double> facetDistancePerLabel; ///< mm, on the surfaces bounding the label
   bool                           optimize{ true };
   bool                           exude{ false };
-  /** degrees: perturbation works on elements below this dihedral angle. 3 rather than CGAL's usual 5: on the
-   * 1 mm pelvis (105k-140k tetrahedra) perturbing up to 5 degrees took 0.5-1.9 s, up to 3 degrees 0.08-0.16 s, and
-   * the recovered modulus moved by at most 0.3 % on average (docs/benchmarks.md, session 44). */
+  /** degrees: perturbation works on elements below this dihedral angle. 3 rather than CGAL's usual 5: several times
+   * faster on the pelvis, and the recovered modulus barely moves (docs/benchmarks.md, session 44). */
   double sliverBound{ 3.0 };
   /** degrees: MeshSceneLabels() refuses a mesh with a smaller dihedral angle, naming the element. Such a
    * sliver is all but flat: its stiffness matrix is near singular and the pull-back inside it ill defined. */

@@ -43,8 +43,8 @@ struct BiomechanicalRegistration_EXPORT NewtonSettings
   /** An increment that converged in at most this many iterations doubles the next one. */
   unsigned int easyIterations{ 5 };
   /** When the path from the last equilibrium fails, try the loads again from u = 0. An estimator turns it off:
-   * its trial points whose warm path fails are declared infeasible at once (on the pelvis every such restart
-   * failed as well, and each cost ~6 s). */
+   * its trial points whose warm path fails are declared infeasible at once (on the pelvis such restarts failed as
+   * well, at the cost of a whole load path each). */
   bool restartFromRest{ true };
 };
 

@@ -185,9 +185,8 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
 }
 
 /** The gzip level WriteImageAtomically uses by default for images of \a TImage: 1 (the fastest) for integer pixels
- * (label maps: 20 MB -> 1 MB on the 1 mm pelvis), 0 for floating-point ones (CT, fields, dose), which gzip barely
- * shrinks (a float field 59 -> 54 MB, a float CT 20 -> 17 MB) for most of the write's time (register on the demo
- * pair: writing 2.2 s at level 1 against 0.35 s uncompressed). */
+ * (label maps shrink about twentyfold), 0 for floating-point ones (CT, fields, dose), which gzip barely shrinks
+ * (by about a tenth) for most of the write's time. */
 template<typename TImage>
 constexpr int
 DefaultCompressionLevel()

@@ -269,7 +269,7 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
  * upper search bound (likewise "E <= " for the lower one), "not determined by the images" when both.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT std::string
-ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
+                                 ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
 
 struct MovingAnatomyMeshes;
 
@@ -282,7 +282,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   double                 coarseFactor{ 1.6 }; ///< coarse (sweep) mesh sizes = scene's x this; <= 1: no coarse mesh
   double                 meshScale{ 1.0 };    ///< mesh sizes = scene's x this (> 1: coarser, faster)
   UncertaintySettings    uncertainty;
-  bool                   pushField{ false }; ///< also the push field (moving -> fixed) in state.push: 2-3 s more
+  bool pushField{ false }; ///< also the push field (moving -> fixed) in state.push (a second rasterization)
   /** Thick slices (ThickSlices(): 2-3 mm slices of a 1 mm in-plane CT): both scans' organs between their slices by
    * shape-based interpolation (InterpolateLabelSlices()): the moving anatomy is meshed from its interpolated
    * labels, the fixed organs' distance maps and the rescans' anatomy are those of the interpolated fixed labels.
@@ -302,7 +302,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
  *
  * A planning scan is segmented long before the daily scans arrive, and every mesh a registration needs depends
  * on the moving labels, the scene and the settings only: the fit's mesh, the coarse mesh of the sweep and the
- * re-meshed models of the stated interval's resamples (together about 18 s of one core on the 1 mm pelvis).
+ * re-meshed models of the stated interval's resamples (together several times the fit's own meshing).
  * MeshMovingAnatomy() makes them once, beforehand or on a spare core while other work runs, and every
  * registration against that planning scan takes them through RegistrationSettings::meshes. They are the meshes
  * RegisterSegmentedPair() would make itself (the same sizes and mesher seeds), so the results are the same bit

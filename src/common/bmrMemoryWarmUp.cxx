@@ -28,7 +28,7 @@
 namespace bmr {
 
 namespace {
-// Chunks of 32 MiB: Close() waits at most one chunk's writes (about 50 ms at the cost above) before the release.
+// Chunks of 32 MiB: Close() waits at most one chunk's writes before the release.
 constexpr std::size_t ChunkBytes = std::size_t{ 32 } << 20;
 } // namespace
 

@@ -14,10 +14,9 @@
 
 namespace itk {
 namespace {
-// The most memory the waiting main thread faults in for the fine factorization [bytes]: on the default 140k mesh
-// of the demo pair the fine factor (79k free dofs, 31.5M entries in L) is 252 MB, the part a change of the
-// prostate's modulus refactorizes is kept at 84 MB (bmr::LinearElasticModel::Factorize), and the
-// update workspaces and K_ff's values split by label take about 100 MB more.
+// The most memory the waiting main thread faults in for the fine factorization [bytes]: about the fine factor of
+// the default pelvis mesh, the part a change of the prostate's modulus refactorizes (kept by
+// bmr::LinearElasticModel::Factorize), the update workspaces and K_ff's values split by label.
 constexpr std::size_t FineFactorWarmUpBytes = std::size_t{ 480 } << 20;
 
 std::shared_ptr<const bmr::SignedDistanceSampler>
@@ -41,8 +40,8 @@ ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string
  * factorization overlaps its last samples: the same objective and factor, sooner.
  *
  * The thread that then asks for the objective (Take) and would otherwise wait faults in the memory of the fine
- * factor while the objective is made (bmr::MemoryWarmUp: on this project's test machine the first fine
- * factorization took 0.75-0.81 s instead of 1.07-1.13 s with it), computes the fine stage's start loads as soon as
+ * factor while the objective is made (bmr::MemoryWarmUp: page faults would otherwise slow the first fine
+ * factorization; docs/estimation.md), computes the fine stage's start loads as soon as
  * the objective exists, while the second thread analyzes its matrix (StartLoads hands them over), and then warms
  * on until the factorization starts. */
 class FineObjectiveInMaking

@@ -95,11 +95,10 @@ Levels()
 /** The calling thread's OpenMP parallel regions on that thread alone (the BLAS's threads are the host's:
  * bmr::ConfigureNumerics()). Debian's CHOLMOD runs the copy loops of its supernodal factorization in teams of 4 OpenMP
  * threads (CHOLMOD_OMP_NUM_THREADS) whose idle workers spin. The estimation factorizes on two threads at once (the
- * sweep's coarse model and the fine one) beside the mesher, so on 2 cores those teams took CPU from the work that
- * mattered: `register` on the demo pair took 7.0-7.2 s with OMP_THREAD_LIMIT=1 against 7.6-7.9 s without (5 alternating
- * runs). The loops only copy, so the results are the same bit for bit. Max active levels 0 makes every parallel
- * region of the calling thread run on that thread alone; it is a per-thread setting, restored on exit so that a
- * program's own OpenMP on that thread is left as it was. */
+ * sweep's coarse model and the fine one) beside the mesher, so those teams take CPU from the work that matters
+ * (measured in docs/benchmarks.md). The loops only copy, so the results are the same bit for bit. Max active levels 0
+ * makes every parallel region of the calling thread run on that thread alone; it is a per-thread setting, restored on
+ * exit so that a program's own OpenMP on that thread is left as it was. */
 SingleThreadedCholmod::SingleThreadedCholmod()
 {
   if (Levels().get)
@@ -118,9 +117,8 @@ SingleThreadedCholmod::~SingleThreadedCholmod()
 }
 
 /** CHOLMOD's default analysis orders by AMD and, when AMD's fill is large, tries METIS as well and keeps the
- * better one. On these 3-D meshes it kept METIS every time measured (the 396k-tetrahedron phantom truth:
- * 2.6e11 against AMD's 1.0e12 flops; the pelvis estimation's 105k and 25k tetrahedra too), so the AMD ordering
- * was computed only to be discarded (0.6 s on the truth); the factors, and so the results, are the same.
+ * better one. On 3-D meshes nested dissection needs several times fewer flops than AMD, so CHOLMOD keeps METIS
+ * and the AMD ordering is computed only to be discarded; the factors, and so the results, are the same.
  * METIS is deterministic (fixed seed). */
 void
 OrderByNestedDissection(cholmod_common & common)

@@ -534,8 +534,8 @@ GenerateMesh(const MeshDomain &        domain,
          "too thin, or only in the last slice of the volume)");
   }
 
-  // Perturbation lifts the minimum dihedral angle from ~0.01-0.1 degrees to the sliver bound (0.08-0.16 s on the
-  // 1 mm pelvis at 3 degrees, 0.5-1.9 s at 5); exudation costs 3-4x more and adds little, so it is opt-in.
+  // Perturbation lifts the minimum dihedral angle from near zero to the sliver bound, cheaply at small bounds;
+  // exudation costs several times more and adds little, so it is opt-in (docs/benchmarks.md, mesh quality).
   if (parameters.optimize && parameters.exude)
   {
     CGAL::refine_mesh_3(c3t3,
