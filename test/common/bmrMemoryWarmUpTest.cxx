@@ -65,17 +65,14 @@ WaitForHeld(const bmr::MemoryWarmUp & warmUp, std::size_t bytes)
 int
 bmrMemoryWarmUpTest(int, char *[])
 {
-  int        failures = 0;
-  const auto check = [&failures](bool ok, const std::string & what) {
-    std::cout << (ok ? "ok    " : "FAIL  ") << what << std::endl;
-    failures += ok ? 0 : 1;
-  };
+  bool ok = true;
 
   // 1. Closed first: no warming at all.
   {
     bmr::MemoryWarmUp warmUp(64 * MiB);
     warmUp.Close();
-    check(warmUp.IsClosed() && warmUp.WarmWhileOpen() == 0, "WarmWhileOpen after Close writes nothing");
+    ok &=
+      bmr::test::Expect(warmUp.IsClosed() && warmUp.WarmWhileOpen() == 0, "WarmWhileOpen after Close writes nothing");
   }
 
   // 2. The cap: 96 MiB (3 chunks) written, resident while held, released before Close() returns. RSS tolerance
@@ -84,45 +81,48 @@ bmrMemoryWarmUpTest(int, char *[])
     bmr::MemoryWarmUp        warmUp(96 * MiB);
     const std::size_t        before = ResidentBytes();
     std::future<std::size_t> warmed = std::async(std::launch::async, [&warmUp] { return warmUp.WarmWhileOpen(); });
-    check(WaitForHeld(warmUp, 96 * MiB), "the warming reaches its cap of 96 MiB");
+    ok &= bmr::test::Expect(WaitForHeld(warmUp, 96 * MiB), "the warming reaches its cap of 96 MiB");
     std::this_thread::sleep_for(std::chrono::milliseconds(50)); // it must stop there and hold
     const std::size_t held = warmUp.GetHeldBytes(), whileHeld = ResidentBytes();
-    check(held == 96 * MiB, "held " + std::to_string(held / MiB) + " MiB, the cap exactly");
+    ok &= bmr::test::Expect(held == 96 * MiB, "held " + std::to_string(held / MiB) + " MiB, the cap exactly");
     if (before > 0)
     {
-      check(whileHeld + 16 * MiB >= before + 96 * MiB,
-            "resident while held: +" + std::to_string((whileHeld - std::min(whileHeld, before)) / MiB) + " MiB");
+      ok &= bmr::test::Expect(whileHeld + 16 * MiB >= before + 96 * MiB,
+                              "resident while held: +" +
+                                std::to_string((whileHeld - std::min(whileHeld, before)) / MiB) + " MiB");
     }
     warmUp.Close();
     const std::size_t after = ResidentBytes();
     if (before > 0)
     {
-      check(after <= before + 16 * MiB,
-            "released when Close() returns: resident +" + std::to_string((after - std::min(after, before)) / MiB) +
-              " MiB");
+      ok &= bmr::test::Expect(after <= before + 16 * MiB,
+                              "released when Close() returns: resident +" +
+                                std::to_string((after - std::min(after, before)) / MiB) + " MiB");
     }
-    check(warmUp.GetHeldBytes() == 0 && warmed.get() == 96 * MiB, "WarmWhileOpen returns the 96 MiB it wrote");
+    ok &= bmr::test::Expect(warmUp.GetHeldBytes() == 0 && warmed.get() == 96 * MiB,
+                            "WarmWhileOpen returns the 96 MiB it wrote");
   }
 
   // 3. Close() stops the warming early: a cap of 4 GiB, closed once one chunk is held.
   {
     bmr::MemoryWarmUp        warmUp(4096 * MiB);
     std::future<std::size_t> warmed = std::async(std::launch::async, [&warmUp] { return warmUp.WarmWhileOpen(); });
-    check(WaitForHeld(warmUp, 32 * MiB), "the warming starts");
+    ok &= bmr::test::Expect(WaitForHeld(warmUp, 32 * MiB), "the warming starts");
     warmUp.Close();
     const std::size_t wrote = warmed.get();
-    check(wrote >= 32 * MiB && wrote < 4096 * MiB,
-          "Close() stopped it after " + std::to_string(wrote / MiB) + " MiB, before the 4096 MiB cap");
+    ok &=
+      bmr::test::Expect(wrote >= 32 * MiB && wrote < 4096 * MiB,
+                        "Close() stopped it after " + std::to_string(wrote / MiB) + " MiB, before the 4096 MiB cap");
   }
 
   // 4. A second warmer while one is running returns at once.
   {
     bmr::MemoryWarmUp        warmUp(64 * MiB);
     std::future<std::size_t> first = std::async(std::launch::async, [&warmUp] { return warmUp.WarmWhileOpen(); });
-    check(WaitForHeld(warmUp, 32 * MiB), "the first warming starts");
-    check(warmUp.WarmWhileOpen() == 0, "a second WarmWhileOpen meanwhile writes nothing");
+    ok &= bmr::test::Expect(WaitForHeld(warmUp, 32 * MiB), "the first warming starts");
+    ok &= bmr::test::Expect(warmUp.WarmWhileOpen() == 0, "a second WarmWhileOpen meanwhile writes nothing");
     warmUp.Close();
-    check(first.get() >= 32 * MiB, "the first one returns after Close()");
+    ok &= bmr::test::Expect(first.get() >= 32 * MiB, "the first one returns after Close()");
   }
 
   // 5. WarmWhile() stops once asked and keeps its memory held; WarmWhileOpen() adds to it up to the cap; Close()
@@ -132,19 +132,21 @@ bmrMemoryWarmUpTest(int, char *[])
     const std::size_t before = ResidentBytes();
     int               asked = 0;
     const std::size_t first = warmUp.WarmWhile([&asked] { return asked++ < 2; });
-    check(first == 64 * MiB && warmUp.GetHeldBytes() == 64 * MiB,
-          "WarmWhile wrote the 2 chunks it was allowed and holds them (" + std::to_string(first / MiB) + " MiB)");
+    ok &= bmr::test::Expect(first == 64 * MiB && warmUp.GetHeldBytes() == 64 * MiB,
+                            "WarmWhile wrote the 2 chunks it was allowed and holds them (" +
+                              std::to_string(first / MiB) + " MiB)");
     std::future<std::size_t> rest = std::async(std::launch::async, [&warmUp] { return warmUp.WarmWhileOpen(); });
-    check(WaitForHeld(warmUp, 128 * MiB), "WarmWhileOpen adds to them up to the cap of 128 MiB");
+    ok &= bmr::test::Expect(WaitForHeld(warmUp, 128 * MiB), "WarmWhileOpen adds to them up to the cap of 128 MiB");
     warmUp.Close();
     const std::size_t after = ResidentBytes();
-    check(rest.get() == 128 * MiB && warmUp.GetHeldBytes() == 0, "WarmWhileOpen returns all 128 MiB held");
+    ok &= bmr::test::Expect(rest.get() == 128 * MiB && warmUp.GetHeldBytes() == 0,
+                            "WarmWhileOpen returns all 128 MiB held");
     if (before > 0)
     {
-      check(after <= before + 16 * MiB,
-            "both released when Close() returns: resident +" + std::to_string((after - std::min(after, before)) / MiB) +
-              " MiB");
+      ok &= bmr::test::Expect(after <= before + 16 * MiB,
+                              "both released when Close() returns: resident +" +
+                                std::to_string((after - std::min(after, before)) / MiB) + " MiB");
     }
   }
-  return failures == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -163,23 +163,17 @@ bmrElasticityEstimatorTest(int, char *[])
             << " kPa, recovered " << soft << " kPa (sigma log E " << sigmaOf("soft") << ")\nstiff: true " << TrueStiffE
             << " kPa, recovered " << stiff << " kPa (sigma log E " << sigmaOf("stiff") << ")\n"
             << optimizer->GetIdentifiabilityMessage() << std::endl;
-  int        failures = 0;
-  const auto check = [&failures](bool ok, const std::string & what) {
-    if (!ok)
-    {
-      std::cerr << "FAIL: " << what << std::endl;
-      ++failures;
-    }
-  };
-  check(optimizer->GetSweep().size() == 12, "a coordinate sweep of 6 samples per unknown (12 in all)");
-  check(std::abs(soft / TrueSoftE - 1.0) < 0.10, "soft core within 10 % of the truth");
-  check(std::abs(stiff / TrueStiffE - 1.0) < 0.10, "stiff core within 10 % of the truth");
-  check(optimizer->GetIdentifiable(), "both moduli identifiable");
+  bool ok = true;
+  ok &=
+    bmr::test::Expect(optimizer->GetSweep().size() == 12, "a coordinate sweep of 6 samples per unknown (12 in all)");
+  ok &= bmr::test::Expect(std::abs(soft / TrueSoftE - 1.0) < 0.10, "soft core within 10 % of the truth");
+  ok &= bmr::test::Expect(std::abs(stiff / TrueStiffE - 1.0) < 0.10, "stiff core within 10 % of the truth");
+  ok &= bmr::test::Expect(optimizer->GetIdentifiable(), "both moduli identifiable");
   for (const char * name : { "soft", "stiff" })
   {
     const double sigma = sigmaOf(name);
-    check(std::isfinite(sigma) && sigma > 0.0, std::string("finite uncertainty of ") + name);
+    ok &= bmr::test::Expect(std::isfinite(sigma) && sigma > 0.0, std::string("finite uncertainty of ") + name);
   }
-  check(optimizer->GetResult().curvature.size() == 4, "a 2 x 2 curvature of Phi*");
-  return failures == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
+  ok &= bmr::test::Expect(optimizer->GetResult().curvature.size() == 4, "a 2 x 2 curvature of Phi*");
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

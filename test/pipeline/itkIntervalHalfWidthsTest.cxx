@@ -33,6 +33,7 @@
 // - fewer than two distinct uncensored values give NaN, not a number pretending to be a spread.
 #include "itkBiomechanicalPipelines.h"
 #include "itkIntervalTestSupport.h"
+#include "bmrTestUtilities.h"
 
 #include <algorithm>
 #include <cmath>
@@ -55,9 +56,10 @@ CensoredLogLikelihood(const std::vector<double> & values, double upper, double m
   return sum;
 }
 
-void
-CheckCensoredFit(itk::test::Checks & Check)
+bool
+CheckCensoredFit()
 {
+  bool                         ok = true;
   const double                 inf = std::numeric_limits<double>::infinity();
   const std::vector<double>    plain{ 0.1, 0.4, -0.3, 0.25, 0.05 };
   const itk::CensoredNormalFit uncensored = itk::FitCensoredNormal(plain, -inf, inf);
@@ -70,9 +72,9 @@ CheckCensoredFit(itk::test::Checks & Check)
   {
     variance += (x - mean) * (x - mean) / 5.0;
   }
-  Check(uncensored.censored == 0 && std::abs(uncensored.mean - mean) < 1e-12 &&
-          std::abs(uncensored.sigma - std::sqrt(variance)) < 1e-12,
-        "no censoring: the sample mean and the divide-by-n deviation");
+  ok &= bmr::test::Expect(uncensored.censored == 0 && std::abs(uncensored.mean - mean) < 1e-12 &&
+                            std::abs(uncensored.sigma - std::sqrt(variance)) < 1e-12,
+                          "no censoring: the sample mean and the divide-by-n deviation");
 
   std::mt19937_64     random(2044);
   std::vector<double> draws;
@@ -94,30 +96,34 @@ CheckCensoredFit(itk::test::Checks & Check)
   {
     clippedVariance += (x - clippedMean) * (x - clippedMean) / 4000.0;
   }
-  Check(fit.censored > 900 && fit.censored < 1300, "about 27 % of N(1, 0.5^2) censored at 1.3");
-  Check(std::abs(fit.mean - 1.0) < 0.012 && std::abs(fit.sigma - 0.5) < 0.010,
-        "censored fit: mu and sigma within four standard errors of 1 and 0.5");
-  Check(std::sqrt(clippedVariance) < 0.8 * 0.5, "the clipped values' SD understates sigma by more than 20 %");
+  ok &= bmr::test::Expect(fit.censored > 900 && fit.censored < 1300, "about 27 % of N(1, 0.5^2) censored at 1.3");
+  ok &= bmr::test::Expect(std::abs(fit.mean - 1.0) < 0.012 && std::abs(fit.sigma - 0.5) < 0.010,
+                          "censored fit: mu and sigma within four standard errors of 1 and 0.5");
+  ok &= bmr::test::Expect(std::sqrt(clippedVariance) < 0.8 * 0.5,
+                          "the clipped values' SD understates sigma by more than 20 %");
   const double best = CensoredLogLikelihood(draws, upper, fit.mean, fit.sigma), h = 1e-4 * fit.sigma;
-  Check(CensoredLogLikelihood(draws, upper, fit.mean + h, fit.sigma) < best &&
-          CensoredLogLikelihood(draws, upper, fit.mean - h, fit.sigma) < best &&
-          CensoredLogLikelihood(draws, upper, fit.mean, fit.sigma + h) < best &&
-          CensoredLogLikelihood(draws, upper, fit.mean, fit.sigma - h) < best,
-        "censored fit: a maximum of the censored likelihood in mu and sigma");
+  ok &= bmr::test::Expect(CensoredLogLikelihood(draws, upper, fit.mean + h, fit.sigma) < best &&
+                            CensoredLogLikelihood(draws, upper, fit.mean - h, fit.sigma) < best &&
+                            CensoredLogLikelihood(draws, upper, fit.mean, fit.sigma + h) < best &&
+                            CensoredLogLikelihood(draws, upper, fit.mean, fit.sigma - h) < best,
+                          "censored fit: a maximum of the censored likelihood in mu and sigma");
   const double scoreMu = (CensoredLogLikelihood(draws, upper, fit.mean + h, fit.sigma) -
                           CensoredLogLikelihood(draws, upper, fit.mean - h, fit.sigma)) /
                          (2.0 * h);
-  Check(std::abs(scoreMu) * fit.sigma < 1e-6 * 4000.0, "censored fit: the likelihood's slope in mu vanishes");
+  ok &= bmr::test::Expect(std::abs(scoreMu) * fit.sigma < 1e-6 * 4000.0,
+                          "censored fit: the likelihood's slope in mu vanishes");
 
   const itk::CensoredNormalFit degenerate = itk::FitCensoredNormal({ 0.2, 0.2, 1.0, 1.0 }, -inf, 1.0);
-  Check(degenerate.censored == 2 && std::isnan(degenerate.sigma), "one distinct uncensored value: no spread (NaN)");
+  ok &= bmr::test::Expect(degenerate.censored == 2 && std::isnan(degenerate.sigma),
+                          "one distinct uncensored value: no spread (NaN)");
+  return ok;
 }
 } // namespace
 
 int
 itkIntervalHalfWidthsTest(int, char *[])
 {
-  itk::test::Checks Check;
+  bool ok = true;
   using itk::IntervalQuantilesEnum;
   using itk::UncertaintyMethodEnum;
   const auto near = [](double a, double b, double tolerance) { return std::abs(a - b) <= tolerance; };
@@ -125,47 +131,50 @@ itkIntervalHalfWidthsTest(int, char *[])
   const auto   student8 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 8);
   const auto   student16 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 16);
   const double root8 = std::sqrt(1.0 + 1.0 / 8.0), root16 = std::sqrt(1.0 + 1.0 / 16.0);
-  Check(near(student8[0], 1.0702874 * root8, 1e-6) && near(student8[1], 2.3646243 * root8, 1e-6),
-        "Student, 8 resamples: t_7 sqrt(9/8) at 68 and 95 % to 1e-6");
-  Check(near(student16[0], 1.0285328 * root16, 1e-6) && near(student16[1], 2.1314495 * root16, 1e-6),
-        "Student, 16 resamples: t_15 sqrt(17/16) at 68 and 95 % to 1e-6");
+  ok &= bmr::test::Expect(near(student8[0], 1.0702874 * root8, 1e-6) && near(student8[1], 2.3646243 * root8, 1e-6),
+                          "Student, 8 resamples: t_7 sqrt(9/8) at 68 and 95 % to 1e-6");
+  ok &= bmr::test::Expect(near(student16[0], 1.0285328 * root16, 1e-6) && near(student16[1], 2.1314495 * root16, 1e-6),
+                          "Student, 16 resamples: t_15 sqrt(17/16) at 68 and 95 % to 1e-6");
 
   const auto   student4 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 4);
   const double root4 = std::sqrt(1.0 + 1.0 / 4.0);
-  Check(near(student4[0], 1.1889286 * root4, 1e-6) && near(student4[1], 3.1824463 * root4, 1e-6),
-        "Student, 4 resamples: t_3 sqrt(5/4) at 68 and 95 % to 1e-6");
+  ok &= bmr::test::Expect(near(student4[0], 1.1889286 * root4, 1e-6) && near(student4[1], 3.1824463 * root4, 1e-6),
+                          "Student, 4 resamples: t_3 sqrt(5/4) at 68 and 95 % to 1e-6");
   const auto calibrated4 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 4);
   const auto calibrated8 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 8);
   const auto & table = itk::RescanCalibrations;
-  Check(itk::UncertaintySettings{}.resamples == 4 && std::size(table) == 1 && table[0].resamples == 4 &&
-          near(calibrated4[0], table[0].halfWidth68, 1e-15) && near(calibrated4[1], table[0].halfWidth95, 1e-15),
-        "calibrated, 4 resamples (the default): its conformal constants (to rounding)");
+  ok &= bmr::test::Expect(itk::UncertaintySettings{}.resamples == 4 && std::size(table) == 1 &&
+                            table[0].resamples == 4 && near(calibrated4[0], table[0].halfWidth68, 1e-15) &&
+                            near(calibrated4[1], table[0].halfWidth95, 1e-15),
+                          "calibrated, 4 resamples (the default): its conformal constants (to rounding)");
   // The conformal quantiles of the default mesh's scores: below Student's at both levels (the 95 % one by more than
   // half: the scores' tail is lighter than the t_3 the four rescans' SD would imply).
-  Check(calibrated4[0] < 0.7 * student4[0] && calibrated4[1] < 0.5 * student4[1],
-        "calibrated, 4: narrower than Student's by more than 30 % (68 %) and 50 % (95 %)");
-  Check(near(calibrated8[0] / calibrated4[0], student8[0] / student4[0], 1e-12) &&
-          near(calibrated8[1] / calibrated4[1], student8[1] / student4[1], 1e-12) && calibrated8[1] < calibrated4[1],
-        "calibrated, 8 resamples: scaled from 4 by Student's ratio, so narrower");
+  ok &= bmr::test::Expect(calibrated4[0] < 0.7 * student4[0] && calibrated4[1] < 0.5 * student4[1],
+                          "calibrated, 4: narrower than Student's by more than 30 % (68 %) and 50 % (95 %)");
+  ok &= bmr::test::Expect(near(calibrated8[0] / calibrated4[0], student8[0] / student4[0], 1e-12) &&
+                            near(calibrated8[1] / calibrated4[1], student8[1] / student4[1], 1e-12) &&
+                            calibrated8[1] < calibrated4[1],
+                          "calibrated, 8 resamples: scaled from 4 by Student's ratio, so narrower");
   const auto calibrated6 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 6);
   const auto student6 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 6);
   const auto calibrated16 =
     itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 16);
   const auto calibrated3 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 3);
   const auto student3 = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student, 3);
-  Check(near(calibrated6[0] / calibrated4[0], student6[0] / student4[0], 1e-12) &&
-          near(calibrated16[1] / calibrated4[1], student16[1] / student4[1], 1e-12) &&
-          near(calibrated3[1] / calibrated4[1], student3[1] / student4[1], 1e-12),
-        "calibrated, 6, 16 and 3 resamples: scaled by Student's ratio from 4");
+  ok &= bmr::test::Expect(near(calibrated6[0] / calibrated4[0], student6[0] / student4[0], 1e-12) &&
+                            near(calibrated16[1] / calibrated4[1], student16[1] / student4[1], 1e-12) &&
+                            near(calibrated3[1] / calibrated4[1], student3[1] / student4[1], 1e-12),
+                          "calibrated, 6, 16 and 3 resamples: scaled by Student's ratio from 4");
   const auto bootstrap =
     itk::IntervalHalfWidths(UncertaintyMethodEnum::Bootstrap, IntervalQuantilesEnum::Calibrated, 8);
-  Check(bootstrap == student8, "the bootstrap was not calibrated: Student's half-widths");
-  Check(itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated) &&
-          !itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student) &&
-          !itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Bootstrap, IntervalQuantilesEnum::Calibrated),
-        "the calibrated half-widths are the rescans' only, and only when asked");
+  ok &= bmr::test::Expect(bootstrap == student8, "the bootstrap was not calibrated: Student's half-widths");
+  ok &= bmr::test::Expect(
+    itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated) &&
+      !itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Student) &&
+      !itk::UsesCalibratedHalfWidths(UncertaintyMethodEnum::Bootstrap, IntervalQuantilesEnum::Calibrated),
+    "the calibrated half-widths are the rescans' only, and only when asked");
   const auto two = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 2);
-  Check(std::isinf(two[0]) && std::isinf(two[1]), "2 resamples: no finite half-width");
-  CheckCensoredFit(Check);
-  return Check.ExitCode();
+  ok &= bmr::test::Expect(std::isinf(two[0]) && std::isinf(two[1]), "2 resamples: no finite half-width");
+  ok &= CheckCensoredFit();
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -30,26 +30,6 @@
 namespace itk {
 namespace test {
 
-/** Prints "ok:" or "FAIL:" and \a what, and counts the failures. */
-class Checks
-{
-public:
-  void
-  operator()(bool ok, const std::string & what)
-  {
-    std::cout << (ok ? "ok:   " : "FAIL: ") << what << std::endl;
-    m_Failures += ok ? 0 : 1;
-  }
-  int
-  ExitCode() const
-  {
-    return m_Failures == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
-  }
-
-private:
-  int m_Failures{ 0 };
-};
-
 /** The fixed labels on a grid of 2 mm voxels over the same extent (nearest neighbor). */
 inline BiomechanicalLabelImageType::Pointer
 Coarsened(const BiomechanicalLabelImageType * labels)

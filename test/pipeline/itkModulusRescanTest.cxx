@@ -29,6 +29,7 @@
 #include "itkBiomechanicalPipelines.h"
 #include "itkBiomechanicalReports.h"
 #include "itkIntervalTestSupport.h"
+#include "bmrTestUtilities.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,7 +37,6 @@
 #include <iostream>
 
 namespace {
-itk::test::Checks Check;
 
 itk::RegistrationSettings
 RescanSettings(double meshJitter, double stepTolerance, unsigned int threads)
@@ -77,6 +77,7 @@ Rescan(const itk::PhantomPair &                 pair,
 int
 itkModulusRescanTest(int, char *[])
 {
+  bool                 ok = true;
   itk::PhantomSettings s = itk::PhantomSettings::Defaults(itk::PhantomSettings::AnatomyEnum::Spheres);
   s.prostateE = 80.0;
   const itk::PhantomPair pair = itk::MakePhantomPair(s);
@@ -86,44 +87,46 @@ itkModulusRescanTest(int, char *[])
   const double               strictStep = 1e-3;
   const itk::ModulusInterval fine = Rescan(pair, pair.fixedLabels, 0.0, strictStep);
   const double               n = double(fine.resampleModuli.size());
-  Check(std::abs(fine.logBias) < 3.0 * 1.2533 * fine.logSigma / std::sqrt(n),
-        "no mesh jitter: the rescans' median does not differ significantly from the fit");
-  Check(fine.lowerDetermined && fine.upperDetermined, "both ends of the interval determined");
+  ok &= bmr::test::Expect(std::abs(fine.logBias) < 3.0 * 1.2533 * fine.logSigma / std::sqrt(n),
+                          "no mesh jitter: the rescans' median does not differ significantly from the fit");
+  ok &= bmr::test::Expect(fine.lowerDetermined && fine.upperDetermined, "both ends of the interval determined");
 
   const itk::ModulusInterval coarse = Rescan(pair, itk::test::Coarsened(pair.fixedLabels), 0.0, strictStep);
-  Check(coarse.logSigma > fine.logSigma, "the rescans spread more on 2 mm fixed voxels than on 1 mm ones");
+  ok &= bmr::test::Expect(coarse.logSigma > fine.logSigma,
+                          "the rescans spread more on 2 mm fixed voxels than on 1 mm ones");
   // At the default limit (1.5 mm) no modulus is stated from 2 mm voxels, and no rescan is computed for it.
   itk::RegistrationSettings gated = RescanSettings(0.0, strictStep, 0);
   gated.uncertainty.statedVoxelLimitMM = itk::UncertaintySettings().statedVoxelLimitMM;
   const itk::RegistrationResult gatedResult =
     itk::RegisterSegmentedPair(pair.movingLabels, itk::test::Coarsened(pair.fixedLabels), nullptr, pair.scene, gated);
   const itk::ModulusInterval & notStated = gatedResult.modulusInterval.at("inner");
-  Check(!notStated.notDeterminedReason.empty() && !notStated.lowerDetermined && !notStated.upperDetermined &&
-          notStated.resampleModuli.empty() && gatedResult.modulusUncertainty.empty(),
-        "2 mm voxels at the default limit: not determined, with a reason, and no rescan computed");
+  ok &= bmr::test::Expect(!notStated.notDeterminedReason.empty() && !notStated.lowerDetermined &&
+                            !notStated.upperDetermined && notStated.resampleModuli.empty() &&
+                            gatedResult.modulusUncertainty.empty(),
+                          "2 mm voxels at the default limit: not determined, with a reason, and no rescan computed");
 
   const double               jitter = itk::UncertaintySettings().meshJitter;
   const itk::ModulusInterval one = Rescan(pair, pair.fixedLabels, jitter);
   const itk::ModulusInterval again = Rescan(pair, pair.fixedLabels, jitter);
-  Check(again.resampleModuli == one.resampleModuli && again.interval95 == one.interval95,
-        "the same seed gives bit-identical rescans");
+  ok &= bmr::test::Expect(again.resampleModuli == one.resampleModuli && again.interval95 == one.interval95,
+                          "the same seed gives bit-identical rescans");
   // One resampling thread: no mesh is made ahead while the fit runs (ResampleMeshPrefetch), each rescan meshes its
   // own, and the rescans are the same.
   const itk::ModulusInterval single =
     Rescan(pair, pair.fixedLabels, jitter, itk::UncertaintySettings().stepTolerance, 1);
-  Check(single.resampleModuli == one.resampleModuli,
-        "one resampling thread without the meshes made ahead gives bit-identical rescans");
+  ok &= bmr::test::Expect(single.resampleModuli == one.resampleModuli,
+                          "one resampling thread without the meshes made ahead gives bit-identical rescans");
   // The moving anatomy meshed beforehand (MeshMovingAnatomy, as for a planning scan): the same meshes, so the same
   // fit and rescans bit for bit; meshes made for another resampling seed are refused.
   const itk::RegistrationSettings defaults = RescanSettings(jitter, itk::UncertaintySettings().stepTolerance, 0);
   const itk::MovingAnatomyMeshes  premeshed = itk::MeshMovingAnatomy(pair.movingLabels, pair.scene, defaults);
-  Check(premeshed.resamples.size() == 4 && !premeshed.coarse.points.empty(),
-        "MeshMovingAnatomy made the fit's, the sweep's and 4 resample meshes");
+  ok &= bmr::test::Expect(premeshed.resamples.size() == 4 && !premeshed.coarse.points.empty(),
+                          "MeshMovingAnatomy made the fit's, the sweep's and 4 resample meshes");
   const itk::ModulusInterval reused =
     Rescan(pair, pair.fixedLabels, jitter, itk::UncertaintySettings().stepTolerance, 0, &premeshed);
-  Check(reused.estimate == one.estimate && reused.resampleModuli == one.resampleModuli &&
-          reused.interval95 == one.interval95,
-        "the meshes made beforehand give the bit-identical fit and rescans");
+  ok &= bmr::test::Expect(reused.estimate == one.estimate && reused.resampleModuli == one.resampleModuli &&
+                            reused.interval95 == one.interval95,
+                          "the meshes made beforehand give the bit-identical fit and rescans");
 
   // The resamples' looser outer search: it stops once the next secant step in log E would be shorter than the
   // tolerance, and the secant's steps shrink superlinearly, so each rescan lies within that tolerance (plus the
@@ -135,8 +138,8 @@ itkModulusRescanTest(int, char *[])
     largest = std::max(largest, std::abs(std::log(one.resampleModuli[k] / strict.resampleModuli[k])));
   }
   std::cout << "  largest |log E| difference between step tolerances 0.01 and 0.001: " << largest << std::endl;
-  Check(largest <= itk::UncertaintySettings().stepTolerance + 1e-3,
-        "each rescan with the default step tolerance lies within it of the strict search's");
+  ok &= bmr::test::Expect(largest <= itk::UncertaintySettings().stepTolerance + 1e-3,
+                          "each rescan with the default step tolerance lies within it of the strict search's");
 
   const auto refusal = [&](const itk::RegistrationSettings & bad) {
     std::string message;
@@ -152,15 +155,16 @@ itkModulusRescanTest(int, char *[])
   };
   itk::RegistrationSettings bad;
   bad.uncertainty.meshJitter = 1.5; // mesh sizes x U(-0.5, 2.5)
-  Check(refusal(bad).find("meshJitter") != std::string::npos, "a mesh jitter of 1.5 is refused, naming the setting");
+  ok &= bmr::test::Expect(refusal(bad).find("meshJitter") != std::string::npos,
+                          "a mesh jitter of 1.5 is refused, naming the setting");
   bad = itk::RegistrationSettings();
   bad.uncertainty.stepTolerance = -0.01;
-  Check(refusal(bad).find("stepTolerance") != std::string::npos,
-        "a negative step tolerance is refused, naming the setting");
+  ok &= bmr::test::Expect(refusal(bad).find("stepTolerance") != std::string::npos,
+                          "a negative step tolerance is refused, naming the setting");
   bad = defaults;
   bad.uncertainty.seed += 1; // other resample meshes
   bad.meshes = &premeshed;
-  Check(refusal(bad).find("MeshMovingAnatomy") != std::string::npos,
-        "meshes made for another resampling seed are refused, naming MeshMovingAnatomy");
-  return Check.ExitCode();
+  ok &= bmr::test::Expect(refusal(bad).find("MeshMovingAnatomy") != std::string::npos,
+                          "meshes made for another resampling seed are refused, naming MeshMovingAnatomy");
+  return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
