@@ -33,7 +33,7 @@ namespace bmr {
  * in it, and the spans of work other threads do alongside the calling thread (a mesh made during the sweep) with
  * the calling thread's waits for them. What is in neither is serial. Recording costs two clock reads and a lock
  * per task; nothing is recorded while no trace lives. A program's opt-in (biomechreg --task-trace FILE); one at a
- * time per process (a second throws itk::ExceptionObject).
+ * time per process (a second throws itk::ExceptionObject); destroy it only after the work it records has ended.
  */
 class BiomechanicalRegistration_EXPORT TaskTrace
 {

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <numeric>
 
 namespace bmr {
 namespace fem {
@@ -332,11 +333,7 @@ SupernodalSolver::CutTree()
   {
     total += v;
   }
-  double dealt = 0.0;
-  for (const double load : best.load)
-  {
-    dealt += load;
-  }
+  const double dealt = std::accumulate(best.load.begin(), best.load.end(), 0.0);
   m_ParallelShare = total > 0.0 ? dealt / total : 0.0;
 }
 
