@@ -644,65 +644,6 @@ Resample(unsigned int                        k,
 }
 } // namespace
 
-bmr::Scene
-ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, std::mt19937_64 & rng)
-{
-  return ScaledMeshSizes(scene, Uniform(rng, 1.0 - u.meshJitter, 1.0 + u.meshJitter));
-}
-
-ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * movingLabels,
-                                           const bmr::Scene &                  scene,
-                                           const UncertaintySettings &         u)
-  : m_Meshes(u.resamples)
-{
-  // Beside the fit, which keeps two cores busy at most: the meshes side by side on the rest of the budget (one
-  // after the other on a small machine); each resample's mesh is drawn from its own random stream.
-  const unsigned int threads = ResampleThreads(u) > 2 ? ResampleThreads(u) - 2 : 1;
-  m_Thread = std::thread([this, movingLabels, scene, u, threads]() {
-    const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "resample meshes alongside");
-    bmr::ParallelFor("resample meshes", static_cast<int>(u.resamples), threads, [&](int k, int) {
-      if (m_Stop)
-      {
-        return;
-      }
-      try
-      {
-        std::vector<PipelineStage> untimed;
-        StageClock                 quiet(nullptr, untimed);
-        Random                     rng = ResampleRandom(u, static_cast<unsigned int>(k));
-        m_Meshes[k] = MeshLabelImage(movingLabels, ResampleMeshScene(scene, u, rng), quiet, "resample mesh");
-      }
-      catch (const std::exception &)
-      {
-        // Left empty: the resample meshes again and reports the failure where it belongs.
-      }
-    });
-  });
-}
-
-ResampleMeshPrefetch::~ResampleMeshPrefetch()
-{
-  Stop();
-}
-
-void
-ResampleMeshPrefetch::Stop()
-{
-  m_Stop = true;
-  if (m_Thread.joinable())
-  {
-    m_Thread.join();
-  }
-}
-
-std::vector<bmr::TetrahedralMesh>
-ResampleMeshPrefetch::Finish()
-{
-  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "resample meshes alongside");
-  Stop();
-  return std::move(m_Meshes);
-}
-
 RescanMapsPrefetch::RescanMapsPrefetch(const BiomechanicalLabelImageType * fixedLabels, const EstimationSetup & setup)
 {
   m_Maps = std::async(std::launch::async, [this, fixedLabels, setup]() {
