@@ -295,6 +295,76 @@ WritePhantom(const std::string &          out,
 
 namespace bmrcli {
 
+/** The version line, and under --verbose whether malloc uses huge pages. */
+void
+PrintVersion()
+{
+  std::cout << "biomechreg " << BMR_VERSION << " (ITKBiomechanicalRegistration; ITK " << itk::Version::GetITKVersion()
+            << ")" << std::endl;
+  if (GetVerbosity() == Verbosity::Verbose)
+  {
+    const char * tunables = std::getenv("GLIBC_TUNABLES");
+    std::cout << "malloc: GLIBC_TUNABLES=" << (tunables ? tunables : "") << " (transparent huge pages "
+              << (tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos ? "on" : "off")
+              << ")" << std::endl;
+  }
+}
+
+/** Runs subcommand \a command (not the demo, help or version) with its \a options; its exit status. */
+int
+RunSubcommand(const std::string & command, const Arguments & options)
+{
+  if (command == "phantom")
+  {
+    return PhantomCommand(options);
+  }
+  if (command == "simulate")
+  {
+    return SimulateCommand(options);
+  }
+  if (command == "register")
+  {
+    return RegisterCommand(options);
+  }
+  if (command == "demons")
+  {
+    return bmrcli::DemonsCommand(options);
+  }
+  if (command == "compare")
+  {
+    return bmrcli::CompareCommand(options);
+  }
+  if (command == "phantom-set")
+  {
+    return bmrcli::PhantomSetCommand(options);
+  }
+  if (command == "phantom-cohort")
+  {
+    return bmrcli::PhantomCohortCommand(options);
+  }
+  if (command == "cohort")
+  {
+    return bmrcli::CohortCommand(options, std::filesystem::canonical("/proc/self/exe").string());
+  }
+  if (command == "cohort-stats")
+  {
+    return bmrcli::CohortStatsCommand(options);
+  }
+  if (command == "dose")
+  {
+    return bmrcli::DoseCommand(options);
+  }
+  if (command == "markers")
+  {
+    return bmrcli::MarkersCommand(options);
+  }
+  if (command == "rt-export")
+  {
+    return bmrcli::RTExportCommand(options);
+  }
+  throw UsageError("unknown command \"" + command + "\"");
+}
+
 /** Records the parallel work (bmr::TaskTrace) into \a path, when given, until the command returns. */
 class TaskTraceFile
 {
@@ -340,16 +410,7 @@ main(int argc, char * argv[])
     const std::string   command = args.empty() ? std::string() : args.front();
     if (global.version || command == "version")
     {
-      std::cout << "biomechreg " << BMR_VERSION << " (ITKBiomechanicalRegistration; ITK "
-                << itk::Version::GetITKVersion() << ")" << std::endl;
-      if (GetVerbosity() == Verbosity::Verbose)
-      {
-        const char * tunables = std::getenv("GLIBC_TUNABLES");
-        std::cout << "malloc: GLIBC_TUNABLES=" << (tunables ? tunables : "") << " (transparent huge pages "
-                  << (tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos ? "on"
-                                                                                                            : "off")
-                  << ")" << std::endl;
-      }
+      PrintVersion();
       return EXIT_SUCCESS;
     }
     if (command == "help" || global.help)
@@ -367,56 +428,7 @@ main(int argc, char * argv[])
     {
       return DemoCommand();
     }
-    const Arguments options(std::vector<std::string>(args.begin() + 1, args.end()));
-    if (command == "phantom")
-    {
-      return PhantomCommand(options);
-    }
-    if (command == "simulate")
-    {
-      return SimulateCommand(options);
-    }
-    if (command == "register")
-    {
-      return RegisterCommand(options);
-    }
-    if (command == "demons")
-    {
-      return bmrcli::DemonsCommand(options);
-    }
-    if (command == "compare")
-    {
-      return bmrcli::CompareCommand(options);
-    }
-    if (command == "phantom-set")
-    {
-      return bmrcli::PhantomSetCommand(options);
-    }
-    if (command == "phantom-cohort")
-    {
-      return bmrcli::PhantomCohortCommand(options);
-    }
-    if (command == "cohort")
-    {
-      return bmrcli::CohortCommand(options, std::filesystem::canonical("/proc/self/exe").string());
-    }
-    if (command == "cohort-stats")
-    {
-      return bmrcli::CohortStatsCommand(options);
-    }
-    if (command == "dose")
-    {
-      return bmrcli::DoseCommand(options);
-    }
-    if (command == "markers")
-    {
-      return bmrcli::MarkersCommand(options);
-    }
-    if (command == "rt-export")
-    {
-      return bmrcli::RTExportCommand(options);
-    }
-    throw UsageError("unknown command \"" + command + "\"");
+    return RunSubcommand(command, Arguments(std::vector<std::string>(args.begin() + 1, args.end())));
   }
   catch (const UsageError & e)
   {

@@ -18,29 +18,18 @@
 #include "bmrNumerics.h"
 
 #include "bmrError.h"
+#include "bmrRuntimeSetting.h"
 
-#include <dlfcn.h>
 #include <string>
 
 namespace bmr {
 namespace {
-/** OpenBLAS's thread getter and setter, looked up at run time so that any other BLAS works unchanged (null
- * without OpenBLAS). */
-struct OpenBlasThreads
-{
-  int (*get)(){ nullptr };
-  void (*set)(int){ nullptr };
-};
-
-const OpenBlasThreads &
+/** OpenBLAS's thread count (both null without OpenBLAS). */
+const RuntimeIntSetting &
 OpenBlas()
 {
-  static const OpenBlasThreads functions = [] {
-    OpenBlasThreads f;
-    f.get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
-    f.set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    return f.get && f.set ? f : OpenBlasThreads{};
-  }();
+  static const RuntimeIntSetting functions =
+    FindRuntimeIntSetting("openblas_get_num_threads", "openblas_set_num_threads");
   return functions;
 }
 } // namespace

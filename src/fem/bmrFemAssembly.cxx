@@ -22,8 +22,8 @@
 #include <metis.h>
 
 #include "bmrError.h"
+#include "bmrRuntimeSetting.h"
 
-#include <dlfcn.h>
 
 #include <algorithm>
 #include <cmath>
@@ -72,22 +72,12 @@ ElementGradients(const TetrahedralMesh & mesh, std::size_t e, double g[4][3])
 }
 
 namespace {
-/** The OpenMP runtime's max-active-levels calls, looked up once at run time (null without an OpenMP runtime). */
-struct OpenMPLevels
-{
-  int (*get)(){ nullptr };
-  void (*set)(int){ nullptr };
-};
-
-const OpenMPLevels &
+/** The OpenMP runtime's max active levels (both null without an OpenMP runtime). */
+const RuntimeIntSetting &
 Levels()
 {
-  static const OpenMPLevels levels = [] {
-    OpenMPLevels l;
-    l.get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"));
-    l.set = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"));
-    return l.get && l.set ? l : OpenMPLevels{};
-  }();
+  static const RuntimeIntSetting levels =
+    FindRuntimeIntSetting("omp_get_max_active_levels", "omp_set_max_active_levels");
   return levels;
 }
 } // namespace

@@ -642,6 +642,37 @@ Resample(unsigned int                        k,
   }
   return moduli;
 }
+/** Each unknown's interval from the resamples that did not fail (\a moduli: per resample, in the unknowns'
+ * order; \a failures: per resample, empty when it succeeded). */
+std::map<std::string, ModulusInterval>
+IntervalsFromResamples(const RegistrationResult &               r,
+                       const UncertaintySettings &              u,
+                       const std::vector<std::vector<double>> & moduli,
+                       const std::vector<std::string> &         failures)
+{
+  std::map<std::string, ModulusInterval> intervals;
+  for (std::size_t m = 0; m < r.unknowns.size(); ++m)
+  {
+    std::vector<double> samples;
+    for (std::size_t k = 0; k < moduli.size(); ++k)
+    {
+      if (failures[k].empty())
+      {
+        samples.push_back(moduli[k][m]);
+      }
+    }
+    const bmr::UnknownModulus & unknown = r.unknowns[m];
+    ModulusInterval &           interval = intervals[unknown.name];
+    interval = BootstrapInterval(r.youngsModulus.at(unknown.name),
+                                 samples,
+                                 unknown,
+                                 u.correctBias,
+                                 IntervalHalfWidths(u.method, u.quantiles, samples.size()));
+    interval.method = u.method == UncertaintyMethodEnum::Rescan ? "rescan" : "bootstrap";
+    interval.quantiles = UsesCalibratedHalfWidths(u.method, u.quantiles) ? "calibrated" : "student";
+  }
+  return intervals;
+}
 } // namespace
 
 RescanMapsPrefetch::RescanMapsPrefetch(const BiomechanicalLabelImageType * fixedLabels, const EstimationSetup & setup)
@@ -735,29 +766,7 @@ BootstrapModuli(const EstimationSetup &             setup,
     }
   });
   clock.End();
-
-  std::vector<std::string>               warnings;
-  std::map<std::string, ModulusInterval> intervals;
-  for (std::size_t m = 0; m < r.unknowns.size(); ++m)
-  {
-    std::vector<double> samples;
-    for (unsigned int k = 0; k < u.resamples; ++k)
-    {
-      if (failures[k].empty())
-      {
-        samples.push_back(moduli[k][m]);
-      }
-    }
-    const bmr::UnknownModulus & unknown = r.unknowns[m];
-    ModulusInterval &           interval = intervals[unknown.name];
-    interval = BootstrapInterval(r.youngsModulus.at(unknown.name),
-                                 samples,
-                                 unknown,
-                                 u.correctBias,
-                                 IntervalHalfWidths(u.method, u.quantiles, samples.size()));
-    interval.method = rescan ? "rescan" : "bootstrap";
-    interval.quantiles = UsesCalibratedHalfWidths(u.method, u.quantiles) ? "calibrated" : "student";
-  }
+  std::vector<std::string> warnings;
   for (unsigned int k = 0; k < u.resamples; ++k)
   {
     if (!failures[k].empty())
@@ -766,7 +775,7 @@ BootstrapModuli(const EstimationSetup &             setup,
     }
   }
   clock.Warn(r.state.warnings, warnings);
-  return intervals;
+  return IntervalsFromResamples(r, u, moduli, failures);
 }
 
 } // namespace pipeline

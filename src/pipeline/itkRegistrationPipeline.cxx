@@ -397,6 +397,60 @@ Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLa
   r.jacobianMinimum = jacobian.minimum;
   r.jacobianNonPositiveFraction = jacobian.fractionNonPositive;
 }
+
+/** The meshes the estimation starts with: the premeshed ones, or the coarse mesh of the sweep (when it sweeps) and
+ * the fine mesh into r.state.mesh (unless the estimation takes it from \a fineMesh after the sweep). Returns the
+ * coarse mesh, empty when there is no sweep. */
+bmr::TetrahedralMesh
+MeshesForEstimation(RegistrationResult &                r,
+                    const MovingAnatomyMeshes *         premeshed,
+                    pipeline::BackgroundMesh *          fineMesh,
+                    bool                                meshDuringSweep,
+                    const BiomechanicalLabelImageType * anatomy,
+                    const bmr::Scene &                  scene,
+                    const RegistrationSettings &        settings,
+                    pipeline::StageClock &              clock)
+{
+  if (premeshed != nullptr)
+  {
+    r.state.mesh = premeshed->fine;
+    return premeshed->coarse;
+  }
+  bmr::TetrahedralMesh coarse;
+  // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
+  if (pipeline::UsesCoarseMesh(scene, settings))
+  {
+    coarse =
+      pipeline::MeshLabelImage(anatomy, ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
+  }
+  if (!meshDuringSweep)
+  {
+    r.state.mesh = fineMesh->Take(clock, "mesh (CGAL Mesh_3)");
+  }
+  return coarse;
+}
+
+/** The warped labels (nearest) and CT (linear, when given) through the pull-back field, then Dice and the Jacobian. */
+void
+WarpAndEvaluate(RegistrationResult &                r,
+                const bmr::Scene &                  scene,
+                const BiomechanicalLabelImageType * movingLabels,
+                const BiomechanicalLabelImageType * fixedLabels,
+                const BiomechanicalCTImageType *    movingCT,
+                pipeline::StageClock &              clock)
+{
+  clock.Begin(movingCT ? "warp (CT linear; labels nearest)" : "warp (labels nearest)");
+  r.warpedLabels = WarpImage(movingLabels, r.state.pullBack.GetPointer(), true, 0);
+  if (movingCT)
+  {
+    r.warpedCT = WarpImage(movingCT, r.state.pullBack.GetPointer(), false, -1000.0f);
+  }
+  clock.End();
+  clock.Begin("report (Dice, Jacobian)");
+  clock.Warn(r.state.warnings, UncertaintyWarnings(r));
+  Evaluate(r, scene, fixedLabels);
+  clock.End();
+}
 } // namespace
 
 namespace pipeline {
@@ -545,25 +599,8 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   const auto maps = pipeline::ObjectiveDistanceMaps(
     fixedLabels, fixedProbabilities, scene, SceneDistanceExactWithinMM, settings.interpolateSlices);
   clock.End(std::to_string(maps.size()) + " organs");
-  // Coarse-to-fine only when there is a modulus to sweep: nothing is meshed twice otherwise.
-  bmr::TetrahedralMesh coarse;
-  if (premeshed != nullptr)
-  {
-    coarse = premeshed->coarse;
-    r.state.mesh = premeshed->fine;
-  }
-  else
-  {
-    if (pipeline::UsesCoarseMesh(scene, settings))
-    {
-      coarse = pipeline::MeshLabelImage(
-        anatomy.GetPointer(), ScaledMeshSizes(scene, settings.coarseFactor), clock, "coarse mesh (sweep)");
-    }
-    if (!meshDuringSweep)
-    {
-      r.state.mesh = fineMesh->Take(clock, "mesh (CGAL Mesh_3)");
-    }
-  }
+  const bmr::TetrahedralMesh coarse =
+    MeshesForEstimation(r, premeshed, fineMesh.get(), meshDuringSweep, anatomy.GetPointer(), scene, settings, clock);
   pipeline::EstimationSetup setup{
     nullptr, {}, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans, &fixedProbabilities
   };
@@ -616,17 +653,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   DescribeState(r, scene, settings.elementState);
 
   pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, clock);
-  clock.Begin(movingCT ? "warp (CT linear; labels nearest)" : "warp (labels nearest)");
-  r.warpedLabels = WarpImage(movingLabels, r.state.pullBack.GetPointer(), true, 0);
-  if (movingCT)
-  {
-    r.warpedCT = WarpImage(movingCT, r.state.pullBack.GetPointer(), false, -1000.0f);
-  }
-  clock.End();
-  clock.Begin("report (Dice, Jacobian)");
-  clock.Warn(r.state.warnings, UncertaintyWarnings(r));
-  Evaluate(r, scene, fixedLabels);
-  clock.End();
+  WarpAndEvaluate(r, scene, movingLabels, fixedLabels, movingCT, clock);
   return r;
 }
 
