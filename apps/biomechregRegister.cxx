@@ -217,13 +217,20 @@ RegisterCommand(const Arguments & args)
   settings.elementState = outputs.mesh;
   const std::string probabilities = args.Get("--fixed-probabilities");
   const bool        ignoreROIs = IgnoreUnmappedROIs(args);
+  const std::string labelSurfaces =
+    args.Has("--label-surfaces") ? args.Choice("--label-surfaces", { "voxels", "distance" }) : "";
   args.CheckAllUsed();
 
   StageTimer timer(true);
   std::cout << "biomechreg register -> " << out << std::endl;
   timer.Begin("read inputs");
-  const bmr::Scene scene = bmr::ReadScene(scenePath);
-  const auto       moving = ReadImage<CTImageType>(movingCT, "moving CT");
+  bmr::Scene scene = bmr::ReadScene(scenePath);
+  if (!labelSurfaces.empty())
+  {
+    scene.mesh.labelSurfaces = labelSurfaces == "distance" ? bmr::MeshingParameters::LabelSurfaces::Distance
+                                                           : bmr::MeshingParameters::LabelSurfaces::Voxels;
+  }
+  const auto moving = ReadImage<CTImageType>(movingCT, "moving CT");
   // A label input may be an RTSTRUCT, rasterized on the grid of the CT of the same scan.
   const auto movingMap = ReadLabelsOrRTStruct(movingLabels, "moving label image", moving, scene, ignoreROIs);
   // The fixed CT is read to check it (and to grid an RTSTRUCT); the fixed label image defines the output grid.

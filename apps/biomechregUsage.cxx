@@ -55,6 +55,7 @@ const std::pair<const char *, const char *> commands[] = {
     "                      [--wall-motion normal|free|traction|pressure] [--max-outer-iterations N]\n"
     "                      [--outer-tolerance T] [--element-inversion allow|limit]\n"
     "                      [--slice-interpolation off|on (organs interpolated between thick slices)]\n"
+    "                      [--label-surfaces voxels|distance (the moving mesh's surfaces; default: the scene's)]\n"
     "                      [--uncertainty rescan|bootstrap|curvature|none] [--resamples N] [--uncertainty-seed S]\n"
     "                      [--uncertainty-threads T] [--uncertainty-mesh-jitter J] [--uncertainty-shift-voxels S]\n"
     "                      [--uncertainty-rotation-deg A] [--uncertainty-wall-slip F] [--uncertainty-smoothing-voxels "

@@ -64,6 +64,16 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
    * sliver is all but flat: its stiffness matrix is near singular and the pull-back inside it ill defined. */
   double       minimumDihedralAngle{ 0.1 };
   unsigned int randomSeed{ 0 };
+  /** Where MeshSceneLabels() puts a label image's surfaces. Voxels: on the faces between voxels of different labels
+   * (CGAL's labeled image), a staircase whose steps are a slice high. Distance: where the labels' interpolated
+   * signed distances meet (DistanceLabelFunction(), scene key mesh.label_surfaces = "distance"), so that between
+   * thick slices an outline moves from one slice's contour to the next instead of in terraces. */
+  enum class LabelSurfaces
+  {
+    Voxels,
+    Distance
+  };
+  LabelSurfaces labelSurfaces{ LabelSurfaces::Voxels };
   /** Local refinement: within refineDistance [mm] of the voxels labeled with one of refineNearLabels (measured on
    * the label grid), cells and surface facets are at most refineSize [mm]. For the thin tissue between an organ
    * whose modulus is estimated and the walls that load it, which a uniform size resolves only at a far higher

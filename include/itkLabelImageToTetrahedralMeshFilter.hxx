@@ -19,6 +19,7 @@
 #define itkLabelImageToTetrahedralMeshFilter_hxx
 
 #include "itkLabelImageToTetrahedralMeshFilter.h"
+#include "bmrDistanceLabels.h"
 #include "bmrSimulation.h"
 #include "itkImageRegionConstIterator.h"
 
@@ -154,7 +155,10 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::GenerateData()
   }
   else
   {
-    const bmr::TetrahedralMesh full = bmr::MeshLabelVolume(labels.data(), grid, m_MeshingParameters);
+    const bmr::TetrahedralMesh full =
+      m_MeshingParameters.labelSurfaces == bmr::MeshingParameters::LabelSurfaces::Distance
+        ? bmr::MeshImplicitLabelsOnGrid(bmr::DistanceLabelFunction(labels, grid), grid, labels, m_MeshingParameters)
+        : bmr::MeshLabelVolume(labels.data(), grid, m_MeshingParameters);
     mesh = bmr::ExtractSubmesh(full, m_ExcludedLabels);
   }
   m_MeshQuality = bmr::ComputeMeshQuality(mesh);

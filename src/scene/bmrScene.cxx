@@ -808,6 +808,7 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
               "sliver_bound_deg",
               "random_seed",
               "minimum_dihedral_angle_deg",
+              "label_surfaces",
               "refine_near" },
             source,
             "mesh");
@@ -829,6 +830,16 @@ ParseMeshingParameters(const Json & j, const std::string & source, MeshingParame
     m.sliverBound = GetNumber(j, "sliver_bound_deg", source, "mesh");
   if (j.contains("minimum_dihedral_angle_deg"))
     m.minimumDihedralAngle = GetNumber(j, "minimum_dihedral_angle_deg", source, "mesh");
+  if (j.contains("label_surfaces"))
+  {
+    const std::string surfaces = GetString(j, "label_surfaces", source, "mesh");
+    if (surfaces != "voxels" && surfaces != "distance")
+    {
+      SceneError(source, "mesh.label_surfaces", "must be \"voxels\" or \"distance\", got \"" + surfaces + "\"");
+    }
+    m.labelSurfaces =
+      surfaces == "distance" ? MeshingParameters::LabelSurfaces::Distance : MeshingParameters::LabelSurfaces::Voxels;
+  }
   if (j.contains("random_seed"))
   {
     if (!j["random_seed"].is_number_unsigned())
@@ -1072,7 +1083,9 @@ SceneToJson(const Scene & scene)
                 { "exude", scene.mesh.exude },
                 { "sliver_bound_deg", scene.mesh.sliverBound },
                 { "minimum_dihedral_angle_deg", scene.mesh.minimumDihedralAngle },
-                { "random_seed", scene.mesh.randomSeed } };
+                { "random_seed", scene.mesh.randomSeed },
+                { "label_surfaces",
+                  scene.mesh.labelSurfaces == MeshingParameters::LabelSurfaces::Distance ? "distance" : "voxels" } };
   for (const auto & keyAndSizes : scene.mesh.SizesPerLabel())
   {
     if (!keyAndSizes.second->empty())

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "bmrSimulation.h"
 
+#include "bmrDistanceLabels.h"
 #include "bmrError.h"
 #include "bmrNeoHookeanForwardModel.h"
 
@@ -282,6 +283,13 @@ TetrahedralMesh
 MeshSceneLabels(const std::int32_t * labels, const GridGeometry & grid, const Scene & scene)
 {
   const SceneMeshInput in = PrepareSceneMesh(labels, grid, scene);
+  if (scene.mesh.labelSurfaces == MeshingParameters::LabelSurfaces::Distance)
+  {
+    return FinishSceneMesh(
+      MeshImplicitLabelsOnGrid(DistanceLabelFunction(in.cropped, in.roi), in.roi, in.cropped, in.parameters),
+      scene,
+      in);
+  }
   return FinishSceneMesh(MeshLabelVolume(in.cropped.data(), in.roi, in.parameters), scene, in);
 }
 
