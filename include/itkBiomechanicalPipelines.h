@@ -150,6 +150,39 @@ struct RescanCalibration
  * Student's ratio (IntervalHalfWidths()); 8 rescans were not calibrated on this mesh. */
 constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
 
+/** The interval at thick slices, where the rescans miss the truth (they resample the voxels' phase and the mesh; at
+ * 2-3 mm slices the fit's error comes from the moving scan's slices: docs/benchmarks.md, "Clinical geometry"). Its
+ * calibration is the fit's own error, measured on pelvis phantom pairs whose two scans both have slices of sliceMM,
+ * an in-plane spacing drawn from U(0.8, 1.2) mm, the fixed grid shifted by a random sub-voxel offset and moduli
+ * log-uniform in 30-500 kPa (benchmarks/results/clinical_geometry/slice_calibration_fit.csv, seeds 5201, 5251 and
+ * 5301: 15, 10 and 15 pairs; benchmarks/summarize_slice_calibration.py fit): b the mean and s the standard deviation
+ * of \f$ \log(\hat E / E_{true}) \f$ over the m pairs whose fit lay inside the search range. The
+ * interval is \f$ \hat E e^{-b} \exp(\pm t_{m-1} \sqrt{1 + 1/m}\, s) \f$ at 68 % and 95 % (Student's predictive
+ * interval: the error of one more pair from the same population). Checked on pairs drawn after the constants were
+ * committed (docs/benchmarks.md, "Clinical geometry: an interval calibrated per slice thickness").
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+struct SliceCalibration
+{
+  double       sliceMM;  ///< both scans' slice thickness
+  double       logBias;  ///< b
+  double       logSigma; ///< s
+  unsigned int pairs;    ///< m
+};
+constexpr SliceCalibration SliceCalibrations[] = { { 2.0, 0.1757, 0.1792, 11 },
+                                                   { 2.5, 0.2511, 0.2420, 8 },
+                                                   { 3.0, 0.2203, 0.2666, 11 } };
+/** A scan's slices [mm] within this of a calibration's thickness use it. */
+constexpr double SliceCalibrationToleranceMM = 0.25;
+/** The in-plane voxel sides [mm] the calibrations drew, the only ones they hold for. */
+constexpr double SliceCalibrationInPlaneMM[2] = { 0.8, 1.2 };
+
+/** The calibration that holds for both scans' voxels, null when none does: both scans' in-plane sides (the two
+ * smaller) within SliceCalibrationInPlaneMM and their slices (the largest side) within SliceCalibrationToleranceMM
+ * of one calibration's thickness. A thick moving scan with a 1 mm fixed scan (or the reverse) is not calibrated:
+ * the two lean opposite ways (docs/benchmarks.md, "which scan's slices make the 3 mm bias"). */
+BiomechanicalRegistration_EXPORT const SliceCalibration *
+FindSliceCalibration(const std::array<double, 3> & movingSpacing, const std::array<double, 3> & fixedSpacing);
+
 /** Whether \a method states its intervals with the calibrated half-widths under \a quantiles (rescans only). */
 BiomechanicalRegistration_EXPORT bool
 UsesCalibratedHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles);
@@ -213,8 +246,10 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
   double stepTolerance{ 0.01 };
   /** Half-widths from the calibration (default, rescans) or Student's t (IntervalQuantilesEnum). */
   IntervalQuantilesEnum quantiles{ IntervalQuantilesEnum::Calibrated };
-  /** The largest label voxel side [mm] at which a modulus is stated (default bmr::StatedModulusVoxelLimitMM, where
-   * coverage was shown). Above it the modulus is reported as not determined and no resample is computed. A study
+  /** The largest label voxel side [mm] at which a modulus is stated from the resamples (default
+   * bmr::StatedModulusVoxelLimitMM, where their coverage was shown). Above it the interval is the thick slices'
+   * calibration where one holds (FindSliceCalibration()), else the modulus is reported as not determined; no
+   * resample is computed either way. A study
    * that measures coverage at coarser voxels (benchmarks/run_calibration_benchmark.sh) raises it; the run then
    * warns that the interval is stated where its coverage was not shown. */
   double statedVoxelLimitMM{ bmr::StatedModulusVoxelLimitMM };
@@ -262,6 +297,7 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
   /** Why no modulus is stated although the search found a fit (for example label voxels coarser than
    * bmr::StatedModulusVoxelLimitMM); empty when the interval stands. Non-empty: both ends not determined. */
   std::string notDeterminedReason;
+  double      calibratedSliceMM{ 0.0 }; ///< mm: the SliceCalibration used (method "slice-calibration"), else 0
 };
 
 /** One line stating the modulus of \a name: "E = 92.1 kPa (68 %: 80.3-105.6 kPa, 95 %: ...)" when both ends are
@@ -270,6 +306,15 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT std::string
                                  ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
+
+/** The interval of \a fit [kPa] at thick slices from \a calibration (SliceCalibration: centred on fit e^(-b), Student's
+ * predictive half-widths t_(m-1) sqrt(1 + 1/m) s); an end beyond \a unknown's search range is not determined, as for
+ * every interval. A fit on a search bound states no bound: the calibration measured fits inside the range, and at
+ * thick slices stiff organs stop on the upper bound with truths far below it (docs/benchmarks.md, "Clinical geometry"):
+ * the modulus is then reported as not determined, with that reason.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
+BiomechanicalRegistration_EXPORT ModulusInterval
+SliceCalibratedInterval(double fit, const SliceCalibration & calibration, const bmr::UnknownModulus & unknown);
 
 struct MovingAnatomyMeshes;
 

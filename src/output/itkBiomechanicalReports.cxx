@@ -107,6 +107,10 @@ ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
                             { "not_determined_reason", i.notDeterminedReason },
                             { "assumes", WallLawCaveat(motion) },
                             { "resamples_kPa", resamples } };
+    if (i.method == "slice-calibration")
+    {
+      intervals[kv.first]["calibrated_slice_mm"] = i.calibratedSliceMM;
+    }
   }
   j["youngs_modulus_interval"] = intervals;
   return j;

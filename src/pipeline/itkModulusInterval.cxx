@@ -140,6 +140,31 @@ IntervalHalfWidths(UncertaintyMethodEnum method, IntervalQuantilesEnum quantiles
              calibration->halfWidth95 * student[1] / reference[1] } };
 }
 
+const SliceCalibration *
+FindSliceCalibration(const std::array<double, 3> & movingSpacing, const std::array<double, 3> & fixedSpacing)
+{
+  std::array<double, 2> slices;
+  for (std::size_t scan = 0; scan < 2; ++scan)
+  {
+    std::array<double, 3> sides = scan == 0 ? movingSpacing : fixedSpacing;
+    std::sort(sides.begin(), sides.end());
+    if (!(sides[0] >= SliceCalibrationInPlaneMM[0] && sides[1] <= SliceCalibrationInPlaneMM[1]))
+    {
+      return nullptr;
+    }
+    slices[scan] = sides[2];
+  }
+  for (const SliceCalibration & c : SliceCalibrations)
+  {
+    if (c.pairs >= 3 && std::abs(slices[0] - c.sliceMM) <= SliceCalibrationToleranceMM &&
+        std::abs(slices[1] - c.sliceMM) <= SliceCalibrationToleranceMM)
+    {
+      return &c;
+    }
+  }
+  return nullptr;
+}
+
 namespace {
 /** phi(a) / (1 - Phi(a)), the inverse Mills ratio; its asymptote a + 1/a where the tail underflows. */
 double
@@ -320,14 +345,49 @@ DeclareNotDetermined(ModulusInterval & interval, const bmr::UnknownModulus & unk
 }
 
 } // namespace pipeline
+ModulusInterval
+SliceCalibratedInterval(double fit, const SliceCalibration & calibration, const bmr::UnknownModulus & unknown)
+{
+  ModulusInterval i;
+  i.method = "slice-calibration";
+  i.quantiles = "student";
+  i.fit = fit;
+  i.calibratedSliceMM = calibration.sliceMM;
+  i.logBias = calibration.logBias;
+  i.biasCorrected = true;
+  i.logSigma = calibration.logSigma;
+  const bool lowerReached = pipeline::ReachesLower(fit, unknown), upperReached = pipeline::ReachesUpper(fit, unknown);
+  if (lowerReached || upperReached)
+  {
+    // The calibration measured the error of fits inside the range; stiff organs read too stiff at thick slices and
+    // stop on the upper bound with truths far below it, so no bound can be stated from such a fit.
+    std::ostringstream reason;
+    reason << "at " << calibration.sliceMM << " mm slices the fit stopped on the search's "
+           << (upperReached ? "upper" : "lower") << " bound (" << fit
+           << " kPa), and the thick slices' calibration states no bound from such a fit";
+    pipeline::DeclareNotDetermined(i, unknown, reason.str());
+    return i;
+  }
+  const double                center = std::log(fit) - calibration.logBias;
+  const std::array<double, 2> k = pipeline::StudentHalfWidths(calibration.pairs);
+  i.estimate = std::exp(center);
+  i.interval68 = { { std::exp(center - k[0] * i.logSigma), std::exp(center + k[0] * i.logSigma) } };
+  i.interval95 = { { std::exp(center - k[1] * i.logSigma), std::exp(center + k[1] * i.logSigma) } };
+  pipeline::JudgeBounds(i, unknown, false, false);
+  return i;
+}
+
 std::string
 ModulusIntervalText(const std::string & name, const ModulusInterval & i)
 {
   std::ostringstream os;
   os << std::setprecision(3) << name;
+  std::ostringstream sliceSource;
+  sliceSource << "calibrated on phantom pairs with " << i.calibratedSliceMM << " mm slices";
   const std::string source = i.method == "bootstrap" ? std::to_string(i.resampleModuli.size()) + " bootstrap resamples"
                              : i.method == "rescan"  ? std::to_string(i.resampleModuli.size()) + " rescans"
-                                                     : std::string("curvature of Phi*");
+                             : i.method == "slice-calibration" ? sliceSource.str()
+                                                               : std::string("curvature of Phi*");
   if (!i.notDeterminedReason.empty())
   {
     os << " E not determined: " << i.notDeterminedReason << " (the fields use the fit, " << i.fit << " kPa)";
@@ -349,7 +409,11 @@ ModulusIntervalText(const std::string & name, const ModulusInterval & i)
   {
     os << " E = " << i.estimate << " kPa (68 %: " << i.interval68[0] << " to " << i.interval68[1]
        << " kPa, 95 %: " << i.interval95[0] << " to " << i.interval95[1] << " kPa; " << source << ", fit " << i.fit
-       << " kPa" << (i.biasCorrected ? ", corrected for the resamples' bias" : "") << ")";
+       << " kPa"
+       << (!i.biasCorrected                  ? ""
+           : i.method == "slice-calibration" ? ", corrected for the thick slices' bias"
+                                             : ", corrected for the resamples' bias")
+       << ")";
   }
   return os.str();
 }

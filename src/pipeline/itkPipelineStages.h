@@ -126,12 +126,13 @@ private:
 };
 
 /** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
- * field on \a movingReference's grid. */
+ * field on \a movingReference's grid; an inverted-element warning names \a scene's labels. */
 void
 ComputeFields(SimulationResult &   result,
               const ImageBase<3> * fixedReference,
               const ImageBase<3> * movingReference,
               bool                 pushField,
+              const bmr::Scene &   scene,
               StageClock &         clock);
 
 /** How many threads the stated interval's resamples may use: UncertaintySettings::threads, or ITK's default. */
@@ -215,6 +216,9 @@ struct EstimationSetup
   /** Whether the label voxels allow a stated modulus (UncertaintySettings::statedVoxelLimitMM): without, no
    * uncertainty of it is computed, neither resamples nor the curvature. */
   bool statesModulus{ true };
+  /** Where the resamples' limit rules them out: the thick slices' calibration that holds for both scans
+   * (FindSliceCalibration()), or null: the modulus is then not determined. */
+  const SliceCalibration * sliceCalibration{ nullptr };
 };
 
 /** The objective organs' distance maps by name. */

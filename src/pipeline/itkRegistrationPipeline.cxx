@@ -103,11 +103,51 @@ StatesModulus(double coarsest, const UncertaintySettings & u)
   return coarsest <= u.statedVoxelLimitMM;
 }
 
+/** The thick slices' calibration that holds for the two label images (FindSliceCalibration()); none for slices
+ * interpolated between (RegistrationSettings::interpolateSlices), which no calibration measured. */
+const SliceCalibration *
+SliceCalibrationOf(const ImageBase<3> * moving, const ImageBase<3> * fixed, const RegistrationSettings & settings)
+{
+  if (settings.interpolateSlices)
+  {
+    return nullptr;
+  }
+  std::array<double, 3> movingSpacing, fixedSpacing;
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    movingSpacing[a] = moving->GetSpacing()[a];
+    fixedSpacing[a] = fixed->GetSpacing()[a];
+  }
+  return FindSliceCalibration(movingSpacing, fixedSpacing);
+}
+
+/** Why no modulus is stated from label voxels of up to \a coarsest mm: beyond the resamples' limit, and no thick-slice
+ * calibration holds; in the words of both the warning and the report. */
+std::string
+NotDeterminedByVoxels(double coarsest, const UncertaintySettings & u)
+{
+  std::ostringstream os;
+  os << bmr::VoxelLimitReason(coarsest, u.statedVoxelLimitMM)
+     << ", and no thick-slice calibration holds for these scans (calibrated: both scans with slices of";
+  const char * separator = " ";
+  for (const SliceCalibration & c : SliceCalibrations)
+  {
+    os << separator << c.sliceMM;
+    separator = ", ";
+  }
+  os << " mm +- " << SliceCalibrationToleranceMM << " mm and in-plane voxels of " << SliceCalibrationInPlaneMM[0]
+     << " to " << SliceCalibrationInPlaneMM[1] << " mm)";
+  return os.str();
+}
+
 /** The warning that goes with the modulus's statement at label voxels of up to \a coarsest mm: not stated above the
- * limit (the statement's own reason); stated, when an interval is made, beyond the geometry where coverage was shown
- * when the limit was raised. */
+ * limit without a thick-slice calibration (the statement's own reason); stated, when an interval is made, beyond the
+ * geometry where coverage was shown when the limit was raised. */
 std::vector<std::string>
-VoxelLimitWarnings(const bmr::Scene & scene, double coarsest, const UncertaintySettings & u)
+VoxelLimitWarnings(const bmr::Scene &          scene,
+                   double                      coarsest,
+                   const UncertaintySettings & u,
+                   const SliceCalibration *    calibration)
 {
   if (scene.UnknownLabels().empty())
   {
@@ -115,7 +155,11 @@ VoxelLimitWarnings(const bmr::Scene & scene, double coarsest, const UncertaintyS
   }
   if (!StatesModulus(coarsest, u))
   {
-    return { bmr::VoxelLimitReason(coarsest, u.statedVoxelLimitMM) + " (the registration itself is not affected)" };
+    if (calibration && u.method != UncertaintyMethodEnum::None)
+    {
+      return {};
+    }
+    return { NotDeterminedByVoxels(coarsest, u) + " (the registration itself is not affected)" };
   }
   if (coarsest <= bmr::StatedModulusVoxelLimitMM || u.method == UncertaintyMethodEnum::None)
   {
@@ -142,7 +186,9 @@ ReadVoxels(RegistrationResult &                r,
   r.slicesInterpolated =
     settings.interpolateSlices && (ThickSlices(movingLabels).axis >= 0 || ThickSlices(fixedLabels).axis >= 0);
   clock.Warn(r.state.warnings, scene.EstimationWarnings(voxels[0]));
-  clock.Warn(r.state.warnings, VoxelLimitWarnings(scene, voxels[1], settings.uncertainty));
+  clock.Warn(r.state.warnings,
+             VoxelLimitWarnings(
+               scene, voxels[1], settings.uncertainty, SliceCalibrationOf(movingLabels, fixedLabels, settings)));
   return voxels[1];
 }
 
@@ -156,7 +202,7 @@ UncertaintyWarnings(const RegistrationResult & r)
   {
     const ModulusInterval & i = kv.second;
     const double            halfWidth = 0.5 * std::log(i.interval68[1] / i.interval68[0]);
-    if (!i.notDeterminedReason.empty())
+    if (!i.notDeterminedReason.empty() && i.method != "slice-calibration")
     {
       continue; // not the images' doing: the voxel warning (VoxelLimitWarnings) says why, in the same words
     }
@@ -310,7 +356,18 @@ StateIntervals(RegistrationResult &                r,
                pipeline::StageClock &              clock)
 {
   const UncertaintyMethodEnum method = setup.settings->uncertainty.method;
-  if (!setup.statesModulus)
+  if (!setup.statesModulus && setup.sliceCalibration)
+  {
+    // Thick slices: the calibration's interval (none asked for: none, as at any voxels).
+    for (const bmr::UnknownModulus & u : r.unknowns)
+    {
+      if (method != UncertaintyMethodEnum::None)
+      {
+        r.modulusInterval[u.name] = SliceCalibratedInterval(r.youngsModulus.at(u.name), *setup.sliceCalibration, u);
+      }
+    }
+  }
+  else if (!setup.statesModulus)
   {
     // Where coverage was not shown no number is stated, whatever the method: nothing to resample for.
     for (const bmr::UnknownModulus & u : r.unknowns)
@@ -318,8 +375,7 @@ StateIntervals(RegistrationResult &                r,
       ModulusInterval & i = r.modulusInterval[u.name];
       i.fit = r.youngsModulus.at(u.name);
       i.method = "none";
-      pipeline::DeclareNotDetermined(
-        i, u, bmr::VoxelLimitReason(coarsestVoxel, setup.settings->uncertainty.statedVoxelLimitMM));
+      pipeline::DeclareNotDetermined(i, u, NotDeterminedByVoxels(coarsestVoxel, setup.settings->uncertainty));
     }
   }
   else if ((method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan) &&
@@ -608,6 +664,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   // The fine solves take every core but the one the interval's prefetches (below) may run on.
   const UncertaintyMethodEnum method = settings.uncertainty.method;
   setup.statesModulus = StatesModulus(coarsestVoxel, settings.uncertainty);
+  setup.sliceCalibration = SliceCalibrationOf(movingLabels, fixedLabels, settings);
   const bool resamples =
     setup.statesModulus && (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
   const unsigned threads = MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
@@ -652,7 +709,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   DescribeState(r, scene, settings.elementState);
 
-  pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, clock);
+  pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, scene, clock);
   WarpAndEvaluate(r, scene, movingLabels, fixedLabels, movingCT, clock);
   return r;
 }

@@ -2,9 +2,11 @@
 # sub-voxel offset; a coarse truth mesh for speed):
 # - the run exits 0; the organs are not interpolated between slices by default (report.json: slice_interpolation
 #   false), and are with --slice-interpolation on;
-# - no modulus is stated from 3 mm voxels, where the interval's coverage was not shown: the statement says "not
-#   determined", both ends are undetermined, the reason names the 3 mm voxels, and the run's warning says the same
-#   thing (the warning and the statement must never disagree);
+# - with both scans at 3 mm slices the interval is the 3 mm calibration's (method slice-calibration,
+#   calibrated_slice_mm 3, the statement names it), no rescan is computed, and no warning says "not determined";
+# - where no calibration holds (slices interpolated, which none measured) no modulus is stated: the statement says
+#   "not determined", both ends are undetermined, the reason names the 3 mm voxels, and the run's warning says the
+#   same thing (the warning and the statement must never disagree);
 # - raised by --uncertainty-voxel-limit-mm, the interval is stated and the warning then says that it is stated
 #   beyond the geometry where coverage was shown.
 # Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregThickSlicesCheck.cmake
@@ -27,15 +29,35 @@ if(NOT rc EQUAL 0)
 endif()
 file(READ ${OUT}/reg/report.json report)
 string(JSON interpolated GET "${report}" slice_interpolation)
+string(JSON method GET "${report}" youngs_modulus_interval prostate method)
+string(JSON calibrated GET "${report}" youngs_modulus_interval prostate calibrated_slice_mm)
+string(JSON statement GET "${report}" youngs_modulus_interval prostate statement)
+string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
+string(JSON resamples LENGTH "${report}" youngs_modulus_interval prostate resamples_kPa)
+if(interpolated)
+  message(SEND_ERROR "report.json: slice_interpolation is ${interpolated} by default")
+endif()
+if(NOT method STREQUAL "slice-calibration" OR NOT calibrated EQUAL 3 OR NOT reason STREQUAL "" OR
+   NOT resamples EQUAL 0 OR NOT statement MATCHES "calibrated on phantom pairs with 3 mm slices")
+  message(SEND_ERROR "at 3 mm the 3 mm calibration is not stated: ${method}, ${calibrated} mm, '${statement}'")
+endif()
+if("${out}${err}" MATCHES "not determined")
+  message(SEND_ERROR "a calibrated statement beside a warning that says 'not determined'")
+endif()
+
+execute_process(COMMAND ${CLI} register ${inputs} --slice-interpolation on --out ${OUT}/interpolated
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "${out}${err}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "register at 1 x 1 x 3 mm, slices interpolated: exit code ${rc}")
+endif()
+file(READ ${OUT}/interpolated/report.json report)
 string(JSON statement GET "${report}" youngs_modulus_interval prostate statement)
 string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
 string(JSON lowerOk GET "${report}" youngs_modulus_interval prostate lower_end_determined)
 string(JSON upperOk GET "${report}" youngs_modulus_interval prostate upper_end_determined)
-if(interpolated)
-  message(SEND_ERROR "report.json: slice_interpolation is ${interpolated} by default")
-endif()
 if(NOT statement MATCHES "not determined: label voxels of up to 3 mm" OR lowerOk OR upperOk)
-  message(SEND_ERROR "at 3 mm a modulus was stated: '${statement}' (determined ${lowerOk}/${upperOk})")
+  message(SEND_ERROR "uncalibrated, a modulus was stated: '${statement}' (determined ${lowerOk}/${upperOk})")
 endif()
 string(FIND "${out}${err}" "warning: ${reason}" at) # the reason holds brackets: a plain search, not a regex
 if(at EQUAL -1)
@@ -62,4 +84,4 @@ endif()
 if(NOT "${out}${err}" MATCHES "warning: label voxels of up to 3 mm: the modulus's interval is stated although")
   message(SEND_ERROR "with the limit raised the run does not warn that coverage was not shown at 3 mm")
 endif()
-message(STATUS "ok: at 3 mm no modulus is stated unless asked, and the warnings agree with the statements")
+message(STATUS "ok: at 3 mm the calibrated interval, uncalibrated none unless asked, and the warnings agree")

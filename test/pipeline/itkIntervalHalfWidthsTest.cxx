@@ -31,6 +31,13 @@
 // - on 4000 draws of N(1, 0.5^2) censored at 1.3 (about 27 % censored) it recovers mu and sigma within four standard
 //   errors (about 0.012 and 0.010), where the SD of the clipped values is 25 % low;
 // - fewer than two distinct uncensored values give NaN, not a number pretending to be a spread.
+// The thick slices' calibration (itk::FindSliceCalibration, itk::SliceCalibratedInterval):
+// - it holds where both scans have one calibration's slices (+-0.25 mm, along any axis) and in-plane voxels of
+//   0.8-1.2 mm, and nowhere else: not at 1 mm, not at 4 mm, not for a 3 mm scan with a 1 mm one (they lean opposite
+//   ways), not at in-plane 1.4 mm;
+// - its interval is fit e^(-b) x/ exp(t_(m-1) sqrt(1 + 1/m) s) (closed form, to 1e-12), with the thickness in the
+//   statement; a fit on the upper search bound states no bound (the calibration saw truths far below it there): not
+//   determined, with the reason.
 #include "itkBiomechanicalPipelines.h"
 #include "itkIntervalTestSupport.h"
 #include "bmrTestUtilities.h"
@@ -118,6 +125,53 @@ CheckCensoredFit()
                           "one distinct uncensored value: no spread (NaN)");
   return ok;
 }
+
+bool
+CheckSliceCalibration()
+{
+  bool ok = true;
+  using Spacing = std::array<double, 3>;
+  const itk::SliceCalibration * three = itk::FindSliceCalibration(Spacing{ 0.98, 0.98, 3.0 }, Spacing{ 1.1, 1.1, 3.2 });
+  ok &= bmr::test::Expect(three != nullptr && three->sliceMM == 3.0 && three->pairs >= 3,
+                          "3 and 3.2 mm slices, in-plane 0.98 and 1.1 mm: the 3 mm calibration");
+  const itk::SliceCalibration * sideways =
+    itk::FindSliceCalibration(Spacing{ 2.0, 0.9, 0.9 }, Spacing{ 0.9, 2.1, 0.9 });
+  ok &= bmr::test::Expect(sideways != nullptr && sideways->sliceMM == 2.0, "2 mm slices along x and y: the 2 mm one");
+  ok &= bmr::test::Expect(itk::FindSliceCalibration(Spacing{ 1, 1, 1 }, Spacing{ 1, 1, 1 }) == nullptr &&
+                            itk::FindSliceCalibration(Spacing{ 1, 1, 4 }, Spacing{ 1, 1, 4 }) == nullptr &&
+                            itk::FindSliceCalibration(Spacing{ 1, 1, 3 }, Spacing{ 1, 1, 1 }) == nullptr &&
+                            itk::FindSliceCalibration(Spacing{ 1, 1, 1 }, Spacing{ 1, 1, 3 }) == nullptr &&
+                            itk::FindSliceCalibration(Spacing{ 1.4, 1.4, 3 }, Spacing{ 1.4, 1.4, 3 }) == nullptr &&
+                            itk::FindSliceCalibration(Spacing{ 1, 1, 2 }, Spacing{ 1, 1, 3 }) == nullptr,
+                          "no calibration at 1 or 4 mm, for one thick scan, at in-plane 1.4 mm, for 2 with 3 mm");
+  if (!three)
+  {
+    return false;
+  }
+  bmr::UnknownModulus unknown;
+  unknown.name = "prostate";
+  unknown.lowerBound = 20.0;
+  unknown.upperBound = 600.0;
+  const itk::ModulusInterval i = itk::SliceCalibratedInterval(100.0, *three, unknown);
+  const auto                 k =
+    itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, three->pairs);
+  const double center = std::log(100.0) - three->logBias;
+  const auto   near = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs(b); };
+  ok &= bmr::test::Expect(
+    near(i.estimate, std::exp(center)) && near(i.interval68[0], std::exp(center - k[0] * three->logSigma)) &&
+      near(i.interval68[1], std::exp(center + k[0] * three->logSigma)) &&
+      near(i.interval95[0], std::exp(center - k[1] * three->logSigma)) &&
+      near(i.interval95[1], std::exp(center + k[1] * three->logSigma)) && i.lowerDetermined && i.upperDetermined,
+    "100 kPa at 3 mm: fit e^(-b) x/ exp(t sqrt(1 + 1/m) s), both ends determined");
+  ok &= bmr::test::Expect(itk::ModulusIntervalText("prostate", i).find("3 mm slices") != std::string::npos,
+                          "the statement names the calibration's slices: " + itk::ModulusIntervalText("prostate", i));
+  const itk::ModulusInterval onBound = itk::SliceCalibratedInterval(600.0, *three, unknown);
+  ok &= bmr::test::Expect(!onBound.lowerDetermined && !onBound.upperDetermined &&
+                            onBound.notDeterminedReason.find("upper bound") != std::string::npos &&
+                            itk::ModulusIntervalText("prostate", onBound).find("not determined") != std::string::npos,
+                          "a fit on the upper bound: not determined, and why");
+  return ok;
+}
 } // namespace
 
 int
@@ -176,5 +230,6 @@ itkIntervalHalfWidthsTest(int, char *[])
   const auto two = itk::IntervalHalfWidths(UncertaintyMethodEnum::Rescan, IntervalQuantilesEnum::Calibrated, 2);
   ok &= bmr::test::Expect(std::isinf(two[0]) && std::isinf(two[1]), "2 resamples: no finite half-width");
   ok &= CheckCensoredFit();
+  ok &= CheckSliceCalibration();
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

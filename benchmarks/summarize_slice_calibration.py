@@ -1,0 +1,119 @@
+"""The thick slices' calibration (itk::SliceCalibrations) from run_calibration_benchmark.sh rows, and its check.
+
+fit RUNS.csv: per slice thickness (the largest side of the rows' spacing_mm), from the pairs whose fit lies inside
+    the search range (20-600 kPa): m, b = mean of log(fit / true E), s = their standard deviation; prints the
+    constants for include/itkBiomechanicalPipelines.h and a markdown table.
+check RUNS.csv OUT_DIR: per slice thickness, what register stated on pairs the constants never saw: coverage of the
+    68 % and 95 % statements (an interval, or a one-sided bound where an end is not determined), how many bounds
+    were stated and were true, how many were not determined, the median |error| of the stated moduli (all and at
+    30-150 kPa); writes OUT_DIR/slice_calibration_check.csv and slice_calibration_check.png (reliability diagram
+    per thickness; log error of the stated estimate against the true modulus) and prints a markdown table.
+"""
+import csv
+import math
+import statistics
+import sys
+from collections import OrderedDict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from interval_rows import covers, determined  # noqa: E402
+
+BOUNDS_KPA = (20.0, 600.0)
+
+
+def slice_mm(r):
+    return max(float(x) for x in r["spacing_mm"].split("x"))
+
+
+def by_slice(rows):
+    groups = OrderedDict()
+    for r in sorted(rows, key=slice_mm):
+        groups.setdefault(slice_mm(r), []).append(r)
+    return groups
+
+
+def fit_constants(rows):
+    print("| slices [mm] | pairs | inside the range | b (mean log error) | s (SD) |")
+    print("|---:|---:|---:|---:|---:|")
+    lines = []
+    for t, group in by_slice(rows).items():
+        inside = [r for r in group if 1.001 * BOUNDS_KPA[0] < float(r["fit_kPa"]) < 0.999 * BOUNDS_KPA[1]]
+        errors = [math.log(float(r["fit_kPa"]) / float(r["true_E_kPa"])) for r in inside]
+        b, s = statistics.mean(errors), statistics.stdev(errors)
+        print(f"| {t:g} | {len(group)} | {len(inside)} | {b:+.4f} | {s:.4f} |")
+        lines.append(f"{{ {t:g}, {b:.4f}, {s:.4f}, {len(inside)} }}")
+    print("constexpr SliceCalibration SliceCalibrations[] = { " + ", ".join(lines) + " };")
+
+
+def check(rows, out):
+    table = []
+    for t, group in by_slice(rows).items():
+        stated = [r for r in group if r["not_determined"] != "1"]
+        both = [r for r in stated if determined(r)]
+        bounds = [r for r in stated if not determined(r)]
+        errors = [abs(float(r["estimate_kPa"]) / float(r["true_E_kPa"]) - 1) for r in both]
+        soft = [abs(float(r["estimate_kPa"]) / float(r["true_E_kPa"]) - 1) for r in both
+                if 30 <= float(r["true_E_kPa"]) <= 150]
+        row = OrderedDict(
+            slice_mm=t, pairs=len(group), not_determined=len(group) - len(stated), bounds=len(bounds),
+            bounds_true=sum(covers(r, float(r["lo95_kPa"]), float(r["hi95_kPa"])) for r in bounds),
+            cover68=sum(covers(r, float(r["lo68_kPa"]), float(r["hi68_kPa"])) for r in stated) / max(len(stated), 1),
+            cover95=sum(covers(r, float(r["lo95_kPa"]), float(r["hi95_kPa"])) for r in stated) / max(len(stated), 1),
+            median_abs_error_pct=100 * statistics.median(errors) if errors else float("nan"),
+            median_abs_error_30_150_pct=100 * statistics.median(soft) if soft else float("nan"),
+            soft_pairs=len(soft),
+            median_inverted=statistics.median(int(r["inverted_elements"]) for r in group if r["inverted_elements"]),
+            median_register_s=statistics.median(float(r["register_s"]) for r in group))
+        table.append(row)
+    with open(f"{out}/slice_calibration_check.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
+        w.writeheader()
+        for row in table:
+            w.writerow({k: f"{v:.4f}" if isinstance(v, float) else v for k, v in row.items()})
+    print("| slices [mm] | pairs | 95 % covers | 68 % covers | bounds (true) | not determined | median abs. error "
+          "(30-150 kPa) | median inverted | register [s] |")
+    print("|---:|---:|---:|---:|---:|---:|---|---:|---:|")
+    for r in table:
+        print(f"| {r['slice_mm']:g} | {r['pairs']} | {r['cover95']:.2f} | {r['cover68']:.2f} | {r['bounds']} "
+              f"({r['bounds_true']}) | {r['not_determined']} | {r['median_abs_error_pct']:.0f} % "
+              f"({r['median_abs_error_30_150_pct']:.0f} %, {r['soft_pairs']} pairs) | {r['median_inverted']:.0f} | "
+              f"{r['median_register_s']:.1f} |")
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
+    left.plot([0.5, 1], [0.5, 1], "k:", label="ideal")
+    for r in table:
+        left.plot([0.68, 0.95], [r["cover68"], r["cover95"]], "o-", label=f"{r['slice_mm']:g} mm slices")
+    left.set_xlabel("stated level")
+    left.set_ylabel("coverage on unseen pairs")
+    left.set_title("Reliability per slice thickness")
+    left.legend()
+    for t, group in by_slice(rows).items():
+        stated = [r for r in group if r["not_determined"] != "1"]
+        left_err = [math.log(float(r["estimate_kPa"]) / float(r["true_E_kPa"])) for r in stated]
+        right.scatter([float(r["true_E_kPa"]) for r in stated], left_err, s=14, label=f"{t:g} mm")
+    right.axhline(0, color="k", lw=0.5)
+    right.set_xscale("log")
+    right.set_xlabel("true E [kPa]")
+    right.set_ylabel("log(stated estimate / true E)")
+    right.set_title("Error of the stated estimate")
+    right.legend()
+    fig.tight_layout()
+    fig.savefig(f"{out}/slice_calibration_check.png", dpi=120)
+
+
+def main(argv):
+    if len(argv) < 3 or argv[1] not in ("fit", "check") or (argv[1] == "check" and len(argv) < 4):
+        sys.exit(__doc__)
+    with open(argv[2]) as f:
+        rows = list(csv.DictReader(f))
+    if argv[1] == "fit":
+        fit_constants(rows)
+    else:
+        check(rows, argv[3])
+
+
+if __name__ == "__main__":
+    main(sys.argv)
