@@ -111,9 +111,11 @@ BiomechanicalRegistration_EXPORT std::map<std::int32_t, InvertedElements>
 InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> & displacement);
 
 /** "label 1: 2081, of which 1650 against label 3 and 410 against label 4; label 2: 3" (InvertedElementsByLabel()),
- * for a warning that says where the deformation crushes tissue; "" without an inverted element. */
+ * for a warning that says where the deformation crushes tissue; each label by its name in \a names where it has one
+ * ("soft_tissue: 2081, of which 1650 against bladder ..."); "" without an inverted element. */
 BiomechanicalRegistration_EXPORT std::string
-                                 InvertedElementsText(const std::map<std::int32_t, InvertedElements> & inverted);
+                                 InvertedElementsText(const std::map<std::int32_t, InvertedElements> & inverted,
+                                                      const std::map<std::int32_t, std::string> &      names = {});
 
 /** Minimum/maximum dihedral angle and radius ratio over all elements. */
 BiomechanicalRegistration_EXPORT MeshQuality

@@ -19,7 +19,9 @@
 #define itkPhysicsDeformationFieldSource_h
 
 #include <cstdint>
+#include <map>
 #include <ostream>
+#include <string>
 #include "itkImageSource.h"
 #include "itkTetrahedralMeshObject.h"
 
@@ -138,6 +140,23 @@ public:
   /** Elements inverted by the deformation (no unique pull-back there). */
   itkGetConstMacro(NumberOfInvertedElements, SizeValueType);
 
+  /** The names of the mesh's labels (value -> name, a scene's), by which the inverted-element warning says where the
+   * deformation crushes tissue; a label without one is named "label N". */
+  void
+  SetLabelNames(const std::map<std::int32_t, std::string> & names)
+  {
+    if (names != m_LabelNames)
+    {
+      m_LabelNames = names;
+      this->Modified();
+    }
+  }
+  const std::map<std::int32_t, std::string> &
+  GetLabelNames() const
+  {
+    return m_LabelNames;
+  }
+
 protected:
   PhysicsDeformationFieldSource();
   ~PhysicsDeformationFieldSource() override = default;
@@ -163,11 +182,12 @@ private:
   void
   WarnInvertedElements(const bmr::TetrahedralMesh & mesh, bool locate) const;
 
-  FieldDirectionEnum m_FieldDirection{ FieldDirectionEnum::FixedToMoving };
-  bool               m_FillOutside{ true };
-  unsigned int       m_FillCoarsening{ 4 };
-  SizeValueType      m_NumberOfCoveredVoxels{ 0 };
-  SizeValueType      m_NumberOfInvertedElements{ 0 };
+  FieldDirectionEnum                  m_FieldDirection{ FieldDirectionEnum::FixedToMoving };
+  bool                                m_FillOutside{ true };
+  unsigned int                        m_FillCoarsening{ 4 };
+  SizeValueType                       m_NumberOfCoveredVoxels{ 0 };
+  SizeValueType                       m_NumberOfInvertedElements{ 0 };
+  std::map<std::int32_t, std::string> m_LabelNames;
 };
 
 } // namespace itk

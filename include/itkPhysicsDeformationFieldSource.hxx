@@ -107,7 +107,7 @@ PhysicsDeformationFieldSource<TOutputImage>::WarnInvertedElements(const bmr::Tet
 {
   // So that a user sees which tissue the deformation crushes, and against which organ.
   const std::string where =
-    locate ? " (" + bmr::InvertedElementsText(bmr::InvertedElementsByLabel(mesh, mesh.displacement)) + ")"
+    locate ? " (" + bmr::InvertedElementsText(bmr::InvertedElementsByLabel(mesh, mesh.displacement), m_LabelNames) + ")"
            : std::string();
   itkWarningMacro(<< m_NumberOfInvertedElements << " elements are inverted by the deformation" << where
                   << "; the field is undefined inside them and holds there the fill of the voxels the mesh does not "
@@ -210,6 +210,12 @@ PhysicsDeformationFieldSource<TOutputImage>::PrintSelf(std::ostream & os, Indent
   os << indent << "FillCoarsening: " << m_FillCoarsening << std::endl;
   os << indent << "NumberOfCoveredVoxels: " << m_NumberOfCoveredVoxels << std::endl;
   os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
+  os << indent << "LabelNames:";
+  for (const auto & [value, name] : m_LabelNames)
+  {
+    os << ' ' << value << '=' << name;
+  }
+  os << std::endl;
 }
 
 } // namespace itk

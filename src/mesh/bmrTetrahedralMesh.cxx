@@ -248,19 +248,24 @@ InvertedElementsByLabel(const TetrahedralMesh & mesh, const std::vector<double> 
 }
 
 std::string
-InvertedElementsText(const std::map<std::int32_t, InvertedElements> & inverted)
+InvertedElementsText(const std::map<std::int32_t, InvertedElements> & inverted,
+                     const std::map<std::int32_t, std::string> &      names)
 {
+  const auto name = [&names](std::int32_t label) {
+    const auto found = names.find(label);
+    return found != names.end() ? found->second : "label " + std::to_string(label);
+  };
   std::ostringstream text;
   for (const auto & [label, of] : inverted)
   {
-    text << (text.tellp() > 0 ? "; " : "") << "label " << label << ": " << of.count;
+    text << (text.tellp() > 0 ? "; " : "") << name(label) << ": " << of.count;
     std::size_t k = 0;
     for (const auto & [other, count] : of.touching)
     {
       text << (k == 0                        ? ", of which "
                : k + 1 == of.touching.size() ? " and "
                                              : ", ")
-           << count << " against label " << other;
+           << count << " against " << name(other);
       ++k;
     }
   }

@@ -501,7 +501,7 @@ EstimateTreatmentFromMarkers(const BiomechanicalLabelImageType * planningLabels,
   clock.End(fit.str());
 
   // The box mesh lives on the cropped grid; its field goes on the whole planning grid.
-  pipeline::ComputeFields(r.state, planningLabels, planningLabels, false, clock);
+  pipeline::ComputeFields(r.state, planningLabels, planningLabels, false, boxScene, clock);
   r.methods[0].field = r.state.pullBack;
   clock.Begin("rigid and thin-plate-spline references");
   for (auto & m : ReferenceMethods(planningLabels, from, to, leaveOneOut))

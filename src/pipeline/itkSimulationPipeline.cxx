@@ -161,15 +161,22 @@ ComputeFields(SimulationResult &   result,
               const ImageBase<3> * fixedReference,
               const ImageBase<3> * movingReference,
               bool                 pushField,
+              const bmr::Scene &   scene,
               StageClock &         clock)
 {
   using SourceType = PhysicsDeformationFieldSource<BiomechanicalFieldType>;
+  std::map<std::int32_t, std::string> names;
+  for (const bmr::SceneLabel & l : scene.labels)
+  {
+    names[l.value] = l.name;
+  }
   auto meshObject = TetrahedralMeshObject::New();
   meshObject->Set(result.mesh);
   clock.Begin("pull-back field (fixed -> moving)");
   auto pull = SourceType::New();
   pull->SetMesh(meshObject);
   pull->SetReferenceImage(fixedReference);
+  pull->SetLabelNames(names);
   pull->Update();
   result.pullBack = pull->GetOutput();
   result.invertedElements = pull->GetNumberOfInvertedElements();
@@ -264,7 +271,7 @@ SimulateMesh(bmr::TetrahedralMesh mesh,
   clock.Add("assemble", t.assemble);
   clock.Add("factorize", t.analyze + t.factorize);
   clock.Add("solve", t.solve);
-  pipeline::ComputeFields(out, reference, movingReference, pushField, clock);
+  pipeline::ComputeFields(out, reference, movingReference, pushField, scene, clock);
   return out;
 }
 

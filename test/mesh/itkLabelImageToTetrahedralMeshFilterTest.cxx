@@ -386,6 +386,9 @@ CheckInvertedElementsByLabel()
   const std::string text = bmr::InvertedElementsText(inverted);
   std::cout << "inverted: " << text << std::endl;
   ok &= Expect(text == "label 1: 2, of which 1 against label 3 and 1 against label 4", "the text says where: " + text);
+  const std::string named = bmr::InvertedElementsText(inverted, { { 1, "soft_tissue" }, { 4, "bladder" } });
+  ok &= Expect(named == "soft_tissue: 2, of which 1 against label 3 and 1 against bladder",
+               "by name where a label has one: " + named);
   ok &= Expect(bmr::CountInvertedElements(mesh, u) == 2, "two inverted in all");
   return ok;
 }
