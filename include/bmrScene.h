@@ -28,9 +28,10 @@
 
 namespace bmr {
 
-/** The largest label voxel side [mm] at which an estimated modulus is stated with an interval. The stated interval's
+/** The largest label voxel side [mm] at which an estimated modulus is stated with the rescans' interval. Its
  * coverage was shown on 1 mm phantoms; at 2-3 mm slices it was measured to miss the truth (docs/benchmarks.md,
- * "Clinical geometry"), so above this limit the modulus is reported as not determined, with this reason, and the
+ * "Clinical geometry"), so above this limit the registration states the interval of a thick-slice calibration where
+ * one holds (itk::SliceCalibrations) and otherwise reports the modulus as not determined, with this reason, and the
  * voxel warning says the same. The registration's fields are not affected. */
 constexpr double StatedModulusVoxelLimitMM = 1.5;
 

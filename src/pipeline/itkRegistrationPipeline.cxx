@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <iterator>
 #include <limits>
 #include <sstream>
 
@@ -129,11 +130,10 @@ NotDeterminedByVoxels(double coarsest, const UncertaintySettings & u)
   std::ostringstream os;
   os << bmr::VoxelLimitReason(coarsest, u.statedVoxelLimitMM)
      << ", and no thick-slice calibration holds for these scans (calibrated: both scans with slices of";
-  const char * separator = " ";
-  for (const SliceCalibration & c : SliceCalibrations)
+  const std::size_t count = std::size(SliceCalibrations);
+  for (std::size_t k = 0; k < count; ++k)
   {
-    os << separator << c.sliceMM;
-    separator = ", ";
+    os << (k == 0 ? " " : k + 1 == count ? " or " : ", ") << SliceCalibrations[k].sliceMM;
   }
   os << " mm +- " << SliceCalibrationToleranceMM << " mm and in-plane voxels of " << SliceCalibrationInPlaneMM[0]
      << " to " << SliceCalibrationInPlaneMM[1] << " mm)";

@@ -265,7 +265,7 @@ VoxelLimitReason(double coarsestVoxel, double limit)
 {
   std::ostringstream os;
   os << "label voxels of up to " << coarsestVoxel << " mm: the modulus is reported as not determined, because the "
-     << "stated interval is made only from voxels of at most " << limit << " mm (its coverage was shown at 1 mm; "
+     << "rescans' interval is stated only from voxels of at most " << limit << " mm (its coverage was shown at 1 mm; "
      << "at 2-3 mm slices it missed the truth)";
   return os.str();
 }
