@@ -21,13 +21,20 @@ endif()
 set(inputs --moving-ct ${P}/moving_ct.nrrd --moving-labels ${P}/moving_labels.nrrd --fixed-ct ${P}/fixed_ct.nrrd
   --fixed-labels ${P}/fixed_labels.nrrd --scene ${P}/scene.json --outputs report)
 
-execute_process(COMMAND ${CLI} register ${inputs} --out ${OUT}/reg RESULT_VARIABLE rc OUTPUT_VARIABLE out
-  ERROR_VARIABLE err)
-message(STATUS "${out}${err}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "register at 1 x 1 x 3 mm: exit code ${rc}")
-endif()
-file(READ ${OUT}/reg/report.json report)
+# Runs register with the inputs and ARGN into OUT/<name>; sets report (report.json) and output (what it printed).
+function(register_into name)
+  execute_process(COMMAND ${CLI} register ${inputs} ${ARGN} --out ${OUT}/${name}
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message(STATUS "${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "register ${ARGN} at 1 x 1 x 3 mm: exit code ${rc}")
+  endif()
+  file(READ ${OUT}/${name}/report.json json)
+  set(report "${json}" PARENT_SCOPE)
+  set(output "${out}${err}" PARENT_SCOPE)
+endfunction()
+
+register_into(reg)
 string(JSON interpolated GET "${report}" slice_interpolation)
 string(JSON method GET "${report}" youngs_modulus_interval prostate method)
 string(JSON calibrated GET "${report}" youngs_modulus_interval prostate calibrated_slice_mm)
@@ -41,17 +48,11 @@ if(NOT method STREQUAL "slice-calibration" OR NOT calibrated EQUAL 3 OR NOT reas
    NOT resamples EQUAL 0 OR NOT statement MATCHES "calibrated on phantom pairs with 3 mm slices")
   message(SEND_ERROR "at 3 mm the 3 mm calibration is not stated: ${method}, ${calibrated} mm, '${statement}'")
 endif()
-if("${out}${err}" MATCHES "not determined")
+if("${output}" MATCHES "not determined")
   message(SEND_ERROR "a calibrated statement beside a warning that says 'not determined'")
 endif()
 
-execute_process(COMMAND ${CLI} register ${inputs} --slice-interpolation on --out ${OUT}/interpolated
-  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message(STATUS "${out}${err}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "register at 1 x 1 x 3 mm, slices interpolated: exit code ${rc}")
-endif()
-file(READ ${OUT}/interpolated/report.json report)
+register_into(interpolated --slice-interpolation on)
 string(JSON statement GET "${report}" youngs_modulus_interval prostate statement)
 string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
 string(JSON lowerOk GET "${report}" youngs_modulus_interval prostate lower_end_determined)
@@ -59,19 +60,12 @@ string(JSON upperOk GET "${report}" youngs_modulus_interval prostate upper_end_d
 if(NOT statement MATCHES "not determined: label voxels of up to 3 mm" OR lowerOk OR upperOk)
   message(SEND_ERROR "uncalibrated, a modulus was stated: '${statement}' (determined ${lowerOk}/${upperOk})")
 endif()
-string(FIND "${out}${err}" "warning: ${reason}" at) # the reason holds brackets: a plain search, not a regex
+string(FIND "${output}" "warning: ${reason}" at) # the reason holds brackets: a plain search, not a regex
 if(at EQUAL -1)
   message(SEND_ERROR "the run's warning does not say what the statement says ('${reason}')")
 endif()
 
-execute_process(COMMAND ${CLI} register ${inputs} --uncertainty-voxel-limit-mm 3.5 --resamples 3 --slice-interpolation on
-  --out ${OUT}/raised
-  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message(STATUS "${out}${err}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "register with --uncertainty-voxel-limit-mm 3.5: exit code ${rc}")
-endif()
-file(READ ${OUT}/raised/report.json report)
+register_into(raised --uncertainty-voxel-limit-mm 3.5 --resamples 3 --slice-interpolation on)
 string(JSON interpolated GET "${report}" slice_interpolation)
 if(NOT interpolated)
   message(SEND_ERROR "report.json: slice_interpolation is ${interpolated} with --slice-interpolation on")
@@ -81,7 +75,7 @@ string(JSON resamples LENGTH "${report}" youngs_modulus_interval prostate resamp
 if(NOT reason STREQUAL "" OR NOT resamples EQUAL 3)
   message(SEND_ERROR "with the limit raised the interval is not stated from 3 rescans ('${reason}', ${resamples})")
 endif()
-if(NOT "${out}${err}" MATCHES "warning: label voxels of up to 3 mm: the modulus's interval is stated although")
+if(NOT "${output}" MATCHES "warning: label voxels of up to 3 mm: the modulus's interval is stated although")
   message(SEND_ERROR "with the limit raised the run does not warn that coverage was not shown at 3 mm")
 endif()
 message(STATUS "ok: at 3 mm the calibrated interval, uncalibrated none unless asked, and the warnings agree")
