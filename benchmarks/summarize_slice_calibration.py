@@ -12,6 +12,7 @@ check RUNS.csv OUT_DIR: per slice thickness, what register stated on pairs the c
 """
 import csv
 import math
+import os
 import statistics
 import sys
 from collections import OrderedDict
@@ -33,6 +34,15 @@ def by_slice(rows):
     groups = OrderedDict()
     for r in sorted(rows, key=slice_mm):
         groups.setdefault(slice_mm(r), []).append(r)
+    return groups
+
+
+def by_geometry(rows):
+    """By slice thickness, the grids rotated about the slice axis (OBLIQUE_DEG) apart: "3", "3 oblique"."""
+    groups = OrderedDict()
+    for r in sorted(rows, key=lambda r: (slice_mm(r), float(r["rotate_z_deg"] or 0) != 0)):
+        oblique = float(r["rotate_z_deg"] or 0) != 0
+        groups.setdefault(f"{slice_mm(r):g}" + (" oblique" if oblique else ""), []).append(r)
     return groups
 
 
@@ -77,9 +87,14 @@ def fit_constants(rows):
     print("constexpr SliceCalibration SliceCalibrations[] = { " + ", ".join(lines) + " };")
 
 
+def label(geometry):
+    """ "3 oblique" -> "3 mm, oblique"."""
+    return geometry.replace(" oblique", " mm, oblique") if geometry.endswith("oblique") else f"{geometry} mm"
+
+
 def check(rows, out):
     table = []
-    for t, group in by_slice(rows).items():
+    for t, group in by_geometry(rows).items():
         stated = [r for r in group if r["not_determined"] != "1"]
         both = [r for r in stated if determined(r)]
         bounds = [r for r in stated if not determined(r)]
@@ -97,7 +112,7 @@ def check(rows, out):
             median_inverted=statistics.median(int(r["inverted_elements"]) for r in group if r["inverted_elements"]),
             median_register_s=statistics.median(float(r["register_s"]) for r in group))
         table.append(row)
-    with open(f"{out}/slice_calibration_check.csv", "w", newline="") as f:
+    with open(f"{out}/slice_calibration_check.csv", "w", newline="") as f:  # the runs: *_runs.csv
         w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
         w.writeheader()
         for row in table:
@@ -106,7 +121,7 @@ def check(rows, out):
           "(30-150 kPa) | median inverted | register [s] |")
     print("|---:|---:|---:|---:|---:|---:|---|---:|---:|")
     for r in table:
-        print(f"| {r['slice_mm']:g} | {r['pairs']} | {r['cover95']:.2f} | {r['cover68']:.2f} | {r['bounds']} "
+        print(f"| {r['slice_mm']} | {r['pairs']} | {r['cover95']:.2f} | {r['cover68']:.2f} | {r['bounds']} "
               f"({r['bounds_true']}) | {r['not_determined']} | {r['median_abs_error_pct']:.0f} % "
               f"({r['median_abs_error_30_150_pct']:.0f} %, {r['soft_pairs']} pairs) | {r['median_inverted']:.0f} | "
               f"{r['median_register_s']:.1f} |")
@@ -114,15 +129,15 @@ def check(rows, out):
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
     left.plot([0.5, 1], [0.5, 1], "k:", label="ideal")
     for r in table:
-        left.plot([0.68, 0.95], [r["cover68"], r["cover95"]], "o-", label=f"{r['slice_mm']:g} mm slices")
+        left.plot([0.68, 0.95], [r["cover68"], r["cover95"]], "o-", label=label(r["slice_mm"]) + " slices")
     left.set_xlabel("stated level")
     left.set_ylabel("coverage on unseen pairs")
     left.set_title("Reliability per slice thickness")
     left.legend()
-    for t, group in by_slice(rows).items():
+    for t, group in by_geometry(rows).items():
         stated = [r for r in group if r["not_determined"] != "1"]
         left_err = [math.log(float(r["estimate_kPa"]) / float(r["true_E_kPa"])) for r in stated]
-        right.scatter([float(r["true_E_kPa"]) for r in stated], left_err, s=14, label=f"{t:g} mm")
+        right.scatter([float(r["true_E_kPa"]) for r in stated], left_err, s=14, label=label(t))
     right.axhline(0, color="k", lw=0.5)
     right.set_xscale("log")
     right.set_xlabel("true E [kPa]")
@@ -136,6 +151,8 @@ def check(rows, out):
 def main(argv):
     if len(argv) < 3 or argv[1] not in ("fit", "check") or (argv[1] == "check" and len(argv) < 4):
         sys.exit(__doc__)
+    if argv[1] == "check" and os.path.abspath(argv[2]) == os.path.abspath(f"{argv[3]}/slice_calibration_check.csv"):
+        sys.exit("RUNS.csv would be overwritten by the summary: name the runs *_runs.csv")
     with open(argv[2]) as f:
         rows = list(csv.DictReader(f))
     if argv[1] == "fit":
