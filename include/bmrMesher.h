@@ -64,7 +64,8 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
    * sliver is all but flat: its stiffness matrix is near singular and the pull-back inside it ill defined. */
   double       minimumDihedralAngle{ 0.1 };
   unsigned int randomSeed{ 0 };
-  /** Where MeshSceneLabels() puts a label image's surfaces. Voxels: on the faces between voxels of different labels
+  /** Where MeshSceneLabels() and itk::LabelImageToTetrahedralMeshFilter put a label image's surfaces
+   * (MeshLabelVolume() itself meshes the voxels'). Voxels: on the faces between voxels of different labels
    * (CGAL's labeled image), a staircase whose steps are a slice high. Distance: where the labels' interpolated
    * signed distances meet (DistanceLabelFunction(), scene key mesh.label_surfaces = "distance"), so that between
    * thick slices an outline moves from one slice's contour to the next instead of in terraces. */

@@ -177,6 +177,8 @@ LabelImageToTetrahedralMeshFilter<TInputImage>::PrintSelf(std::ostream & os, Ind
   os << indent << "FacetDistance [mm]: " << p.facetDistance << std::endl;
   os << indent << "FacetAngle [deg]: " << p.facetAngle << std::endl;
   os << indent << "CellRadiusEdgeRatio: " << p.cellRadiusEdgeRatio << std::endl;
+  os << indent << "LabelSurfaces: "
+     << (p.labelSurfaces == bmr::MeshingParameters::LabelSurfaces::Distance ? "Distance" : "Voxels") << std::endl;
   for (const auto & nameAndSizes : p.SizesPerLabel())
   {
     os << indent << nameAndSizes.first << ':';

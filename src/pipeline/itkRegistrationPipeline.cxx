@@ -358,7 +358,7 @@ StateIntervals(RegistrationResult &                r,
   const UncertaintyMethodEnum method = setup.settings->uncertainty.method;
   if (!setup.statesModulus && setup.sliceCalibration)
   {
-    // Thick slices: the calibration's interval (none asked for: none, as at any voxels).
+    // Thick slices: the calibration's interval; none when none is asked for, as at any voxels.
     for (const bmr::UnknownModulus & u : r.unknowns)
     {
       if (method != UncertaintyMethodEnum::None)
