@@ -41,7 +41,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <future>
+#include <map>
 #include <memory>
 
 namespace {
@@ -314,55 +316,30 @@ PrintVersion()
 int
 RunSubcommand(const std::string & command, const Arguments & options)
 {
-  if (command == "phantom")
+  using Handler = std::function<int(const Arguments &)>;
+  static const std::map<std::string, Handler> handlers = {
+    { "phantom", PhantomCommand },
+    { "simulate", SimulateCommand },
+    { "register", RegisterCommand },
+    { "demons", bmrcli::DemonsCommand },
+    { "compare", bmrcli::CompareCommand },
+    { "phantom-set", bmrcli::PhantomSetCommand },
+    { "phantom-cohort", bmrcli::PhantomCohortCommand },
+    { "cohort",
+      [](const Arguments & a) {
+        return bmrcli::CohortCommand(a, std::filesystem::canonical("/proc/self/exe").string());
+      } },
+    { "cohort-stats", bmrcli::CohortStatsCommand },
+    { "dose", bmrcli::DoseCommand },
+    { "markers", bmrcli::MarkersCommand },
+    { "rt-export", bmrcli::RTExportCommand }
+  };
+  const auto found = handlers.find(command);
+  if (found == handlers.end())
   {
-    return PhantomCommand(options);
+    throw UsageError("unknown command \"" + command + "\"");
   }
-  if (command == "simulate")
-  {
-    return SimulateCommand(options);
-  }
-  if (command == "register")
-  {
-    return RegisterCommand(options);
-  }
-  if (command == "demons")
-  {
-    return bmrcli::DemonsCommand(options);
-  }
-  if (command == "compare")
-  {
-    return bmrcli::CompareCommand(options);
-  }
-  if (command == "phantom-set")
-  {
-    return bmrcli::PhantomSetCommand(options);
-  }
-  if (command == "phantom-cohort")
-  {
-    return bmrcli::PhantomCohortCommand(options);
-  }
-  if (command == "cohort")
-  {
-    return bmrcli::CohortCommand(options, std::filesystem::canonical("/proc/self/exe").string());
-  }
-  if (command == "cohort-stats")
-  {
-    return bmrcli::CohortStatsCommand(options);
-  }
-  if (command == "dose")
-  {
-    return bmrcli::DoseCommand(options);
-  }
-  if (command == "markers")
-  {
-    return bmrcli::MarkersCommand(options);
-  }
-  if (command == "rt-export")
-  {
-    return bmrcli::RTExportCommand(options);
-  }
-  throw UsageError("unknown command \"" + command + "\"");
+  return found->second(options);
 }
 
 /** Records the parallel work (bmr::TaskTrace) into \a path, when given, until the command returns. */

@@ -31,7 +31,8 @@ namespace bmr {
  * contours instead of along the voxels' faces.
  *
  * For every label l present, the symmetric signed distance \f$ \phi_l = (\phi_{mask} - \phi_{complement}) / 2 \f$
- * [mm, negative inside] of its voxels (Maurer, with the grid's spacing), kept within two voxels of them. A point x
+ * [mm, negative inside] of its voxels (itk::detail::MaskAndComplementMap, the fixed organs' maps), on the box of
+ * its voxels grown by two of the coarsest voxel side. A point x
  * takes the label of the smallest trilinearly interpolated \f$ \phi_l(x) \f$ among the labels at the eight voxel
  * centres around it, so every voxel centre keeps its own label and, between two slices 3 mm apart, an organ's
  * outline moves linearly from one slice's contour to the next (a ruled surface) instead of in a 1.5 mm terrace.

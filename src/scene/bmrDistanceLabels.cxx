@@ -19,8 +19,9 @@
 
 #include "bmrError.h"
 
-#include "itkImage.h"
-#include "itkSignedMaurerDistanceMapImageFilter.h"
+#include "itkGridGeometryConversion.h"
+#include "itkRegionOfInterestImageFilter.h"
+#include "itkSceneDistanceMaps.h"
 
 #include <algorithm>
 #include <array>
@@ -31,9 +32,6 @@
 
 namespace bmr {
 namespace {
-
-using MaskImage = itk::Image<unsigned char, 3>;
-using MapImage = itk::Image<float, 3>;
 
 /** One label's symmetric signed distance [mm] on the index box [first, first + size) of the grid. */
 struct LabelDistance
@@ -57,75 +55,28 @@ struct LabelDistance
   }
 };
 
-/** Maurer's signed distance [mm, negative inside] of \a mask's non-zero voxels. */
-MapImage::Pointer
-MaurerMap(const MaskImage * mask)
-{
-  auto distance = itk::SignedMaurerDistanceMapImageFilter<MaskImage, MapImage>::New();
-  distance->SetInput(mask);
-  distance->SetUseImageSpacing(true);
-  distance->SetSquaredDistance(false);
-  distance->SetInsideIsPositive(false);
-  distance->SetBackgroundValue(0);
-  distance->Update();
-  return distance->GetOutput();
-}
+using LabelImage = itk::Image<std::int32_t, 3>;
 
-/** The symmetric distance of label \a value on the box of its voxels grown by two voxels (clipped to the grid). */
+/** The symmetric distance of label \a value (itk::detail::MaskAndComplementMap) on the box of its voxels grown by
+ * two voxels along every axis (itk::detail::PaddedMaskBox, clipped to the grid). */
 LabelDistance
-DistanceOfLabel(const std::vector<std::int32_t> & labels, const GridGeometry & grid, std::int32_t value)
+DistanceOfLabel(const LabelImage * labels, std::int32_t value)
 {
-  const std::array<std::ptrdiff_t, 3> n = { { static_cast<std::ptrdiff_t>(grid.size[0]),
-                                              static_cast<std::ptrdiff_t>(grid.size[1]),
-                                              static_cast<std::ptrdiff_t>(grid.size[2]) } };
-  std::array<std::ptrdiff_t, 3>       lo = n, hi = { { -1, -1, -1 } };
-  std::size_t                         offset = 0;
-  for (std::ptrdiff_t k = 0; k < n[2]; ++k)
-    for (std::ptrdiff_t j = 0; j < n[1]; ++j)
-      for (std::ptrdiff_t i = 0; i < n[0]; ++i, ++offset)
-      {
-        if (labels[offset] == value)
-        {
-          const std::array<std::ptrdiff_t, 3> at = { { i, j, k } };
-          for (unsigned a = 0; a < 3; ++a)
-          {
-            lo[a] = std::min(lo[a], at[a]);
-            hi[a] = std::max(hi[a], at[a]);
-          }
-        }
-      }
-  LabelDistance       d;
-  MaskImage::SizeType size;
+  const auto &              spacing = labels->GetSpacing();
+  const double              margin = 2.0 * std::max({ spacing[0], spacing[1], spacing[2] });
+  const itk::ImageRegion<3> box = itk::detail::PaddedMaskBox(labels, value, value, margin);
+  auto                      crop = itk::RegionOfInterestImageFilter<LabelImage, LabelImage>::New();
+  crop->SetInput(labels);
+  crop->SetRegionOfInterest(box);
+  crop->Update();
+  const auto    map = itk::detail::MaskAndComplementMap(crop->GetOutput(), value, value);
+  LabelDistance d;
   for (unsigned a = 0; a < 3; ++a)
   {
-    d.first[a] = std::max<std::ptrdiff_t>(lo[a] - 2, 0);
-    d.size[a] = std::min<std::ptrdiff_t>(hi[a] + 2, n[a] - 1) - d.first[a] + 1;
-    size[a] = static_cast<itk::SizeValueType>(d.size[a]);
+    d.first[a] = static_cast<std::ptrdiff_t>(box.GetIndex(a));
+    d.size[a] = static_cast<std::ptrdiff_t>(box.GetSize(a));
   }
-  MaskImage::Pointer mask[2] = { MaskImage::New(), MaskImage::New() };
-  for (auto & m : mask)
-  {
-    m->SetRegions(size);
-    m->SetSpacing(grid.spacing.data());
-    m->Allocate();
-  }
-  std::size_t b = 0;
-  for (std::ptrdiff_t k = 0; k < d.size[2]; ++k)
-    for (std::ptrdiff_t j = 0; j < d.size[1]; ++j)
-      for (std::ptrdiff_t i = 0; i < d.size[0]; ++i, ++b)
-      {
-        const auto at = static_cast<std::size_t>(d.first[0] + i + n[0] * (d.first[1] + j + n[1] * (d.first[2] + k)));
-        const bool inside = labels[at] == value;
-        mask[0]->GetBufferPointer()[b] = inside ? 1 : 0;
-        mask[1]->GetBufferPointer()[b] = inside ? 0 : 1;
-      }
-  const MapImage::Pointer organ = MaurerMap(mask[0]);
-  const MapImage::Pointer rest = MaurerMap(mask[1]);
-  d.phi.resize(b);
-  for (std::size_t v = 0; v < b; ++v)
-  {
-    d.phi[v] = 0.5f * (organ->GetBufferPointer()[v] - rest->GetBufferPointer()[v]);
-  }
+  d.phi.assign(map->GetBufferPointer(), map->GetBufferPointer() + box.GetNumberOfPixels());
   return d;
 }
 
@@ -139,9 +90,10 @@ public:
   {
     const std::set<std::int32_t> present(labels.begin(), labels.end());
     m_Values.assign(present.begin(), present.end());
+    const auto image = itk::MakeImageOnGrid<LabelImage>(grid, labels);
     for (std::int32_t value : m_Values)
     {
-      m_Distances.push_back(DistanceOfLabel(labels, grid, value));
+      m_Distances.push_back(DistanceOfLabel(image, value));
     }
   }
 
