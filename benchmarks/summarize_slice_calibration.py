@@ -1,9 +1,9 @@
 """The thick slices' calibration (itk::SliceCalibrations) from run_calibration_benchmark.sh rows, and its check.
 
-fit RUNS.csv: per slice thickness (the largest side of the rows' spacing_mm), from all m pairs: b and s, the mean
-    and standard deviation of log(fit / true E) by the censored normal likelihood (a fit on the upper search bound,
-    600 kPa, says only that its error is at least log(600 / true E)); prints the constants for
-    include/itkBiomechanicalPipelines.h and a markdown table.
+fit RUNS.csv [RUNS.csv ...]: per slice thickness (the largest side of the rows' spacing_mm), from all m pairs: the
+    line log(fit / 100 kPa) = a + beta log(true E / 100 kPa) with residual SD s, by the censored (Tobit) likelihood
+    (a fit on the upper search bound, 600 kPa, says only that the fit would have gone at least there); prints the
+    constants for include/itkBiomechanicalPipelines.h and a markdown table. Needs scipy.
 check RUNS.csv OUT_DIR: per slice thickness, what register stated on pairs the constants never saw: coverage of the
     68 % and 95 % statements (an interval, or a one-sided bound where an end is not determined), how many bounds
     were stated and were true, how many were not determined, the median |error| of the stated moduli (all and at
@@ -46,44 +46,49 @@ def by_geometry(rows):
     return groups
 
 
-def censored_normal(values, limits):
-    """Maximum-likelihood mean and SD of a normal sample of which \a values are seen and \a limits are only known to be
-    exceeded (right-censored), on a grid of 0.002 in the mean and 0.0025 in the SD (finer than the constants' digits
-    matter for the interval)."""
-    def phi_tail(z):
-        return 0.5 * math.erfc(z / math.sqrt(2))
+E0_KPA = 100.0  # the reference modulus of the calibration line
 
-    def nll(mu, sigma):
-        seen = sum(0.5 * ((x - mu) / sigma) ** 2 + math.log(sigma) for x in values)
-        return seen - sum(math.log(max(phi_tail((c - mu) / sigma), 1e-300)) for c in limits)
 
-    grid = ((nll(mu, sigma), mu, sigma) for mu in (i * 0.002 - 0.5 for i in range(1001))
-            for sigma in (0.02 + j * 0.0025 for j in range(393)))
-    _, mu, sigma = min(grid)
-    return mu, sigma
+def censored_line(log_true, log_fit, censored_at):
+    """Maximum-likelihood line log(fit / E0) = a + beta log(E / E0) + N(0, sigma^2) of the pairs' fits against their
+    truths, a fit on the upper search bound only known to be at least there (right-censored at \a censored_at:
+    the Tobit likelihood); Nelder-Mead from the uncensored least-squares line, to 1e-7 in the parameters (finer than
+    the constants' digits matter for the interval)."""
+    import numpy as np
+    from scipy.optimize import minimize
+    from scipy.stats import norm
+    x, y = np.array(log_true), np.array(log_fit)
+    cens = y >= censored_at - 1e-6
+
+    def nll(p):
+        a, beta, log_sigma = p
+        mu, sigma = a + beta * x, math.exp(log_sigma)
+        return -(norm.logpdf(y[~cens], mu[~cens], sigma).sum() + norm.logsf(censored_at, mu[cens], sigma).sum())
+
+    beta0, a0 = np.polyfit(x[~cens], y[~cens], 1)
+    start = [a0, beta0, math.log(np.std(y[~cens] - a0 - beta0 * x[~cens]))]
+    best = minimize(nll, start, method="Nelder-Mead", options={"xatol": 1e-7, "fatol": 1e-10, "maxiter": 20000})
+    a, beta, log_sigma = best.x
+    return a, beta, math.exp(log_sigma), int(cens.sum())
 
 
 def fit_constants(rows):
-    """Every pair counts: a fit that stopped on the upper search bound says only that its error is at least
-    log(bound / true E) (right-censored); leaving such pairs out would drop the stiffest errors."""
-    print("| slices [mm] | pairs | on the upper bound (censored) | b (mean log error) | s (SD) |")
-    print("|---:|---:|---:|---:|---:|")
+    """Every pair counts: a fit that stopped on the upper search bound says only that the fit would have gone at
+    least there (right-censored); leaving such pairs out would drop the stiffest fits. The line's slope carries the
+    error's growth with E (stiff organs read too stiff by more than soft ones at thick slices)."""
+    print("| slices [mm] | pairs | on the upper bound (censored) | a | beta | s |")
+    print("|---:|---:|---:|---:|---:|---:|")
     lines = []
     for t, group in by_slice(rows).items():
-        seen, limits = [], []
-        for r in group:
-            fit, E = float(r["fit_kPa"]), float(r["true_E_kPa"])
-            if fit >= 0.999 * BOUNDS_KPA[1]:
-                limits.append(math.log(BOUNDS_KPA[1] / E))
-            elif fit > 1.001 * BOUNDS_KPA[0]:
-                seen.append(math.log(fit / E))
-            else:
-                sys.exit("a fit on the lower bound: the censored fit below handles the upper one only")
+        log_true = [math.log(float(r["true_E_kPa"]) / E0_KPA) for r in group]
+        log_fit = [math.log(float(r["fit_kPa"]) / E0_KPA) for r in group]
+        if min(float(r["fit_kPa"]) for r in group) <= 1.001 * BOUNDS_KPA[0]:
+            sys.exit("a fit on the lower bound: the censored fit below handles the upper one only")
         m = len(group)
-        b, sigma = censored_normal(seen, limits)
-        s = sigma * math.sqrt(m / (m - 1))  # the divide-by-n maximum-likelihood SD, as an SD of m values
-        print(f"| {t:g} | {m} | {len(limits)} | {b:+.4f} | {s:.4f} |")
-        lines.append(f"{{ {t:g}, {b:.4f}, {s:.4f}, {m} }}")
+        a, beta, sigma, censored = censored_line(log_true, log_fit, math.log(BOUNDS_KPA[1] / E0_KPA))
+        s = sigma * math.sqrt(m / (m - 2))  # the divide-by-n maximum-likelihood SD, as a residual SD of a line
+        print(f"| {t:g} | {m} | {censored} | {a:+.4f} | {beta:.4f} | {s:.4f} |")
+        lines.append(f"{{ {t:g}, {a:.4f}, {beta:.4f}, {s:.4f}, {m} }}")
     print("constexpr SliceCalibration SliceCalibrations[] = { " + ", ".join(lines) + " };")
 
 
@@ -153,12 +158,15 @@ def main(argv):
         sys.exit(__doc__)
     if argv[1] == "check" and os.path.abspath(argv[2]) == os.path.abspath(f"{argv[3]}/slice_calibration_check.csv"):
         sys.exit("RUNS.csv would be overwritten by the summary: name the runs *_runs.csv")
-    with open(argv[2]) as f:
-        rows = list(csv.DictReader(f))
     if argv[1] == "fit":
+        rows = []
+        for path in argv[2:]:
+            with open(path) as f:
+                rows += list(csv.DictReader(f))
         fit_constants(rows)
     else:
-        check(rows, argv[3])
+        with open(argv[2]) as f:
+            check(list(csv.DictReader(f)), argv[3])
 
 
 if __name__ == "__main__":

@@ -99,12 +99,14 @@ JudgeBounds(ModulusInterval & i, const bmr::UnknownModulus & u, bool lowerReache
   i.estimate = std::min(std::max(i.estimate, u.lowerBound), u.upperBound);
 }
 
-/** Student's half-widths t_(n-1) sqrt(1 + 1/n) at 68 % and 95 % (the predictive interval of one more draw). */
+/** Student's half-widths t_(n-p) sqrt(1 + 1/n) at 68 % and 95 %: the predictive interval of one more draw about a
+ * model of \a parameters fitted to \a n draws (1: their mean; 2: a line). */
 std::array<double, 2>
-StudentHalfWidths(std::size_t n)
+StudentHalfWidths(std::size_t n, std::size_t parameters = 1)
 {
   const double predictive = std::sqrt(1.0 + 1.0 / double(n));
-  return { { StudentQuantile(0.84, double(n - 1)) * predictive, StudentQuantile(0.975, double(n - 1)) * predictive } };
+  const double degrees = double(n - parameters);
+  return { { StudentQuantile(0.84, degrees) * predictive, StudentQuantile(0.975, degrees) * predictive } };
 }
 } // namespace
 } // namespace pipeline
@@ -353,27 +355,21 @@ SliceCalibratedInterval(double fit, const SliceCalibration & calibration, const 
   i.quantiles = "student";
   i.fit = fit;
   i.calibratedSliceMM = calibration.sliceMM;
-  i.logBias = calibration.logBias;
   i.biasCorrected = true;
-  i.logSigma = calibration.logSigma;
-  const bool lowerReached = pipeline::ReachesLower(fit, unknown), upperReached = pipeline::ReachesUpper(fit, unknown);
-  if (lowerReached || upperReached)
-  {
-    // The calibration measured the error of fits inside the range; stiff organs read too stiff at thick slices and
-    // stop on the upper bound with truths far below it, so no bound can be stated from such a fit.
-    std::ostringstream reason;
-    reason << "at " << calibration.sliceMM << " mm slices the fit stopped on the search's "
-           << (upperReached ? "upper" : "lower") << " bound (" << fit
-           << " kPa), and the thick slices' calibration states no bound from such a fit";
-    pipeline::DeclareNotDetermined(i, unknown, reason.str());
-    return i;
-  }
-  const double                center = std::log(fit) - calibration.logBias;
-  const std::array<double, 2> k = pipeline::StudentHalfWidths(calibration.pairs);
-  i.estimate = std::exp(center);
-  i.interval68 = { { std::exp(center - k[0] * i.logSigma), std::exp(center + k[0] * i.logSigma) } };
-  i.interval95 = { { std::exp(center - k[1] * i.logSigma), std::exp(center + k[1] * i.logSigma) } };
-  pipeline::JudgeBounds(i, unknown, false, false);
+  i.logSigma = calibration.logSigma / calibration.slope;
+  // The truth whose line passes through log(fit) + shift: the estimate at shift 0, the interval's ends at -+k s.
+  const double logFit = std::log(fit / SliceCalibrationReferenceKPa);
+  const auto   truthAt = [&](double shift) {
+    return SliceCalibrationReferenceKPa * std::exp((logFit + shift - calibration.offset) / calibration.slope);
+  };
+  const std::array<double, 2> k = pipeline::StudentHalfWidths(calibration.pairs, 2);
+  i.estimate = truthAt(0.0);
+  i.logBias = std::log(fit / i.estimate);
+  i.interval68 = { { truthAt(-k[0] * calibration.logSigma), truthAt(k[0] * calibration.logSigma) } };
+  i.interval95 = { { truthAt(-k[1] * calibration.logSigma), truthAt(k[1] * calibration.logSigma) } };
+  // A fit on a search bound would have gone at least (at most) there: the bound's own interval end stands, the
+  // other is not determined.
+  pipeline::JudgeBounds(i, unknown, pipeline::ReachesLower(fit, unknown), pipeline::ReachesUpper(fit, unknown));
   return i;
 }
 

@@ -35,9 +35,12 @@
 // - it holds where both scans have one calibration's slices (+-0.25 mm, along any axis) and in-plane voxels of
 //   0.8-1.2 mm, and nowhere else: not at 1 mm, not at 4 mm, not for a 3 mm scan with a 1 mm one (they lean opposite
 //   ways), not at in-plane 1.4 mm;
-// - its interval is fit e^(-b) x/ exp(t_(m-1) sqrt(1 + 1/m) s) (closed form, to 1e-12), with the thickness in the
-//   statement; a fit on the upper search bound states no bound (the calibration saw truths far below it there): not
-//   determined, with the reason.
+// - its interval inverts the calibration line log(fit / E0) = a + beta log(E / E0): the estimate and the ends are
+//   E0 exp((log(fit / E0) - a -+ k s) / beta), k = t_(m-2) sqrt(1 + 1/m) (closed form, to 1e-12), with the thickness
+//   in the statement; the inversion is exact: a fit k95 s above a truth's line has that truth as its 95 % lower end,
+//   and one k95 s below as its upper end (to 1e-12);
+// - a fit on the upper search bound states "E >=" the line's inverse of the bound less k s, the upper end not
+//   determined; on the lower one "E <=", the lower end not determined.
 #include "itkBiomechanicalPipelines.h"
 #include "itkIntervalTestSupport.h"
 #include "bmrTestUtilities.h"
@@ -152,24 +155,43 @@ CheckSliceCalibration()
   unknown.name = "prostate";
   unknown.lowerBound = 20.0;
   unknown.upperBound = 600.0;
+  const double E0 = itk::SliceCalibrationReferenceKPa, a = three->offset, beta = three->slope, s = three->logSigma;
+  const double m = three->pairs;
+  // t_(m-2) from Student's half-widths of m - 1 draws, t_(m-2) sqrt(1 + 1/(m-1)), with the factor for m.
+  const auto   student = itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student,
+                                               three->pairs - 1);
+  const double predictive = std::sqrt(1.0 + 1.0 / m) / std::sqrt(1.0 + 1.0 / (m - 1));
+  const double k = student[0] * predictive, k95 = student[1] * predictive;
+  const auto   inverse = [&](double fit, double shift) { return E0 * std::exp((std::log(fit / E0) - a + shift) / beta); };
+  const auto   near = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
   const itk::ModulusInterval i = itk::SliceCalibratedInterval(100.0, *three, unknown);
-  const auto                 k =
-    itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, three->pairs);
-  const double center = std::log(100.0) - three->logBias;
-  const auto   near = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs(b); };
-  ok &= bmr::test::Expect(
-    near(i.estimate, std::exp(center)) && near(i.interval68[0], std::exp(center - k[0] * three->logSigma)) &&
-      near(i.interval68[1], std::exp(center + k[0] * three->logSigma)) &&
-      near(i.interval95[0], std::exp(center - k[1] * three->logSigma)) &&
-      near(i.interval95[1], std::exp(center + k[1] * three->logSigma)) && i.lowerDetermined && i.upperDetermined,
-    "100 kPa at 3 mm: fit e^(-b) x/ exp(t sqrt(1 + 1/m) s), both ends determined");
+  ok &= bmr::test::Expect(near(i.estimate, inverse(100.0, 0.0)) && near(i.interval68[0], inverse(100.0, -k * s)) &&
+                            near(i.interval68[1], inverse(100.0, k * s)) &&
+                            near(i.interval95[0], inverse(100.0, -k95 * s)) &&
+                            near(i.interval95[1], inverse(100.0, k95 * s)) && i.lowerDetermined && i.upperDetermined &&
+                            near(i.logBias, std::log(100.0 / i.estimate)) && near(i.logSigma, s / beta),
+                          "100 kPa at 3 mm: E0 exp((log(fit / E0) - a -+ t_(m-2) sqrt(1 + 1/m) s) / beta)");
   ok &= bmr::test::Expect(itk::ModulusIntervalText("prostate", i).find("3 mm slices") != std::string::npos,
                           "the statement names the calibration's slices: " + itk::ModulusIntervalText("prostate", i));
+  const double truth = 150.0;
+  const double highFit = E0 * std::exp(a + beta * std::log(truth / E0) + k95 * s);
+  const double lowFit = E0 * std::exp(a + beta * std::log(truth / E0) - k95 * s);
+  ok &= bmr::test::Expect(near(itk::SliceCalibratedInterval(highFit, *three, unknown).interval95[0], truth) &&
+                            near(itk::SliceCalibratedInterval(lowFit, *three, unknown).interval95[1], truth),
+                          "a fit k95 s above (below) the line of 150 kPa has 150 kPa as its 95 % lower (upper) end");
   const itk::ModulusInterval onBound = itk::SliceCalibratedInterval(600.0, *three, unknown);
-  ok &= bmr::test::Expect(!onBound.lowerDetermined && !onBound.upperDetermined &&
-                            onBound.notDeterminedReason.find("upper bound") != std::string::npos &&
-                            itk::ModulusIntervalText("prostate", onBound).find("not determined") != std::string::npos,
-                          "a fit on the upper bound: not determined, and why");
+  ok &= bmr::test::Expect(onBound.lowerDetermined && !onBound.upperDetermined &&
+                            near(onBound.interval95[0], inverse(600.0, -k95 * s)) && onBound.interval95[1] == 600.0 &&
+                            onBound.notDeterminedReason.empty() &&
+                            itk::ModulusIntervalText("prostate", onBound).find(">=") != std::string::npos,
+                          "a fit on the upper bound: E >= the line's inverse of the bound less k95 s: " +
+                            itk::ModulusIntervalText("prostate", onBound));
+  const itk::ModulusInterval onLower = itk::SliceCalibratedInterval(20.0, *three, unknown);
+  ok &= bmr::test::Expect(!onLower.lowerDetermined && onLower.upperDetermined &&
+                            near(onLower.interval95[1], inverse(20.0, k95 * s)) &&
+                            itk::ModulusIntervalText("prostate", onLower).find("<=") != std::string::npos,
+                          "a fit on the lower bound: E <= the line's inverse of the bound plus k95 s: " +
+                            itk::ModulusIntervalText("prostate", onLower));
   return ok;
 }
 } // namespace
