@@ -68,6 +68,7 @@ ParsePhantomSettings(const Arguments & args)
   o.bladderMM = args.Number("--bladder-mm", o.bladderMM);
   o.rectumMM = args.Number("--rectum-mm", o.rectumMM);
   o.fractions = args.Choice("--fractions", { "off", "on" }) == "on";
+  o.contourFractions = args.Choice("--outline-fractions", { "off", "on" }) == "on";
   o.model = args.Choice("--model", { "linear", "neo_hookean" }) == "neo_hookean" ? bmr::MaterialModelEnum::NeoHookean
                                                                                  : bmr::MaterialModelEnum::Linear;
   o.truthRefinement = args.Number("--truth-mesh-scale", o.truthRefinement);

@@ -19,6 +19,7 @@
 // the displacement fields, warped images and report that come out of it.
 #include "biomechregCommon.h"
 #include "itkBiomechanicalReports.h"
+#include "itkDicomRT.h"
 
 #include <cmath>
 #include <sstream>
@@ -94,6 +95,46 @@ ReadProbabilityImages(const std::string & list)
       ReadImage<itk::BiomechanicalProbabilityImageType>(item.substr(equals + 1), "fixed probability of " + organ);
   }
   return images;
+}
+
+/** The objective organs of an RTSTRUCT given as \a fixedLabels as the area fractions of their outlines
+ * (itk::ReadRTStructAreaFractions) on the fixed CT's grid, added to \a probabilities where an organ has none; nothing
+ * for a label image. The fixed organs' surfaces then follow the polygons, not their voxels. */
+void
+AddOutlineFractions(const std::string &         fixedLabels,
+                    const itk::ImageBase<3> *   fixedCT,
+                    const bmr::Scene &          scene,
+                    itk::OrganProbabilityImages & probabilities)
+{
+  if (itk::ReadDicomModality(fixedLabels) != "RTSTRUCT")
+  {
+    return;
+  }
+  std::vector<std::string> organs;
+  for (const bmr::ObjectiveTerm & term : scene.objective)
+  {
+    if (probabilities.count(term.label) == 0)
+    {
+      organs.push_back(term.label);
+    }
+  }
+  try
+  {
+    for (auto & [organ, fractions] : itk::ReadRTStructAreaFractions(fixedLabels, fixedCT, organs))
+    {
+      probabilities[organ] = fractions;
+    }
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    bmr::Fail("AddOutlineFractions", "fixed label image: " + std::string(e.GetDescription()));
+  }
+  std::cout << "  fixed organs' surfaces from the RTSTRUCT's outlines:";
+  for (const auto & organ : organs)
+  {
+    std::cout << " " << organ;
+  }
+  std::cout << std::endl;
 }
 
 itk::RegistrationSettings
@@ -219,6 +260,7 @@ RegisterCommand(const Arguments & args)
   const bool        ignoreROIs = IgnoreUnmappedROIs(args);
   const std::string labelSurfaces =
     args.Has("--label-surfaces") ? args.Choice("--label-surfaces", { "voxels", "distance" }) : "";
+  const bool outlines = args.Choice("--rtstruct-surfaces", { "outlines", "voxels" }) == "outlines";
   args.CheckAllUsed();
 
   StageTimer timer(true);
@@ -236,7 +278,11 @@ RegisterCommand(const Arguments & args)
   // The fixed CT is read to check it (and to grid an RTSTRUCT); the fixed label image defines the output grid.
   const auto fixed = ReadImage<CTImageType>(fixedCT, "fixed CT");
   const auto fixedMap = ReadLabelsOrRTStruct(fixedLabels, "fixed label image", fixed, scene, ignoreROIs);
-  const auto fixedProbabilities = ReadProbabilityImages(probabilities);
+  auto       fixedProbabilities = ReadProbabilityImages(probabilities);
+  if (outlines)
+  {
+    AddOutlineFractions(fixedLabels, fixed, scene, fixedProbabilities);
+  }
   timer.End();
   // The moving CT is warped only when the warped CT is written.
   const auto result = itk::RegisterSegmentedPair(

@@ -466,6 +466,9 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   unsigned int         numberOfSeeds{ 3 };
   double               trackingNoiseMM{ 0.5 }; ///< sigma of the tracked treatment markers' noise [mm] per axis
   bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
+  /** Also the area fractions of every objective organ's exact outlines on each fixed slice, as an RTSTRUCT drawn on
+   * the fixed scan carries them (fixedContourFractions). */
+  bool contourFractions{ false };
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
   /** What the truth's mesh follows: the moving label map's voxels (Voxels), or the analytic anatomy those voxels
    * sample (Anatomy, the default: bmr::MeshSceneFunction(), smooth surfaces that stay put when the truth is refined,
@@ -517,6 +520,7 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
    * PhantomSettings::trackingNoiseMM per axis, seeded by the phantom's seed (itk::AddTrackingNoise). */
   std::vector<bmr::Landmark> trackedLandmarks;
   OrganProbabilityImages     fixedFractions; ///< per objective organ, with PhantomSettings::fractions
+  OrganProbabilityImages     fixedContourFractions; ///< per objective organ, with PhantomSettings::contourFractions
   std::size_t                truthTetrahedra{ 0 }, truthNodes{ 0 };
   /** How far each loaded wall moved in the truth [mm]: the largest and the mean |u| over the truth mesh's nodes on
    * the wall, per load surface. For pressure loads the filling a pressure made (bladder filling = its max). */

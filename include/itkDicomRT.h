@@ -21,6 +21,7 @@
 #include "BiomechanicalRegistrationExport.h"
 #include "bmrScene.h"
 #include "itkImage.h"
+#include "itkPlanarContourFractions.h"
 
 #include <cstdint>
 #include <map>
@@ -99,6 +100,20 @@ BiomechanicalRegistration_EXPORT DicomRTLabelImageType::Pointer
                                                           const ImageBase<3> *                        referenceGrid,
                                                           const std::map<std::string, std::int32_t> & roiNameToLabel,
                                                           const RTStructRasterizationOptions &        options = {});
+
+/** \brief The area fraction of each voxel of \a referenceGrid that each ROI of \a roiNames encloses in an RTSTRUCT:
+ * PlanarContourAreaFractions() of the ROI's contours, one image per name (names as given, matched as
+ * ReadRTStructAsLabelImage() matches them; other ROIs of the file are skipped).
+ *
+ * Where ReadRTStructAsLabelImage() keeps one bit per voxel, these keep where the polygon runs inside it: the input
+ * of ComputeProbabilityDistanceMap() for a fixed organ drawn as contours (RegisterSegmentedPair()'s fixed
+ * probabilities). Overlaps are not resolved: each ROI's own region. Throws itk::ExceptionObject as
+ * ReadRTStructAsLabelImage() does, naming the file and the ROI, and when a name is not an ROI of the file.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT std::map<std::string, ContourFractionImageType::Pointer>
+                                 ReadRTStructAreaFractions(const std::string &              rtstructPath,
+                                                           const ImageBase<3> *             referenceGrid,
+                                                           const std::vector<std::string> & roiNames);
 
 /** \brief Reads a DICOM RTDOSE as a dose image [Gy] on the dose grid.
  *

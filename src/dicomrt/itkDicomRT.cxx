@@ -23,6 +23,7 @@
 #include "bmrError.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkDicomRTCommon.h"
+#include "itkPlanarContours.h"
 
 #include "gdcmDataSet.h"
 #include "gdcmImage.h"
@@ -216,16 +217,11 @@ CheckModality(const gdcm::DataSet & ds, const std::string & expected, const char
 
 constexpr const char * RTStructWhere = "ReadRTStructAsLabelImage";
 
-struct Contour
-{
-  std::vector<ImageBase<3>::PointType> points; ///< LPS [mm]
-};
-
 struct ROI
 {
   std::string          name;
   long                 number{ 0 };
-  std::vector<Contour> contours;
+  std::vector<PlanarContour> contours;
   bool                 mapped{ false };
   std::int32_t         label{ 0 };
 };
@@ -356,7 +352,7 @@ MapROIs(std::vector<ROI> &                          rois,
   }
 }
 
-Contour
+PlanarContour
 ReadContour(const gdcm::DataSet & item, const ROI & roi, std::size_t index, const std::string & path)
 {
   const std::string what = "ROI " + Quote(roi.name) + ", contour " + std::to_string(index);
@@ -386,7 +382,7 @@ ReadContour(const gdcm::DataSet & item, const ROI & roi, std::size_t index, cons
        << " points (3 per point, at least 3 points)";
     FailFile(RTStructWhere, "RTSTRUCT", path, os.str());
   }
-  Contour contour;
+  PlanarContour contour;
   for (std::size_t p = 0; p < coordinates.size(); p += 3)
   {
     ImageBase<3>::PointType point;
@@ -436,12 +432,6 @@ ReadContours(const gdcm::DataSet & ds, std::vector<ROI> & rois, const std::strin
   }
 }
 
-/** An edge of a contour in the continuous index space of a slice (i, j). */
-struct Edge
-{
-  double x0, y0, x1, y1;
-};
-
 /** A run of voxels of one row, as offsets into the output buffer. */
 struct Run
 {
@@ -449,93 +439,17 @@ struct Run
   std::size_t length;
 };
 
-/** The edges of \a roi's contours per slice index of \a grid; throws when a contour matches no slice or
- * leaves the grid in-plane. */
-std::map<long, std::vector<Edge>>
-ContourEdgesPerSlice(const ROI & roi, const ImageBase<3> * grid, const std::string & path)
-{
-  // Continuous indices are computed by the grid (any direction), relative to its region's start.
-  const auto region = grid->GetLargestPossibleRegion();
-  // DS values carry at most 16 characters: positions are exact to ~1e-6 of a voxel; 1e-3 voxel is ample.
-  constexpr double                  tolerance = 1e-3;
-  std::map<long, std::vector<Edge>> edges;
-  for (std::size_t c = 0; c < roi.contours.size(); ++c)
-  {
-    const auto &                            points = roi.contours[c].points;
-    std::vector<ContinuousIndex<double, 3>> indices(points.size());
-    double                                  meanK = 0.0;
-    for (std::size_t p = 0; p < points.size(); ++p)
-    {
-      grid->TransformPhysicalPointToContinuousIndex(points[p], indices[p]);
-      for (unsigned int a = 0; a < 3; ++a)
-      {
-        indices[p][a] -= static_cast<double>(region.GetIndex(a));
-      }
-      meanK += indices[p][2] / static_cast<double>(points.size());
-    }
-    const long         slice = std::lround(meanK);
-    const std::string  what = "ROI " + Quote(roi.name) + ", contour " + std::to_string(c + 1);
-    std::ostringstream at;
-    at << " (at z = " << points.front()[2] << " mm)";
-    for (const auto & index : indices)
-    {
-      if (std::abs(index[2] - static_cast<double>(slice)) > 0.5 + tolerance)
-      {
-        FailFile(RTStructWhere,
-                 "RTSTRUCT",
-                 path,
-                 what + at.str() + " does not lie in one slice of the reference grid (it is not parallel to them)");
-      }
-    }
-    if (slice < 0 || slice >= static_cast<long>(region.GetSize(2)))
-    {
-      std::ostringstream os;
-      os << what << at.str() << " lies on no slice of the reference grid (slice index " << meanK << ", grid 0.."
-         << region.GetSize(2) - 1 << ")";
-      FailFile(RTStructWhere, "RTSTRUCT", path, os.str());
-    }
-    for (const auto & index : indices)
-    {
-      for (unsigned int a = 0; a < 2; ++a)
-      {
-        if (index[a] < -0.5 - tolerance || index[a] > static_cast<double>(region.GetSize(a)) - 0.5 + tolerance)
-        {
-          FailFile(RTStructWhere, "RTSTRUCT", path, what + at.str() + " lies outside the reference grid in-plane");
-        }
-      }
-    }
-    auto & sliceEdges = edges[slice];
-    for (std::size_t p = 0; p < indices.size(); ++p)
-    {
-      const auto & a = indices[p];
-      const auto & b = indices[(p + 1) % indices.size()]; // closed: the last point joins the first
-      sliceEdges.push_back({ a[0], a[1], b[0], b[1] });
-    }
-  }
-  return edges;
-}
-
 /** Even-odd fill of one slice: along each row j (y = j), voxel centre i is inside when an odd number of edges
- * cross the row left of it. An edge crosses the row when its ends lie on different sides of y (one end
- * strictly above): a vertex on the row is counted once, so the count along a row of closed contours is even. */
+ * cross the row left of it (detail::RowCrossings()). */
 void
-FillSlice(const std::vector<Edge> & edges, long slice, const ImageRegion<3> & region, std::vector<Run> & runs)
+FillSlice(const std::vector<detail::ContourEdge> & edges, long slice, const ImageRegion<3> & region, std::vector<Run> & runs)
 {
   const long          nx = static_cast<long>(region.GetSize(0));
   const long          ny = static_cast<long>(region.GetSize(1));
   std::vector<double> crossings;
   for (long j = 0; j < ny; ++j)
   {
-    const double y = static_cast<double>(j);
-    crossings.clear();
-    for (const auto & e : edges)
-    {
-      if ((e.y0 > y) != (e.y1 > y))
-      {
-        crossings.push_back(e.x0 + (y - e.y0) * (e.x1 - e.x0) / (e.y1 - e.y0));
-      }
-    }
-    std::sort(crossings.begin(), crossings.end());
+    detail::RowCrossings(edges, static_cast<double>(j), crossings);
     for (std::size_t m = 0; m + 1 < crossings.size(); m += 2)
     {
       // Centres i with crossings[m] < i <= crossings[m + 1] have an odd count of crossings left of them.
@@ -550,11 +464,18 @@ FillSlice(const std::vector<Edge> & edges, long slice, const ImageRegion<3> & re
   }
 }
 
+/** The owner of \a roi's contours in messages: RTSTRUCT "path": ROI "name". */
+std::string
+ContourOwner(const ROI & roi, const std::string & path)
+{
+  return "RTSTRUCT " + Quote(path) + ": ROI " + Quote(roi.name);
+}
+
 std::vector<Run>
 RasterizeROI(const ROI & roi, const ImageBase<3> * grid, const std::string & path)
 {
   std::vector<Run> runs;
-  for (const auto & slice : ContourEdgesPerSlice(roi, grid, path))
+  for (const auto & slice : detail::ContourEdgesPerSlice(roi.contours, grid, RTStructWhere, ContourOwner(roi, path)))
   {
     FillSlice(slice.second, slice.first, grid->GetLargestPossibleRegion(), runs);
   }
@@ -801,6 +722,43 @@ ReadRTStructAsLabelImage(const std::string &                         rtstructPat
     }
   }
   return labels;
+}
+
+std::map<std::string, ContourFractionImageType::Pointer>
+ReadRTStructAreaFractions(const std::string &              rtstructPath,
+                          const ImageBase<3> *             referenceGrid,
+                          const std::vector<std::string> & roiNames)
+{
+  if (!referenceGrid)
+  {
+    FailFile(RTStructWhere, "RTSTRUCT", rtstructPath, "no reference grid given");
+  }
+  gdcm::Reader reader;
+  CheckDicomFile(RTStructWhere, "RTSTRUCT", rtstructPath);
+  ReadParsedFile(reader, RTStructWhere, "RTSTRUCT", rtstructPath);
+  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
+  CheckModality(ds, "RTSTRUCT", RTStructWhere, rtstructPath);
+  CheckReferencedSeries(ds, rtstructPath);
+  std::vector<ROI>                    rois = ReadROIs(ds, rtstructPath);
+  std::map<std::string, std::int32_t> wanted;
+  for (const auto & name : roiNames)
+  {
+    wanted.emplace(name, 1);
+  }
+  MapROIs(rois, wanted, true, rtstructPath);
+  ReadContours(ds, rois, rtstructPath);
+  std::map<std::string, ContourFractionImageType::Pointer> fractions;
+  for (const auto & roi : rois)
+  {
+    if (roi.mapped)
+    {
+      const auto name = std::find_if(roiNames.begin(), roiNames.end(), [&roi](const std::string & n) {
+        return NameKey(n) == NameKey(roi.name);
+      });
+      fractions[*name] = PlanarContourAreaFractions(roi.contours, referenceGrid, ContourOwner(roi, rtstructPath));
+    }
+  }
+  return fractions;
 }
 
 DicomRTDoseImageType::Pointer

@@ -222,6 +222,10 @@ WritePhantomPair(const std::string & directory, const PhantomPair & pair, const 
   {
     WriteImageAtomically(kv.second.GetPointer(), directory + "/fixed_fraction_" + kv.first + ".nrrd");
   }
+  for (const auto & kv : pair.fixedContourFractions)
+  {
+    WriteImageAtomically(kv.second.GetPointer(), directory + "/fixed_outline_fraction_" + kv.first + ".nrrd");
+  }
   WriteImageAtomically(pair.truthField.GetPointer(), directory + "/truth_field.nrrd");
   bmr::WriteTextFileAtomically(directory + "/scene.json", bmr::SceneToJson(pair.scene));
   bmr::WriteTextFileAtomically(directory + "/truth_scene.json", bmr::SceneToJson(pair.truthScene));

@@ -271,90 +271,6 @@ FixedLabels(const PhantomSettings & s, const bmr::GridGeometry & grid, const Bio
   return MakeImageOnGrid<BiomechanicalLabelImageType>(grid, AnatomyLabelsAt(s, PullBackPoints(grid, field)));
 }
 
-/** Each objective organ's volume fraction in every fixed voxel, as a partial-volume segmentation would give it:
- * voxels whose 26 neighbors all carry their label are 0 or 1; the others are sampled at 4^3 sub-points, each
- * pulled back through the truth field (trilinear between voxel centers) into the analytic anatomy. */
-OrganProbabilityImages
-FixedFractions(const PhantomSettings &             s,
-               const bmr::Scene &                  scene,
-               const BiomechanicalLabelImageType * labels,
-               const BiomechanicalFieldType *      field)
-{
-  const bmr::GridGeometry grid = GridGeometryOf(labels);
-  const std::int32_t *    l = labels->GetBufferPointer();
-  const auto              at = [&grid](std::size_t v) {
-    return std::array<std::size_t, 3>{
-      { v % grid.size[0], (v / grid.size[0]) % grid.size[1], v / (grid.size[0] * grid.size[1]) }
-    };
-  };
-  std::vector<std::size_t> mixed;
-  for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
-  {
-    const auto i = at(v);
-    bool       uniform = true;
-    for (int n = 0; n < 27 && uniform; ++n)
-    {
-      const std::array<long, 3> j{ { long(i[0]) + n % 3 - 1, long(i[1]) + n / 3 % 3 - 1, long(i[2]) + n / 9 - 1 } };
-      if (j[0] >= 0 && j[1] >= 0 && j[2] >= 0 && j[0] < long(grid.size[0]) && j[1] < long(grid.size[1]) &&
-          j[2] < long(grid.size[2]))
-      {
-        uniform = l[(j[2] * grid.size[1] + j[1]) * grid.size[0] + j[0]] == l[v];
-      }
-    }
-    if (!uniform)
-    {
-      mixed.push_back(v);
-    }
-  }
-  constexpr int sub = 4;
-  auto          interpolator = VectorLinearInterpolateImageFunction<BiomechanicalFieldType, double>::New();
-  interpolator->SetInputImage(field);
-  std::vector<double> points;
-  points.reserve(3 * mixed.size() * sub * sub * sub);
-  for (std::size_t v : mixed)
-  {
-    const auto i = at(v);
-    for (int k = 0; k < sub * sub * sub; ++k)
-    {
-      ContinuousIndex<double, 3> index;
-      index[0] = double(i[0]) + (k % sub + 0.5) / sub - 0.5;
-      index[1] = double(i[1]) + (k / sub % sub + 0.5) / sub - 0.5;
-      index[2] = double(i[2]) + (k / (sub * sub) + 0.5) / sub - 0.5;
-      Point<double, 3> x;
-      labels->TransformContinuousIndexToPhysicalPoint(index, x);
-      const auto d = interpolator->IsInsideBuffer(index)
-                       ? interpolator->EvaluateAtContinuousIndex(index)
-                       : field->GetPixel(labels->GetLargestPossibleRegion().GetIndex());
-      for (unsigned int c = 0; c < 3; ++c)
-      {
-        points.push_back(x[c] + d[c]);
-      }
-    }
-  }
-  const std::vector<std::int32_t> subLabels = AnatomyLabelsAt(s, points);
-  OrganProbabilityImages          fractions;
-  for (const bmr::ObjectiveTerm & term : scene.objective)
-  {
-    const std::int32_t value = scene.FindLabel(term.label)->value;
-    std::vector<float> f(grid.GetNumberOfVoxels());
-    for (std::size_t v = 0; v < f.size(); ++v)
-    {
-      f[v] = l[v] == value ? 1.0f : 0.0f;
-    }
-    for (std::size_t m = 0; m < mixed.size(); ++m)
-    {
-      int in = 0;
-      for (int k = 0; k < sub * sub * sub; ++k)
-      {
-        in += subLabels[m * sub * sub * sub + k] == value;
-      }
-      f[mixed[m]] = float(in) / float(sub * sub * sub);
-    }
-    fractions[term.label] = MakeImageOnGrid<BiomechanicalProbabilityImageType>(grid, f);
-  }
-  return fractions;
-}
-
 /** Seed centers moved by the simulated displacement: the ground-truth landmark pairs. */
 /** \a grid with its origin moved by U(-shift, shift) voxels along each of its axes (mt19937_64(seed)'s raw
  * integers, whose sequence the standard fixes). */
@@ -494,10 +410,18 @@ MakePhantomPair(const PhantomSettings &    s,
 
   MoveSeeds(pair, moving.seeds, truth.mesh);
   pair.trackedLandmarks = AddTrackingNoise(pair.fixedLandmarks, s.trackingNoiseMM, s.seed);
+  const auto anatomyAt = [&s](const std::vector<double> & points) { return AnatomyLabelsAt(s, points); };
   if (s.fractions)
   {
     clock.Begin("volume fractions of the fixed organs");
-    pair.fixedFractions = FixedFractions(s, pair.scene, pair.fixedLabels, pair.truthField);
+    pair.fixedFractions = pipeline::FixedVolumeFractions(pair.scene, pair.fixedLabels, pair.truthField, anatomyAt);
+    clock.End();
+  }
+  if (s.contourFractions)
+  {
+    clock.Begin("outline fractions of the fixed organs");
+    pair.fixedContourFractions =
+      pipeline::FixedContourFractions(pair.scene, pair.fixedLabels, pair.truthField, anatomyAt);
     clock.End();
   }
   return pair;

@@ -29,6 +29,7 @@
 #include "bmrStopwatch.h"
 
 #include <atomic>
+#include <functional>
 #include <future>
 #include <mutex>
 #include <random>
@@ -269,6 +270,30 @@ ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const bmr::Scene &                  scene,
                       double                              exactWithinMM,
                       bool                                interpolateSlices);
+
+/** The analytic anatomy's labels at physical points (x, y, z triples) [mm]: the phantom's truth as a function. */
+using AnatomyLabelsFunction = std::function<std::vector<std::int32_t>(const std::vector<double> &)>;
+
+/** Each objective organ's volume fraction in every fixed voxel of \a labels, as a partial-volume segmentation would
+ * give it: voxels whose 26 neighbours all carry their label are 0 or 1; the others are sampled at 4^3 sub-points,
+ * each pulled back through the truth field \a field (trilinear between voxel centres) into the anatomy
+ * (\a labelsAt). */
+OrganProbabilityImages
+FixedVolumeFractions(const bmr::Scene &                  scene,
+                     const BiomechanicalLabelImageType * labels,
+                     const BiomechanicalFieldType *      field,
+                     const AnatomyLabelsFunction &       labelsAt);
+
+/** Each objective organ's area fractions of its exact outlines on every fixed slice of \a labels, as an RTSTRUCT
+ * drawn on the fixed scan carries them: the outlines traced on each slice's labels (marching squares, one vertex
+ * per voxel edge the organ's boundary crosses), each vertex moved along its voxel edge onto the anatomy's boundary
+ * by 12 bisections (1/4096 of a voxel) of the pulled-back anatomy, and the polygons' area fractions
+ * (PlanarContourAreaFractions()). */
+OrganProbabilityImages
+FixedContourFractions(const bmr::Scene &                  scene,
+                      const BiomechanicalLabelImageType * labels,
+                      const BiomechanicalFieldType *      field,
+                      const AnatomyLabelsFunction &       labelsAt);
 
 /** The labels the moving anatomy is meshed from: \a labels interpolated between thick slices when \a settings
  * ask for it (RegistrationSettings::interpolateSlices), else \a labels themselves. */
