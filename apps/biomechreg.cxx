@@ -191,6 +191,45 @@ MeshedAlongsideDetail(const itk::MovingAnatomyMeshes & meshes)
   return detail.str();
 }
 
+/** The demo's phantom: the pelvis with a prostate of \a trueE [kPa]. */
+itk::PhantomSettings
+DemoPhantomSettings(double trueE)
+{
+  // 1 mm voxels and a bladder filling of 8 mm: the prostate's shape change is then several voxels of
+  // surface motion, which the label maps resolve (at 1.25 x 1.25 x 2.5 mm and 4 mm it is not; README).
+  itk::PhantomSettings o;
+  o.grid.size = { { 200, 160, 160 } };
+  o.grid.spacing = { { 1.0, 1.0, 1.0 } };
+  o.bladderMM = 8.0;
+  o.rectumMM = 4.0;
+  o.prostateE = trueE;
+  return o;
+}
+
+/** The prostate's modulus recovered against the truth \a trueE [kPa], Dice after warping and the Jacobian. */
+void
+PrintDemoEstimate(const itk::RegistrationResult & result, double trueE)
+{
+  const auto   stated = result.modulusInterval.find("prostate");
+  const double recovered =
+    stated == result.modulusInterval.end() ? result.youngsModulus.at("prostate") : stated->second.estimate;
+  std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
+            << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
+            << std::noshowpos << " %), fit " << result.youngsModulus.at("prostate") << " kPa"
+            << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
+            << "\n  (coverage of the interval over 30-500 kPa: docs/benchmarks.md, calibration benchmark)"
+            << "\n  note: " << itk::WallLawCaveat(itk::RegistrationSettings().walls.motion)
+            << (result.estimation.identifiable ? "" : "\n  warning: ")
+            << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
+            << "\n  Dice after warping:";
+  for (const auto & kv : result.dice)
+  {
+    std::cout << "  " << kv.first << " " << std::setprecision(4) << kv.second;
+  }
+  std::cout << "\n  pull-back Jacobian determinant: minimum " << std::setprecision(3) << result.jacobianMinimum
+            << ", fraction <= 0: " << result.jacobianNonPositiveFraction << "\n";
+}
+
 int
 DemoCommand()
 {
@@ -200,14 +239,7 @@ DemoCommand()
   std::cout << "biomechreg demo: pelvis phantom -> joint estimation of wall loads and prostate modulus -> "
                "displacement fields -> warped images -> report\n"
             << "(outputs in ./" << dir << "; run 'biomechreg help' for the subcommands)\n\n";
-  // 1 mm voxels and a bladder filling of 8 mm: the prostate's shape change is then several voxels of
-  // surface motion, which the label maps resolve (at 1.25 x 1.25 x 2.5 mm and 4 mm it is not; README).
-  itk::PhantomSettings o;
-  o.grid.size = { { 200, 160, 160 } };
-  o.grid.spacing = { { 1.0, 1.0, 1.0 } };
-  o.bladderMM = 8.0;
-  o.rectumMM = 4.0;
-  o.prostateE = trueE;
+  const itk::PhantomSettings o = DemoPhantomSettings(trueE);
   std::cout << "1. phantom pair with known truth (prostate " << trueE
             << " kPa, tissue 10 kPa, bladder +8 mm, rectum +4 mm, 1 mm voxels; fixed scan from a finer, "
                "independent mesh)\n";
@@ -244,24 +276,7 @@ DemoCommand()
   WriteRegistration(dir + "/register", result, settings, outputs, run);
   PrintOuterIterations(result);
 
-  const auto   stated = result.modulusInterval.find("prostate");
-  const double recovered =
-    stated == result.modulusInterval.end() ? result.youngsModulus.at("prostate") : stated->second.estimate;
-  std::cout << "\n  prostate Young's modulus: true " << std::fixed << std::setprecision(1) << trueE
-            << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
-            << std::noshowpos << " %), fit " << result.youngsModulus.at("prostate") << " kPa"
-            << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
-            << "\n  (coverage of the interval over 30-500 kPa: docs/benchmarks.md, calibration benchmark)"
-            << "\n  note: " << itk::WallLawCaveat(itk::RegistrationSettings().walls.motion)
-            << (result.estimation.identifiable ? "" : "\n  warning: ")
-            << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
-            << "\n  Dice after warping:";
-  for (const auto & kv : result.dice)
-  {
-    std::cout << "  " << kv.first << " " << std::setprecision(4) << kv.second;
-  }
-  std::cout << "\n  pull-back Jacobian determinant: minimum " << std::setprecision(3) << result.jacobianMinimum
-            << ", fraction <= 0: " << result.jacobianNonPositiveFraction << "\n";
+  PrintDemoEstimate(result, trueE);
   Stages phantomStages = pair.stages;
   phantomStages.insert(phantomStages.end(), timer.stages.begin(), timer.stages.end());
   std::cout << "\nPhantom generation:";

@@ -165,21 +165,10 @@ PrintDoseTable(const itk::DoseEvaluation & evaluation)
   std::cout.unsetf(std::ios::floatfield);
 }
 
-} // namespace
-
-int
-DoseCommand(const Arguments & args)
+/** The synthetic plan's settings from the options; refuses them out of range, or without --plan-margin (\a plan). */
+itk::ConformalPlanSettings
+ParsePlanSettings(const Arguments & args, bool plan)
 {
-  const std::string labelsPath = args.Require("--labels");
-  const std::string scenePath = args.Require("--scene");
-  const std::string out = args.Require("--out");
-  const std::string dosePath = args.Get("--dose");
-  const std::string fieldPath = args.Get("--field");
-  const bool        plan = args.Has("--plan-margin");
-  if (plan == !dosePath.empty())
-  {
-    throw UsageError("give either --dose FILE or --plan-margin MM (a synthetic conformal plan)");
-  }
   itk::ConformalPlanSettings planSettings;
   planSettings.marginMm = args.Number("--plan-margin", planSettings.marginMm);
   planSettings.prescriptionGy = args.Number("--prescription-Gy", planSettings.prescriptionGy);
@@ -196,6 +185,13 @@ DoseCommand(const Arguments & args)
   {
     throw UsageError("--prescription-Gy, --penumbra-mm and --bath-fraction describe the plan of --plan-margin");
   }
+  return planSettings;
+}
+
+/** The evaluation's settings from the options: bins, V-doses, gEUD parameters and the wall's organs. */
+itk::DoseEvaluationSettings
+ParseDoseEvaluationSettings(const Arguments & args)
+{
   itk::DoseEvaluationSettings settings;
   settings.binWidthGy = args.Number("--bin-width-Gy", settings.binWidthGy);
   if (!(settings.binWidthGy >= 0.001 && settings.binWidthGy <= 10.0))
@@ -209,16 +205,15 @@ DoseCommand(const Arguments & args)
   settings.eudParameters = args.NamedNumbers("--eud-a");
   settings.wall.prostateName = args.Get("--prostate", settings.wall.prostateName);
   settings.wall.rectumName = args.Get("--rectum", settings.wall.rectumName);
-  const bool plot = args.Choice("--plot", { "on", "off" }) == "on";
-  args.CheckAllUsed();
+  return settings;
+}
 
-  // Every input is read and checked before anything is written: a bad input leaves no output directory.
-  StageTimer timer;
-  std::cout << "biomechreg dose -> " << out << std::endl;
-  timer.Begin("read inputs");
-  const bmr::Scene scene = bmr::ReadScene(scenePath);
-  auto             labels = ReadImage<LabelImageType>(labelsPath, "label image");
-  const auto       structures = itk::DoseStructuresFromScene(scene);
+/** Refuses a --eud-a name that is neither a structure of the scene at \a scenePath nor the wall. */
+void
+CheckEudStructures(const itk::DoseEvaluationSettings &         settings,
+                   const std::map<std::string, std::int32_t> & structures,
+                   const std::string &                         scenePath)
+{
   for (const auto & kv : settings.eudParameters)
   {
     if (structures.count(kv.first) == 0 && kv.first != settings.wall.name)
@@ -227,35 +222,41 @@ DoseCommand(const Arguments & args)
                                scenePath + "\" (nor " + settings.wall.name + ")");
     }
   }
-  DoseImageType::Pointer dose = plan ? nullptr : ReadDose(dosePath);
-  FieldType::Pointer     field = fieldPath.empty() ? nullptr : ReadImage<FieldType>(fieldPath, "displacement field");
-  timer.End();
+}
 
-  if (plan)
+/** The synthetic conformal plan around the prostate of \a structures (the scene at \a scenePath). */
+DoseImageType::Pointer
+MakePlanDose(const LabelImageType *                      labels,
+             const std::map<std::string, std::int32_t> & structures,
+             const itk::DoseEvaluationSettings &         settings,
+             const itk::ConformalPlanSettings &          planSettings,
+             const std::string &                         scenePath,
+             StageTimer &                                timer)
+{
+  const auto prostate = structures.find(settings.wall.prostateName);
+  if (prostate == structures.end())
   {
-    const auto prostate = structures.find(settings.wall.prostateName);
-    if (prostate == structures.end())
-    {
-      throw std::runtime_error("the scene \"" + scenePath + "\" has no structure \"" + settings.wall.prostateName +
-                               "\" for the plan's target (see --prostate)");
-    }
-    std::ostringstream detail;
-    detail << "PTV = " << settings.wall.prostateName << " + " << planSettings.marginMm << " mm, Rx "
-           << planSettings.prescriptionGy << " Gy, penumbra " << planSettings.penumbraMm << " mm";
-    timer.Begin("conformal plan");
-    dose = itk::MakeConformalDosePlan(labels, prostate->second, planSettings);
-    timer.End(detail.str());
+    throw std::runtime_error("the scene \"" + scenePath + "\" has no structure \"" + settings.wall.prostateName +
+                             "\" for the plan's target (see --prostate)");
   }
-  if (field)
-  {
-    timer.Begin("warp dose (linear)");
-    dose = itk::WarpDose(dose, field);
-    timer.End();
-  }
-  timer.Begin("DVH and metrics");
-  const itk::DoseEvaluation evaluation = itk::EvaluateDose(labels, dose, structures, settings);
-  timer.End(evaluation.doseResampled ? "dose resampled linearly onto the label grid" : "");
+  std::ostringstream detail;
+  detail << "PTV = " << settings.wall.prostateName << " + " << planSettings.marginMm << " mm, Rx "
+         << planSettings.prescriptionGy << " Gy, penumbra " << planSettings.penumbraMm << " mm";
+  timer.Begin("conformal plan");
+  DoseImageType::Pointer dose = itk::MakeConformalDosePlan(labels, prostate->second, planSettings);
+  timer.End(detail.str());
+  return dose;
+}
 
+/** Writes the tables, the dose on the label grid and (with \a plot) dvh.png into \a out. */
+void
+WriteDoseOutputs(const std::string &         out,
+                 const itk::DoseEvaluation & evaluation,
+                 const DoseImageType *       dose,
+                 const LabelImageType *      labels,
+                 bool                        plot,
+                 StageTimer &                timer)
+{
   timer.Begin("write outputs");
   MakeOutputDirectory(out);
   itk::WriteDoseEvaluation(out, evaluation);
@@ -267,6 +268,55 @@ DoseCommand(const Arguments & args)
     PlotDoseVolumeHistograms(out);
     timer.End();
   }
+}
+
+} // namespace
+
+int
+DoseCommand(const Arguments & args)
+{
+  const std::string labelsPath = args.Require("--labels");
+  const std::string scenePath = args.Require("--scene");
+  const std::string out = args.Require("--out");
+  const std::string dosePath = args.Get("--dose");
+  const std::string fieldPath = args.Get("--field");
+  const bool        plan = args.Has("--plan-margin");
+  if (plan == !dosePath.empty())
+  {
+    throw UsageError("give either --dose FILE or --plan-margin MM (a synthetic conformal plan)");
+  }
+  const itk::ConformalPlanSettings  planSettings = ParsePlanSettings(args, plan);
+  const itk::DoseEvaluationSettings settings = ParseDoseEvaluationSettings(args);
+  const bool                        plot = args.Choice("--plot", { "on", "off" }) == "on";
+  args.CheckAllUsed();
+
+  // Every input is read and checked before anything is written: a bad input leaves no output directory.
+  StageTimer timer;
+  std::cout << "biomechreg dose -> " << out << std::endl;
+  timer.Begin("read inputs");
+  const bmr::Scene scene = bmr::ReadScene(scenePath);
+  auto             labels = ReadImage<LabelImageType>(labelsPath, "label image");
+  const auto       structures = itk::DoseStructuresFromScene(scene);
+  CheckEudStructures(settings, structures, scenePath);
+  DoseImageType::Pointer dose = plan ? nullptr : ReadDose(dosePath);
+  FieldType::Pointer     field = fieldPath.empty() ? nullptr : ReadImage<FieldType>(fieldPath, "displacement field");
+  timer.End();
+
+  if (plan)
+  {
+    dose = MakePlanDose(labels, structures, settings, planSettings, scenePath, timer);
+  }
+  if (field)
+  {
+    timer.Begin("warp dose (linear)");
+    dose = itk::WarpDose(dose, field);
+    timer.End();
+  }
+  timer.Begin("DVH and metrics");
+  const itk::DoseEvaluation evaluation = itk::EvaluateDose(labels, dose, structures, settings);
+  timer.End(evaluation.doseResampled ? "dose resampled linearly onto the label grid" : "");
+
+  WriteDoseOutputs(out, evaluation, dose, labels, plot, timer);
   std::cout << "\n";
   PrintDoseTable(evaluation);
   PrintTimings(timer.stages);

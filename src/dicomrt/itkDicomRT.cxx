@@ -15,9 +15,9 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-// DICOM-RT input: RTSTRUCT -> label map on a CT grid, RTDOSE -> dose image [Gy]. GDCM is used only in this
-// unit; attributes are read from the raw element values (strings parsed here) rather than through
-// gdcm::Attribute, whose conversions assume well-formed values, so that a corrupt file gives an error.
+// DICOM-RT input, structures: RTSTRUCT -> label map or area fractions on a CT grid; the Modality of a file.
+// Attributes are read from the raw element values (strings parsed here) rather than through gdcm::Attribute, whose
+// conversions assume well-formed values, so that a corrupt file gives an error.
 #include "itkDicomRT.h"
 
 #include "bmrError.h"
@@ -26,48 +26,34 @@
 #include "itkPlanarContours.h"
 
 #include "gdcmDataSet.h"
-#include "gdcmImage.h"
-#include "gdcmImageReader.h"
 #include "gdcmItem.h"
 #include "gdcmReader.h"
 #include "gdcmSequenceOfItems.h"
 #include "gdcmTag.h"
-#include "gdcmTrace.h"
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
-#include <iterator>
-#include <limits>
-#include <numeric>
-#include <set>
 #include <sstream>
 
 namespace itk {
 namespace {
+using dicomrt::CheckDicomFile;
+using dicomrt::CheckModality;
+using dicomrt::FailFile;
 using dicomrt::HasPart10Preamble;
 using dicomrt::NameKey;
 using dicomrt::ParseNumbers;
+using dicomrt::Quote;
+using dicomrt::ReadParsedFile;
 using dicomrt::StringValue;
-using dicomrt::Trim;
 using dicomrt::Upper;
 
 // ------------------------------------------------------------------------------------------ tags
 
-const gdcm::Tag ModalityTag(0x0008, 0x0060);
 const gdcm::Tag SeriesInstanceUIDTag(0x0020, 0x000e);
-const gdcm::Tag ImagePositionPatientTag(0x0020, 0x0032);
-const gdcm::Tag ImageOrientationPatientTag(0x0020, 0x0037);
-const gdcm::Tag PixelSpacingTag(0x0028, 0x0030);
-const gdcm::Tag DoseUnitsTag(0x3004, 0x0002);
-const gdcm::Tag GridFrameOffsetVectorTag(0x3004, 0x000c);
-const gdcm::Tag DoseGridScalingTag(0x3004, 0x000e);
 const gdcm::Tag ReferencedFrameOfReferenceSequenceTag(0x3006, 0x0010);
 const gdcm::Tag RTReferencedStudySequenceTag(0x3006, 0x0012);
 const gdcm::Tag RTReferencedSeriesSequenceTag(0x3006, 0x0014);
@@ -84,12 +70,6 @@ const gdcm::Tag ReferencedROINumberTag(0x3006, 0x0084);
 // ------------------------------------------------------------------------------------------ text
 
 std::string
-Quote(const std::string & text)
-{
-  return "\"" + text + "\"";
-}
-
-std::string
 JoinQuoted(const std::vector<std::string> & names)
 {
   std::string joined;
@@ -98,13 +78,6 @@ JoinQuoted(const std::vector<std::string> & names)
     joined += (joined.empty() ? "" : ", ") + Quote(n);
   }
   return joined.empty() ? "none" : joined;
-}
-
-/** Throws naming the file: `<kind> "<path>": <message>`. */
-[[noreturn]] void
-FailFile(const char * where, const std::string & kind, const std::string & path, const std::string & message)
-{
-  bmr::Fail(where, kind + " " + Quote(path) + ": " + message);
 }
 
 // ------------------------------------------------------------------------------------------ DICOM values
@@ -132,98 +105,17 @@ Sequence(const gdcm::DataSet & ds, const gdcm::Tag & tag)
   return nullptr;
 }
 
-/** Turns GDCM's diagnostics (printed on std::cerr by Debian's build) off while it lives. */
-class QuietGDCM
-{
-public:
-  QuietGDCM()
-    : m_Warning(gdcm::Trace::GetWarningFlag())
-    , m_Error(gdcm::Trace::GetErrorFlag())
-  {
-    gdcm::Trace::WarningOff();
-    gdcm::Trace::ErrorOff();
-  }
-  ~QuietGDCM()
-  {
-    gdcm::Trace::SetWarning(m_Warning);
-    gdcm::Trace::SetError(m_Error);
-  }
-  QuietGDCM(const QuietGDCM &) = delete;
-  QuietGDCM &
-  operator=(const QuietGDCM &) = delete;
-
-private:
-  bool m_Warning;
-  bool m_Error;
-};
-
-/** Refuses, naming the file, what GDCM must not see: not a file, not DICOM Part 10, or an incomplete structure. */
-void
-CheckDicomFile(const char * where, const std::string & kind, const std::string & path)
-{
-  std::ifstream file(path, std::ios::binary);
-  if (!file || std::filesystem::is_directory(path))
-  {
-    FailFile(where, kind, path, "cannot be opened");
-  }
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  if (bytes.size() < 132 || std::memcmp(bytes.data() + 128, "DICM", 4) != 0)
-  {
-    FailFile(where, kind, path, "is not a DICOM file");
-  }
-  const std::string problem = dicomrt::DicomStructureProblem(std::move(bytes));
-  if (!problem.empty())
-  {
-    FailFile(where, kind, path, "is corrupt: " + problem);
-  }
-}
-
-/** Parses \a path with \a reader (a gdcm::Reader or gdcm::ImageReader) after CheckDicomFile(); throws naming the
- * file when GDCM cannot. */
-void
-ReadParsedFile(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path)
-{
-  QuietGDCM quiet;
-  bool      ok = false;
-  reader.SetFileName(path.c_str());
-  try
-  {
-    ok = reader.Read();
-  }
-  catch (const std::exception &)
-  {
-    ok = false;
-  }
-  if (!ok)
-  {
-    FailFile(where, kind, path, "cannot be read as DICOM (corrupt)");
-  }
-}
-
-void
-CheckModality(const gdcm::DataSet & ds, const std::string & expected, const char * where, const std::string & path)
-{
-  const std::string modality = Upper(StringValue(ds, ModalityTag));
-  if (modality != expected)
-  {
-    FailFile(where,
-             expected,
-             path,
-             "is not an " + expected + " (Modality " + (modality.empty() ? "missing" : Quote(modality)) + ")");
-  }
-}
-
 // ------------------------------------------------------------------------------------------ RTSTRUCT
 
 constexpr const char * RTStructWhere = "ReadRTStructAsLabelImage";
 
 struct ROI
 {
-  std::string          name;
-  long                 number{ 0 };
+  std::string                name;
+  long                       number{ 0 };
   std::vector<PlanarContour> contours;
-  bool                 mapped{ false };
-  std::int32_t         label{ 0 };
+  bool                       mapped{ false };
+  std::int32_t               label{ 0 };
 };
 
 /** Requires a Referenced Frame of Reference Sequence naming at least one referenced series: the structures
@@ -442,7 +334,10 @@ struct Run
 /** Even-odd fill of one slice: along each row j (y = j), voxel centre i is inside when an odd number of edges
  * cross the row left of it (detail::RowCrossings()). */
 void
-FillSlice(const std::vector<detail::ContourEdge> & edges, long slice, const ImageRegion<3> & region, std::vector<Run> & runs)
+FillSlice(const std::vector<detail::ContourEdge> & edges,
+          long                                     slice,
+          const ImageRegion<3> &                   region,
+          std::vector<Run> &                       runs)
 {
   const long          nx = static_cast<long>(region.GetSize(0));
   const long          ny = static_cast<long>(region.GetSize(1));
@@ -490,137 +385,6 @@ MakeLabelImage(const ImageBase<3> * grid, std::int32_t background)
   auto labels = MakeImageOnGrid<DicomRTLabelImageType>(GridGeometryOf(grid), {});
   labels->FillBuffer(background);
   return labels;
-}
-
-// ------------------------------------------------------------------------------------------ RTDOSE
-
-constexpr const char * RTDoseWhere = "ReadRTDose";
-
-std::vector<double>
-RequireNumbers(const gdcm::DataSet & ds, const gdcm::Tag & tag, const std::string & name, const std::string & path)
-{
-  std::vector<double> values;
-  if (!ds.FindDataElement(tag) || !ParseNumbers(StringValue(ds, tag), values) || values.empty())
-  {
-    std::ostringstream os;
-    os << "has no valid " << name << " " << tag;
-    FailFile(RTDoseWhere, "RTDOSE", path, os.str());
-  }
-  return values;
-}
-
-/** Origin [mm], spacing [mm] and direction of the dose grid from its position, orientation, pixel spacing and
- * frame offsets. */
-void
-SetDoseGeometry(const gdcm::DataSet & ds, unsigned int frames, DicomRTDoseImageType * image, const std::string & path)
-{
-  const auto position = RequireNumbers(ds, ImagePositionPatientTag, "Image Position (Patient)", path);
-  const auto orientation = RequireNumbers(ds, ImageOrientationPatientTag, "Image Orientation (Patient)", path);
-  const auto pixelSpacing = RequireNumbers(ds, PixelSpacingTag, "Pixel Spacing", path);
-  if (position.size() != 3 || orientation.size() != 6 || pixelSpacing.size() != 2 || pixelSpacing[0] <= 0 ||
-      pixelSpacing[1] <= 0)
-  {
-    FailFile(RTDoseWhere,
-             "RTDOSE",
-             path,
-             "its Image Position (3 values), Image Orientation (6) or Pixel Spacing (2 positive) is malformed");
-  }
-  const std::array<double, 3> row{ { orientation[0], orientation[1], orientation[2] } };
-  const std::array<double, 3> column{ { orientation[3], orientation[4], orientation[5] } };
-  const std::array<double, 3> normal{ { row[1] * column[2] - row[2] * column[1],
-                                        row[2] * column[0] - row[0] * column[2],
-                                        row[0] * column[1] - row[1] * column[0] } };
-  const double                rowLength = std::sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2]);
-  const double columnLength = std::sqrt(column[0] * column[0] + column[1] * column[1] + column[2] * column[2]);
-  const double dot = row[0] * column[0] + row[1] * column[1] + row[2] * column[2];
-  if (std::abs(rowLength - 1) > 1e-3 || std::abs(columnLength - 1) > 1e-3 || std::abs(dot) > 1e-3)
-  {
-    FailFile(RTDoseWhere, "RTDOSE", path, "its Image Orientation (Patient) is not two orthogonal unit vectors");
-  }
-
-  // Frame positions along the normal, relative to the Image Position.
-  std::vector<double> offsets(1, 0.0);
-  if (frames > 1 || ds.FindDataElement(GridFrameOffsetVectorTag))
-  {
-    offsets = RequireNumbers(ds, GridFrameOffsetVectorTag, "Grid Frame Offset Vector", path);
-  }
-  if (offsets.size() != frames)
-  {
-    FailFile(RTDoseWhere,
-             "RTDOSE",
-             path,
-             "its Grid Frame Offset Vector has " + std::to_string(offsets.size()) + " values for " +
-               std::to_string(frames) + " frames");
-  }
-  if (offsets[0] != 0.0)
-  {
-    // DICOM PS3.3 C.8.8.3.2: a first value other than 0 makes the vector the frames' z coordinates, which is
-    // allowed only for the axial orientation 1\0\0\0\1\0.
-    const bool axial = std::abs(row[0] - 1) < 1e-6 && std::abs(column[1] - 1) < 1e-6;
-    if (!axial)
-    {
-      FailFile(RTDoseWhere,
-               "RTDOSE",
-               path,
-               "its Grid Frame Offset Vector starts at a non-zero value (z coordinates) on a non-axial grid");
-    }
-    for (auto & o : offsets)
-    {
-      o -= position[2];
-    }
-  }
-  double step = 1.0; // one frame: a nominal slice spacing [mm]
-  if (frames > 1)
-  {
-    step = (offsets.back() - offsets.front()) / static_cast<double>(frames - 1);
-    double smallest = std::numeric_limits<double>::infinity(), largest = -smallest;
-    for (unsigned int f = 1; f < frames; ++f)
-    {
-      smallest = std::min(smallest, offsets[f] - offsets[f - 1]);
-      largest = std::max(largest, offsets[f] - offsets[f - 1]);
-    }
-    const double allowed = std::max(1e-3 * std::abs(step), 1e-3); // mm: DS text rounding
-    if (step == 0.0 || largest - step > allowed || step - smallest > allowed)
-    {
-      std::ostringstream os;
-      os << "its frames are not evenly spaced (Grid Frame Offset Vector steps from " << smallest << " to " << largest
-         << " mm)";
-      FailFile(RTDoseWhere, "RTDOSE", path, os.str());
-    }
-  }
-  DicomRTDoseImageType::PointType     origin;
-  DicomRTDoseImageType::SpacingType   spacing;
-  DicomRTDoseImageType::DirectionType direction;
-  const double                        sign = step < 0 ? -1.0 : 1.0;
-  for (unsigned int a = 0; a < 3; ++a)
-  {
-    origin[a] = position[a] + offsets[0] * normal[a];
-    direction(a, 0) = row[a];
-    direction(a, 1) = column[a];
-    direction(a, 2) = sign * normal[a];
-  }
-  spacing[0] = pixelSpacing[1]; // DICOM: spacing between rows, then between columns
-  spacing[1] = pixelSpacing[0];
-  spacing[2] = std::abs(step);
-  image->SetOrigin(origin);
-  image->SetSpacing(spacing);
-  image->SetDirection(direction);
-}
-
-/** Stored value number \a i of a buffer of 16- or 32-bit, signed or unsigned, little-endian integers (GDCM
- * delivers the decoded buffer in the machine's byte order, little endian on every platform we build for). */
-double
-StoredValue(const std::vector<char> & buffer, std::size_t i, unsigned int bits, bool isSigned)
-{
-  if (bits == 16)
-  {
-    std::uint16_t v;
-    std::memcpy(&v, buffer.data() + 2 * i, 2);
-    return isSigned ? static_cast<double>(static_cast<std::int16_t>(v)) : static_cast<double>(v);
-  }
-  std::uint32_t v;
-  std::memcpy(&v, buffer.data() + 4 * i, 4);
-  return isSigned ? static_cast<double>(static_cast<std::int32_t>(v)) : static_cast<double>(v);
 }
 
 } // namespace
@@ -752,109 +516,12 @@ ReadRTStructAreaFractions(const std::string &              rtstructPath,
   {
     if (roi.mapped)
     {
-      const auto name = std::find_if(roiNames.begin(), roiNames.end(), [&roi](const std::string & n) {
-        return NameKey(n) == NameKey(roi.name);
-      });
+      const auto name = std::find_if(
+        roiNames.begin(), roiNames.end(), [&roi](const std::string & n) { return NameKey(n) == NameKey(roi.name); });
       fractions[*name] = PlanarContourAreaFractions(roi.contours, referenceGrid, ContourOwner(roi, rtstructPath));
     }
   }
   return fractions;
-}
-
-DicomRTDoseImageType::Pointer
-ReadRTDose(const std::string & path)
-{
-  CheckDicomFile(RTDoseWhere, "RTDOSE", path);
-  const std::string modality = ReadDicomModality(path);
-  if (modality != "RTDOSE")
-  {
-    FailFile(RTDoseWhere,
-             "RTDOSE",
-             path,
-             "is not an RTDOSE (Modality " + (modality.empty() ? std::string("missing") : Quote(modality)) + ")");
-  }
-  gdcm::ImageReader reader;
-  ReadParsedFile(reader, RTDoseWhere, "RTDOSE", path);
-  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
-  CheckModality(ds, "RTDOSE", RTDoseWhere, path);
-  const std::string units = Upper(StringValue(ds, DoseUnitsTag));
-  if (units != "GY")
-  {
-    FailFile(RTDoseWhere,
-             "RTDOSE",
-             path,
-             "its Dose Units (3004,0002) are " + (units.empty() ? std::string("missing") : Quote(units)) +
-               ", not GY (a relative dose cannot be used as Gy)");
-  }
-  const auto scaling = RequireNumbers(ds, DoseGridScalingTag, "Dose Grid Scaling", path);
-  if (scaling.size() != 1 || !(scaling[0] > 0))
-  {
-    FailFile(RTDoseWhere, "RTDOSE", path, "its Dose Grid Scaling (3004,000E) is not one positive number");
-  }
-
-  const gdcm::Image &       gdcmImage = reader.GetImage();
-  const gdcm::PixelFormat & format = gdcmImage.GetPixelFormat();
-  const unsigned int        bits = format.GetBitsAllocated();
-  if (format.GetSamplesPerPixel() != 1 || (bits != 16 && bits != 32))
-  {
-    FailFile(RTDoseWhere,
-             "RTDOSE",
-             path,
-             "its pixels are " + std::to_string(format.GetSamplesPerPixel()) + " sample(s) of " + std::to_string(bits) +
-               " bits; one sample of 16 or 32 bits is required");
-  }
-  const unsigned int columns = gdcmImage.GetDimension(0);
-  const unsigned int rows = gdcmImage.GetDimension(1);
-  const unsigned int frames = gdcmImage.GetNumberOfDimensions() > 2 ? gdcmImage.GetDimension(2) : 1;
-  const double       declared = static_cast<double>(columns) * rows * frames;
-  if (columns == 0 || rows == 0 || frames == 0 || declared > BiomechanicalMaximumNumberOfVoxels)
-  {
-    FailFile(RTDoseWhere, "RTDOSE", path, "declares an empty or absurd grid (Rows x Columns x Number of Frames)");
-  }
-  const std::size_t voxels = static_cast<std::size_t>(columns) * rows * frames;
-  std::vector<char> buffer(std::max<std::size_t>(gdcmImage.GetBufferLength(), 1));
-  bool              decoded = false;
-  try
-  {
-    decoded = gdcmImage.GetBuffer(buffer.data());
-  }
-  catch (const std::exception &)
-  {
-    decoded = false;
-  }
-  if (!decoded || gdcmImage.GetBufferLength() < voxels * (bits / 8))
-  {
-    FailFile(RTDoseWhere,
-             "RTDOSE",
-             path,
-             "its pixel data hold fewer values than Rows x Columns x Number of Frames (truncated or corrupt)");
-  }
-
-  auto                             dose = DicomRTDoseImageType::New();
-  DicomRTDoseImageType::RegionType region;
-  region.SetSize(0, columns);
-  region.SetSize(1, rows);
-  region.SetSize(2, frames);
-  dose->SetRegions(region);
-  SetDoseGeometry(ds, frames, dose.GetPointer(), path);
-  dose->Allocate();
-  float *    values = dose->GetBufferPointer();
-  const bool isSigned = format.GetPixelRepresentation() == 1;
-  for (std::size_t i = 0; i < voxels; ++i)
-  {
-    values[i] = static_cast<float>(StoredValue(buffer, i, bits, isSigned) * scaling[0]);
-  }
-  return dose;
-}
-
-DicomRTDoseImageType::Pointer
-ReadDoseImage(const std::string & path)
-{
-  if (ReadDicomModality(path) == "RTDOSE")
-  {
-    return ReadRTDose(path);
-  }
-  return ReadBiomechanicalImage<DicomRTDoseImageType>(path, "dose image");
 }
 
 } // namespace itk

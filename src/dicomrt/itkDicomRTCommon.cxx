@@ -27,6 +27,7 @@
 
 #include "gdcmItem.h"
 #include "gdcmReader.h"
+#include "gdcmTrace.h"
 #include "gdcmWriter.h"
 
 #include <algorithm>
@@ -34,8 +35,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 
 namespace itk {
@@ -173,6 +176,32 @@ Fnv1a(const std::string & text, std::uint64_t hash)
   hash ^= hash >> 33;
   return hash;
 }
+
+/** Turns GDCM's diagnostics (printed on std::cerr by Debian's build) off while it lives. */
+class QuietGDCM
+{
+public:
+  QuietGDCM()
+    : m_Warning(gdcm::Trace::GetWarningFlag())
+    , m_Error(gdcm::Trace::GetErrorFlag())
+  {
+    gdcm::Trace::WarningOff();
+    gdcm::Trace::ErrorOff();
+  }
+  ~QuietGDCM()
+  {
+    gdcm::Trace::SetWarning(m_Warning);
+    gdcm::Trace::SetError(m_Error);
+  }
+  QuietGDCM(const QuietGDCM &) = delete;
+  QuietGDCM &
+  operator=(const QuietGDCM &) = delete;
+
+private:
+  bool m_Warning;
+  bool m_Error;
+};
+
 } // namespace
 
 std::string
@@ -404,6 +433,77 @@ WriteDataSetAtomically(const gdcm::DataSet & ds, const std::string & path, const
     bmr::Fail(where, "cannot write \"" + path + "\"");
   }
   bmr::CommitTemporaryFile(temporary, path);
+}
+
+// ------------------------------------------------------------------------------------------ reading
+
+std::string
+Quote(const std::string & text)
+{
+  return "\"" + text + "\"";
+}
+
+/** Throws naming the file: `<kind> "<path>": <message>`. */
+[[noreturn]] void
+FailFile(const char * where, const std::string & kind, const std::string & path, const std::string & message)
+{
+  bmr::Fail(where, kind + " " + Quote(path) + ": " + message);
+}
+
+/** Refuses, naming the file, what GDCM must not see: not a file, not DICOM Part 10, or an incomplete structure. */
+void
+CheckDicomFile(const char * where, const std::string & kind, const std::string & path)
+{
+  std::ifstream file(path, std::ios::binary);
+  if (!file || std::filesystem::is_directory(path))
+  {
+    FailFile(where, kind, path, "cannot be opened");
+  }
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (bytes.size() < 132 || std::memcmp(bytes.data() + 128, "DICM", 4) != 0)
+  {
+    FailFile(where, kind, path, "is not a DICOM file");
+  }
+  const std::string problem = DicomStructureProblem(std::move(bytes));
+  if (!problem.empty())
+  {
+    FailFile(where, kind, path, "is corrupt: " + problem);
+  }
+}
+
+/** Parses \a path with \a reader (a gdcm::Reader or gdcm::ImageReader) after CheckDicomFile(); throws naming the
+ * file when GDCM cannot. */
+void
+ReadParsedFile(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path)
+{
+  QuietGDCM quiet;
+  bool      ok = false;
+  reader.SetFileName(path.c_str());
+  try
+  {
+    ok = reader.Read();
+  }
+  catch (const std::exception &)
+  {
+    ok = false;
+  }
+  if (!ok)
+  {
+    FailFile(where, kind, path, "cannot be read as DICOM (corrupt)");
+  }
+}
+
+void
+CheckModality(const gdcm::DataSet & ds, const std::string & expected, const char * where, const std::string & path)
+{
+  const std::string modality = Upper(StringValue(ds, gdcm::Tag(0x0008, 0x0060)));
+  if (modality != expected)
+  {
+    FailFile(where,
+             expected,
+             path,
+             "is not an " + expected + " (Modality " + (modality.empty() ? "missing" : Quote(modality)) + ")");
+  }
 }
 
 } // namespace dicomrt

@@ -29,6 +29,10 @@
 #include <string>
 #include <vector>
 
+namespace gdcm {
+class Reader;
+}
+
 namespace itk {
 namespace dicomrt {
 
@@ -123,6 +127,29 @@ PutCommonModules(gdcm::DataSet &          ds,
  * \a path and renames it when complete. */
 void
 WriteDataSetAtomically(const gdcm::DataSet & ds, const std::string & path, const char * where);
+
+// The readers' checks of the files they read (RTSTRUCT, RTDOSE).
+
+/** \a text in double quotes. */
+std::string
+Quote(const std::string & text);
+
+/** Throws naming the file: `<kind> "<path>": <message>`. */
+[[noreturn]] void
+FailFile(const char * where, const std::string & kind, const std::string & path, const std::string & message);
+
+/** Refuses, naming the file, what GDCM must not see: not a file, not DICOM Part 10, or an incomplete structure. */
+void
+CheckDicomFile(const char * where, const std::string & kind, const std::string & path);
+
+/** Parses \a path with \a reader (a gdcm::Reader or gdcm::ImageReader) after CheckDicomFile(); throws naming the
+ * file when GDCM cannot. */
+void
+ReadParsedFile(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path);
+
+/** Refuses, naming the file, a data set whose Modality (0008,0060) is not \a expected. */
+void
+CheckModality(const gdcm::DataSet & ds, const std::string & expected, const char * where, const std::string & path);
 
 } // namespace dicomrt
 } // namespace itk

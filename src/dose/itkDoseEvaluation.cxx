@@ -228,20 +228,132 @@ ResampleDoseOntoGrid(const BiomechanicalDoseImageType * dose, const ImageBase<3>
   return resample->GetOutput();
 }
 
+namespace {
+
+constexpr const char * EvaluateDoseWhere = "itk::EvaluateDose";
+
+/** The structures evaluated, in order, with their label values (-1 for a derived one) and doses. */
+struct StructureDoses
+{
+  std::vector<std::string>   names;
+  std::vector<std::int32_t>  values;
+  std::vector<GatheredDoses> gathered;
+};
+
+/** The doses of each of \a structures, from \a doseOnGrid on the grid of \a labels; \a inside: per voxel whether it
+ * lies inside the dose grid (empty: all do). Throws when a structure is absent from \a labels. */
+StructureDoses
+GatherStructureDoses(const DoseLabelImageType *                  labels,
+                     const BiomechanicalDoseImageType *          doseOnGrid,
+                     const std::map<std::string, std::int32_t> & structures,
+                     const std::vector<bool> &                   inside)
+{
+  // Structures by label value (several names may share one label).
+  StructureDoses                           result;
+  std::multimap<std::int32_t, std::size_t> byLabel;
+  for (const auto & kv : structures)
+  {
+    byLabel.emplace(kv.second, result.names.size());
+    result.names.push_back(kv.first);
+    result.values.push_back(kv.second);
+  }
+  result.gathered.resize(result.names.size());
+  ImageRegionConstIterator<DoseLabelImageType>         label(labels, labels->GetLargestPossibleRegion());
+  ImageRegionConstIterator<BiomechanicalDoseImageType> doseIt(doseOnGrid, doseOnGrid->GetLargestPossibleRegion());
+  for (std::size_t voxel = 0; !label.IsAtEnd(); ++label, ++doseIt, ++voxel)
+  {
+    const auto range = byLabel.equal_range(label.Get());
+    for (auto s = range.first; s != range.second; ++s)
+    {
+      AddVoxelDose(result.gathered[s->second], result.names[s->second], doseIt.Get(), inside.empty() || inside[voxel]);
+    }
+  }
+  for (std::size_t s = 0; s < result.names.size(); ++s)
+  {
+    if (result.gathered[s].doses.empty())
+    {
+      bmr::Fail(EvaluateDoseWhere,
+                "structure \"" + result.names[s] + "\" (label " + std::to_string(result.values[s]) +
+                  ") is absent from the label image");
+    }
+  }
+  return result;
+}
+
+/** The doses of the anterior rectal wall between the labels \a rectumLabel and \a prostateLabel. Throws when it is
+ * empty. */
+GatheredDoses
+GatherAnteriorRectalWallDoses(const DoseLabelImageType *         labels,
+                              const BiomechanicalDoseImageType * doseOnGrid,
+                              std::int32_t                       rectumLabel,
+                              std::int32_t                       prostateLabel,
+                              const AnteriorRectalWallSettings & settings,
+                              const std::vector<bool> &          inside)
+{
+  const auto wall =
+    AnteriorRectalWallMask(labels, rectumLabel, prostateLabel, settings.wallThicknessMm, settings.prostateDistanceMm);
+  GatheredDoses                                        wallDoses;
+  ImageRegionConstIterator<DoseMaskImageType>          in(wall, labels->GetLargestPossibleRegion());
+  ImageRegionConstIterator<BiomechanicalDoseImageType> d(doseOnGrid, doseOnGrid->GetLargestPossibleRegion());
+  for (std::size_t voxel = 0; !in.IsAtEnd(); ++in, ++d, ++voxel)
+  {
+    if (in.Get())
+    {
+      AddVoxelDose(wallDoses, settings.name, d.Get(), inside.empty() || inside[voxel]);
+    }
+  }
+  if (wallDoses.doses.empty())
+  {
+    bmr::Fail(EvaluateDoseWhere,
+              "the anterior rectal wall is empty: no voxel of \"" + settings.rectumName + "\" lies within " +
+                Number(settings.prostateDistanceMm) + " mm of \"" + settings.prostateName + "\"");
+  }
+  return wallDoses;
+}
+
+/** The metrics and DVH of each structure of \a doses, of voxels of \a voxelVolume [mm^3]. */
+std::vector<StructureDose>
+EvaluateStructureDoses(const StructureDoses & doses, double voxelVolume, const DoseEvaluationSettings & settings)
+{
+  // One dose axis for every DVH: up to the largest dose of any structure.
+  double maximumDose = 0.0;
+  for (const auto & g : doses.gathered)
+  {
+    maximumDose = std::max(maximumDose, *std::max_element(g.doses.begin(), g.doses.end()));
+  }
+  std::vector<StructureDose> evaluated;
+  for (std::size_t s = 0; s < doses.names.size(); ++s)
+  {
+    const auto    found = settings.eudParameters.find(doses.names[s]);
+    const double  a = found != settings.eudParameters.end() ? found->second : bmr::DefaultEudParameter(doses.names[s]);
+    const auto &  gathered = doses.gathered[s].doses;
+    StructureDose result;
+    result.name = doses.names[s];
+    result.label = doses.values[s];
+    result.metrics = bmr::ComputeDoseMetrics(gathered, voxelVolume, a, settings.volumeDosesGy);
+    result.dvh = bmr::ComputeDoseVolumeHistogram(gathered, voxelVolume, settings.binWidthGy, maximumDose);
+    result.fractionOutsideDoseGrid =
+      static_cast<double>(doses.gathered[s].outside) / static_cast<double>(gathered.size());
+    evaluated.push_back(std::move(result));
+  }
+  return evaluated;
+}
+
+} // namespace
+
 DoseEvaluation
 EvaluateDose(const DoseLabelImageType *                  labels,
              const BiomechanicalDoseImageType *          dose,
              const std::map<std::string, std::int32_t> & structures,
              const DoseEvaluationSettings &              settings)
 {
-  const char * where = "itk::EvaluateDose";
   if (labels == nullptr || dose == nullptr)
   {
-    bmr::Fail(where, "no label image or no dose image");
+    bmr::Fail(EvaluateDoseWhere, "no label image or no dose image");
   }
   if (structures.empty())
   {
-    bmr::Fail(where, "no structures to evaluate");
+    bmr::Fail(EvaluateDoseWhere, "no structures to evaluate");
   }
   DoseEvaluation evaluation;
   evaluation.binWidthGy = settings.binWidthGy;
@@ -249,87 +361,21 @@ EvaluateDose(const DoseLabelImageType *                  labels,
   evaluation.doseResampled = !SameGrid(dose, labels);
   const auto              doseOnGrid = ResampleDoseOntoGrid(dose, labels);
   const std::vector<bool> inside = evaluation.doseResampled ? InsideDoseGrid(labels, dose) : std::vector<bool>();
-
-  // Structures by label value (several names may share one label).
-  std::vector<std::string>                 names;
-  std::vector<std::int32_t>                values;
-  std::multimap<std::int32_t, std::size_t> byLabel;
-  for (const auto & kv : structures)
-  {
-    byLabel.emplace(kv.second, names.size());
-    names.push_back(kv.first);
-    values.push_back(kv.second);
-  }
-  std::vector<GatheredDoses>                           gathered(names.size());
-  const auto                                           region = labels->GetLargestPossibleRegion();
-  ImageRegionConstIterator<DoseLabelImageType>         label(labels, region);
-  ImageRegionConstIterator<BiomechanicalDoseImageType> doseIt(doseOnGrid, doseOnGrid->GetLargestPossibleRegion());
-  for (std::size_t voxel = 0; !label.IsAtEnd(); ++label, ++doseIt, ++voxel)
-  {
-    const auto range = byLabel.equal_range(label.Get());
-    for (auto s = range.first; s != range.second; ++s)
-    {
-      AddVoxelDose(gathered[s->second], names[s->second], doseIt.Get(), inside.empty() || inside[voxel]);
-    }
-  }
-  for (std::size_t s = 0; s < names.size(); ++s)
-  {
-    if (gathered[s].doses.empty())
-    {
-      bmr::Fail(where,
-                "structure \"" + names[s] + "\" (label " + std::to_string(values[s]) +
-                  ") is absent from the label image");
-    }
-  }
+  StructureDoses          doses = GatherStructureDoses(labels, doseOnGrid, structures, inside);
 
   const auto rectum = structures.find(settings.wall.rectumName);
   const auto prostate = structures.find(settings.wall.prostateName);
   if (settings.anteriorRectalWall && rectum != structures.end() && prostate != structures.end())
   {
-    const auto wall = AnteriorRectalWallMask(
-      labels, rectum->second, prostate->second, settings.wall.wallThicknessMm, settings.wall.prostateDistanceMm);
-    GatheredDoses                                        wallDoses;
-    ImageRegionConstIterator<DoseMaskImageType>          in(wall, region);
-    ImageRegionConstIterator<BiomechanicalDoseImageType> d(doseOnGrid, doseOnGrid->GetLargestPossibleRegion());
-    for (std::size_t voxel = 0; !in.IsAtEnd(); ++in, ++d, ++voxel)
-    {
-      if (in.Get())
-      {
-        AddVoxelDose(wallDoses, settings.wall.name, d.Get(), inside.empty() || inside[voxel]);
-      }
-    }
-    if (wallDoses.doses.empty())
-    {
-      bmr::Fail(where,
-                "the anterior rectal wall is empty: no voxel of \"" + settings.wall.rectumName + "\" lies within " +
-                  Number(settings.wall.prostateDistanceMm) + " mm of \"" + settings.wall.prostateName + "\"");
-    }
-    names.push_back(settings.wall.name);
-    values.push_back(-1);
-    gathered.push_back(std::move(wallDoses));
-  }
-
-  // One dose axis for every DVH: up to the largest dose of any structure.
-  double maximumDose = 0.0;
-  for (const auto & g : gathered)
-  {
-    maximumDose = std::max(maximumDose, *std::max_element(g.doses.begin(), g.doses.end()));
+    GatheredDoses wallDoses =
+      GatherAnteriorRectalWallDoses(labels, doseOnGrid, rectum->second, prostate->second, settings.wall, inside);
+    doses.names.push_back(settings.wall.name);
+    doses.values.push_back(-1);
+    doses.gathered.push_back(std::move(wallDoses));
   }
   const auto & spacing = labels->GetSpacing();
   const double voxelVolume = spacing[0] * spacing[1] * spacing[2];
-  for (std::size_t s = 0; s < names.size(); ++s)
-  {
-    const auto    found = settings.eudParameters.find(names[s]);
-    const double  a = found != settings.eudParameters.end() ? found->second : bmr::DefaultEudParameter(names[s]);
-    StructureDose result;
-    result.name = names[s];
-    result.label = values[s];
-    result.metrics = bmr::ComputeDoseMetrics(gathered[s].doses, voxelVolume, a, settings.volumeDosesGy);
-    result.dvh = bmr::ComputeDoseVolumeHistogram(gathered[s].doses, voxelVolume, settings.binWidthGy, maximumDose);
-    result.fractionOutsideDoseGrid =
-      static_cast<double>(gathered[s].outside) / static_cast<double>(gathered[s].doses.size());
-    evaluation.structures.push_back(std::move(result));
-  }
+  evaluation.structures = EvaluateStructureDoses(doses, voxelVolume, settings);
   return evaluation;
 }
 

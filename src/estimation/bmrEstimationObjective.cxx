@@ -487,6 +487,202 @@ TangentResponse(ForwardModel & model, const LoadParameterization & loads, const 
   }
   return A;
 }
+
+/** The residuals SolveLoadsGaussNewton() minimizes, on the dofs they read (from their Jacobian's pattern at the
+ * unloaded state), with the prior's weight. A linear model's state is affine in p: computed once. A nonlinear one
+ * is solved at every p, and its derivative du/dp taken from the tangent at each point where the Jacobian is
+ * needed. */
+class LoadResiduals
+{
+public:
+  LoadResiduals(ForwardModel &                        model,
+                const LoadParameterization &          loads,
+                const std::vector<const DataTerm *> & terms,
+                const CompressionBarrier *            barrier,
+                std::size_t &                         infeasible,
+                std::size_t                           np)
+    : m_Model(model)
+    , m_Loads(loads)
+    , m_Terms(terms)
+    , m_Barrier(barrier)
+    , m_Infeasible(infeasible)
+    , m_NumberOfParameters(np)
+  {
+    std::vector<double> r;
+    ResidualJacobian    pattern;
+    StackResiduals(m_Terms, std::vector<double>(3 * m_Model.GetMesh().GetNumberOfPoints(), 0.0), r, &pattern);
+    m_Dofs = UniqueNodes(pattern.dofs);
+    m_Linear = m_Model.IsLinear();
+    if (m_Linear)
+    {
+      m_State = LinearizeState(m_Model, m_Loads, m_Dofs);
+    }
+    else
+    {
+      m_State.rowOfDof = RowsOfDofs(m_Dofs, 3 * m_Model.GetMesh().GetNumberOfPoints());
+    }
+    // The prior's weight alpha from R(e_0) = alpha / 2 (exact in binary floating point).
+    std::vector<double> unit(np, 0.0);
+    if (np > 0)
+    {
+      unit[0] = 1.0;
+    }
+    m_Alpha = np > 0 ? 2.0 * m_Loads.EvaluatePrior(unit) : 0.0;
+  }
+
+  double
+  GetAlpha() const
+  {
+    return m_Alpha;
+  }
+
+  /** Residuals r(p) and their Jacobian J = dr/du A; the prior alpha/2 |p|^2 is added to the value.
+   * An infeasible p (no nonlinear state follows its loads) has an infinite value, which LM rejects. */
+  double
+  operator()(const Eigen::VectorXd & p, Eigen::VectorXd & rp, Eigen::MatrixXd * J)
+  {
+    std::vector<double> u;
+    if (!StateAt(p, J != nullptr, u))
+    {
+      return std::numeric_limits<double>::infinity();
+    }
+    std::vector<double> rv;
+    ResidualJacobian    jac;
+    StackResiduals(m_Terms, u, rv, J ? &jac : nullptr);
+    rp = Eigen::Map<const Eigen::VectorXd>(rv.data(), static_cast<Eigen::Index>(rv.size()));
+    if (J)
+    {
+      ChainJacobian(jac, rv.size(), *J);
+    }
+    // The barrier (nonlinear models) enters the value that accepts or rejects a step, not the Jacobian (which
+    // would need du/dp at every dof): a step that crushes elements is rejected like any rise of Phi.
+    const double barrier = m_Barrier ? m_Barrier->Evaluate(u, nullptr) : 0.0;
+    return 0.5 * rp.squaredNorm() + 0.5 * m_Alpha * p.squaredNorm() + barrier;
+  }
+
+private:
+  /** The state \a u at \a p (and, with a nonlinear model and \a jacobian, A at it); false when p is infeasible. */
+  bool
+  StateAt(const Eigen::VectorXd & p, bool jacobian, std::vector<double> & u)
+  {
+    if (m_Linear)
+    {
+      const Eigen::VectorXd Ap = m_State.A * p;
+      u = m_State.u0;
+      for (std::size_t i = 0; i < m_Dofs.size(); ++i)
+      {
+        u[m_Dofs[i]] += Ap[static_cast<Eigen::Index>(i)];
+      }
+      return true;
+    }
+    const BoundaryLoad load = m_Loads.Apply(std::vector<double>(p.data(), p.data() + p.size()));
+    if (!m_Model.TrySolveState(load.forces, load.prescribed, u))
+    {
+      ++m_Infeasible;
+      return false;
+    }
+    if (jacobian)
+    {
+      m_State.A = TangentResponse(m_Model, m_Loads, m_Dofs);
+    }
+    return true;
+  }
+
+  /** J = dr/du A from the residuals' Jacobian \a jac (\a rows rows) and the state's A. */
+  void
+  ChainJacobian(const ResidualJacobian & jac, std::size_t rows, Eigen::MatrixXd & J) const
+  {
+    J.setZero(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(m_NumberOfParameters));
+    for (std::size_t k = 0; k < rows; ++k)
+    {
+      for (std::size_t e = jac.rowStart[k]; e < jac.rowStart[k + 1]; ++e)
+      {
+        J.row(static_cast<Eigen::Index>(k)) += jac.values[e] * m_State.A.row(m_State.rowOfDof[jac.dofs[e]]);
+      }
+    }
+  }
+
+  ForwardModel &                        m_Model;
+  const LoadParameterization &          m_Loads;
+  const std::vector<const DataTerm *> & m_Terms;
+  const CompressionBarrier *            m_Barrier;
+  std::size_t &                         m_Infeasible;
+  std::size_t                           m_NumberOfParameters;
+  std::vector<std::int32_t>             m_Dofs;
+  bool                                  m_Linear{ false };
+  AffineState                           m_State;
+  double                                m_Alpha{ 0.0 };
+};
+
+/** The Levenberg-Marquardt iterate: p with its residuals, Jacobian and value, and the damping mu. */
+struct MarquardtIterate
+{
+  Eigen::VectorXd p, rp, rTry;
+  Eigen::MatrixXd J;
+  double          value{ 0.0 };
+  double          mu{ 1e-3 };
+  bool            converged{ false };
+};
+
+/** The iterate at \a start, or at zero loads when no equilibrium follows the start's. */
+MarquardtIterate
+StartIterate(LoadResiduals & residuals, const std::vector<double> & start)
+{
+  MarquardtIterate s;
+  s.p = Eigen::Map<const Eigen::VectorXd>(start.data(), static_cast<Eigen::Index>(start.size()));
+  s.value = residuals(s.p, s.rp, &s.J);
+  if (!std::isfinite(s.value))
+  {
+    // No equilibrium follows the start's loads (a nonlinear model: a start carried over from another modulus or
+    // scene): begin at zero loads, the unloaded state, which always is one. Without it r and J would be empty.
+    s.p.setZero();
+    s.value = residuals(s.p, s.rp, &s.J);
+    if (!std::isfinite(s.value))
+    {
+      Fail("EstimationObjective::SolveLoadsGaussNewton", "no equilibrium at the start's loads nor at zero loads");
+    }
+  }
+  return s;
+}
+
+/** One iteration's damped steps (H + mu diag) delta = -g, mu growing after each failure, until one decreases the
+ * value (at most 30 attempts); false when none did. */
+bool
+TakeMarquardtStep(LoadResiduals &         residuals,
+                  const Eigen::MatrixXd & H,
+                  const Eigen::VectorXd & g,
+                  MarquardtIterate &      s,
+                  LoadSolution &          result)
+{
+  bool accepted = false;
+  for (int attempt = 0; attempt < 30 && !accepted; ++attempt)
+  {
+    Eigen::MatrixXd M = H;
+    // Marquardt scaling plus a floor of 1e-3 of the mean curvature: directions the objective hardly sees
+    // (a wall sliding along itself) get short steps instead of huge rejected ones.
+    M.diagonal().array() += s.mu * (H.diagonal().array() + 1e-3 * H.diagonal().mean());
+    const Eigen::VectorXd pTry = s.p + M.ldlt().solve(-g);
+    const double          valueTry = residuals(pTry, s.rTry, nullptr);
+    if (valueTry < s.value)
+    {
+      const double decrease = s.value - valueTry;
+      s.p = pTry;
+      s.value = residuals(s.p, s.rp, &s.J);
+      s.mu = std::max(s.mu / 3.0, 1e-9);
+      accepted = true;
+      if (decrease <= 1e-10 * s.value)
+      {
+        s.converged = true;
+        result.stop = "no further decrease";
+      }
+    }
+    else
+    {
+      s.mu *= 4.0;
+    }
+  }
+  return accepted;
+}
 } // namespace
 
 LoadSolution
@@ -504,143 +700,31 @@ EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
   {
     Fail("EstimationObjective::SolveLoadsGaussNewton", "needs an affine load parameterization");
   }
-  // The dofs the residuals read, from their Jacobian's pattern at the unloaded state.
-  std::vector<double> r;
-  ResidualJacobian    pattern;
-  StackResiduals(m_Terms, std::vector<double>(3 * m_Model.GetMesh().GetNumberOfPoints(), 0.0), r, &pattern);
-  const std::vector<std::int32_t> dofs = UniqueNodes(pattern.dofs);
-  // A linear model's state is affine in p: computed once. A nonlinear one is solved at every p, and its
-  // derivative du/dp taken from the tangent at each point where the Jacobian is needed.
-  const bool  linear = m_Model.IsLinear();
-  AffineState state;
-  if (linear)
-  {
-    state = LinearizeState(m_Model, m_Loads, dofs);
-  }
-  else
-  {
-    state.rowOfDof = RowsOfDofs(dofs, 3 * m_Model.GetMesh().GetNumberOfPoints());
-  }
-  // The prior's weight alpha from R(e_0) = alpha / 2 (exact in binary floating point).
-  std::vector<double> unit(np, 0.0);
-  if (np > 0)
-  {
-    unit[0] = 1.0;
-  }
-  const double alpha = np > 0 ? 2.0 * m_Loads.EvaluatePrior(unit) : 0.0;
-
-  // Residuals r(p) and their Jacobian J = dr/du A; the prior alpha/2 |p|^2 is added to the value.
-  // An infeasible p (no nonlinear state follows its loads) has an infinite value, which LM rejects.
-  const auto residuals = [&](const Eigen::VectorXd & p, Eigen::VectorXd & rp, Eigen::MatrixXd * J) {
-    std::vector<double> u;
-    if (linear)
-    {
-      const Eigen::VectorXd Ap = state.A * p;
-      u = state.u0;
-      for (std::size_t i = 0; i < dofs.size(); ++i)
-      {
-        u[dofs[i]] += Ap[static_cast<Eigen::Index>(i)];
-      }
-    }
-    else
-    {
-      const BoundaryLoad load = m_Loads.Apply(std::vector<double>(p.data(), p.data() + p.size()));
-      if (!m_Model.TrySolveState(load.forces, load.prescribed, u))
-      {
-        ++m_Infeasible;
-        return std::numeric_limits<double>::infinity();
-      }
-      if (J)
-      {
-        state.A = TangentResponse(m_Model, m_Loads, dofs);
-      }
-    }
-    std::vector<double> rv;
-    ResidualJacobian    jac;
-    StackResiduals(m_Terms, u, rv, J ? &jac : nullptr);
-    rp = Eigen::Map<const Eigen::VectorXd>(rv.data(), static_cast<Eigen::Index>(rv.size()));
-    if (J)
-    {
-      J->setZero(static_cast<Eigen::Index>(rv.size()), static_cast<Eigen::Index>(np));
-      for (std::size_t k = 0; k < rv.size(); ++k)
-      {
-        for (std::size_t e = jac.rowStart[k]; e < jac.rowStart[k + 1]; ++e)
-        {
-          J->row(static_cast<Eigen::Index>(k)) += jac.values[e] * state.A.row(state.rowOfDof[jac.dofs[e]]);
-        }
-      }
-    }
-    // The barrier (nonlinear models) enters the value that accepts or rejects a step, not the Jacobian (which
-    // would need du/dp at every dof): a step that crushes elements is rejected like any rise of Phi.
-    const double barrier = m_Barrier ? m_Barrier->Evaluate(u, nullptr) : 0.0;
-    return 0.5 * rp.squaredNorm() + 0.5 * alpha * p.squaredNorm() + barrier;
-  };
+  LoadResiduals residuals(m_Model, m_Loads, m_Terms, m_Barrier.get(), m_Infeasible, np);
+  const double  alpha = residuals.GetAlpha();
   // Levenberg-Marquardt: (J^T J + mu diag(J^T J)) delta = -J^T r; mu shrinks after a success, grows after a failure.
-  Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(start.data(), static_cast<Eigen::Index>(np));
-  Eigen::VectorXd rp, rTry;
-  Eigen::MatrixXd J;
-  double          value = residuals(p, rp, &J);
-  if (!std::isfinite(value))
-  {
-    // No equilibrium follows the start's loads (a nonlinear model: a start carried over from another modulus or
-    // scene): begin at zero loads, the unloaded state, which always is one. Without it r and J would be empty.
-    p.setZero();
-    value = residuals(p, rp, &J);
-    if (!std::isfinite(value))
-    {
-      Fail("EstimationObjective::SolveLoadsGaussNewton", "no equilibrium at the start's loads nor at zero loads");
-    }
-  }
-  double       mu = 1e-3;
-  LoadSolution result;
+  MarquardtIterate s = StartIterate(residuals, start);
+  LoadSolution     result;
   result.stop = "maximum number of iterations";
   unsigned int it = 0;
-  bool         converged = false;
-  for (; it < maximumIterations && !converged; ++it)
+  for (; it < maximumIterations && !s.converged; ++it)
   {
-    const Eigen::VectorXd g = J.transpose() * rp + alpha * p;
-    if (g.norm() <= tolerance * std::max(1.0, p.norm()))
+    const Eigen::VectorXd g = s.J.transpose() * s.rp + alpha * s.p;
+    if (g.norm() <= tolerance * std::max(1.0, s.p.norm()))
     {
       result.stop = "gradient below tolerance";
       break;
     }
-    Eigen::MatrixXd H = J.transpose() * J;
+    Eigen::MatrixXd H = s.J.transpose() * s.J;
     H.diagonal().array() += alpha;
-    bool accepted = false;
-    for (int attempt = 0; attempt < 30 && !accepted; ++attempt)
-    {
-      Eigen::MatrixXd M = H;
-      // Marquardt scaling plus a floor of 1e-3 of the mean curvature: directions the objective hardly sees
-      // (a wall sliding along itself) get short steps instead of huge rejected ones.
-      M.diagonal().array() += mu * (H.diagonal().array() + 1e-3 * H.diagonal().mean());
-      const Eigen::VectorXd pTry = p + M.ldlt().solve(-g);
-      const double          valueTry = residuals(pTry, rTry, nullptr);
-      if (valueTry < value)
-      {
-        const double decrease = value - valueTry;
-        p = pTry;
-        value = residuals(p, rp, &J);
-        mu = std::max(mu / 3.0, 1e-9);
-        accepted = true;
-        if (decrease <= 1e-10 * value)
-        {
-          converged = true;
-          result.stop = "no further decrease";
-        }
-      }
-      else
-      {
-        mu *= 4.0;
-      }
-    }
-    if (!accepted)
+    if (!TakeMarquardtStep(residuals, H, g, s, result))
     {
       result.stop = "no descent";
       break;
     }
   }
   result.iterations = it;
-  result.parameters.assign(p.data(), p.data() + np);
+  result.parameters.assign(s.p.data(), s.p.data() + np);
   result.value = Evaluate(result.parameters, &result.gradient, &result.logModulusGradient);
   return result;
 }

@@ -260,75 +260,53 @@ PearsonTest(const std::vector<double> & x,
   result.permutationExact = true;
 }
 
-/** Kendall tau-b with its permutation count. Permuting y keeps its groups of ties, so tau-b's denominator is
- * fixed and the permutations compare the integer n_c - n_d exactly. */
-void
-KendallTest(const std::vector<double> & x,
-            const std::vector<double> & y,
-            bool                        enumerate,
-            CorrelationTestResult &     result)
+/** sign(v_i - v_j) at [i n + j]. */
+std::vector<int>
+PairSigns(const std::vector<double> & v)
 {
-  const std::size_t n = x.size();
+  const std::size_t n = v.size();
   auto              sign = [](double a, double b) { return int(a > b) - int(a < b); };
-  // signX[i n + j] and signY[i n + j]: sign(x_i - x_j) and sign(y_i - y_j).
-  std::vector<int> signX(n * n);
-  std::vector<int> signY(n * n);
+  std::vector<int>  signs(n * n);
   for (std::size_t i = 0; i < n; ++i)
   {
     for (std::size_t j = 0; j < n; ++j)
     {
-      signX[i * n + j] = sign(x[i], x[j]);
-      signY[i * n + j] = sign(y[i], y[j]);
+      signs[i * n + j] = sign(v[i], v[j]);
     }
   }
-  long long difference = 0; // n_c - n_d
-  for (std::size_t i = 0; i < n; ++i)
+  return signs;
+}
+
+/** The sums over one sample's groups of ties (size t) that tau-b and the variance of n_c - n_d need. */
+struct KendallTieSums
+{
+  double pairs = 0.0;    // sum t(t-1)/2
+  double variance = 0.0; // sum t(t-1)(2t+5)
+  double first = 0.0;    // sum t(t-1)
+  double second = 0.0;   // sum t(t-1)(t-2)
+};
+
+KendallTieSums
+TieSums(const std::vector<double> & values)
+{
+  KendallTieSums sums;
+  for (double t : TieGroupSizes(values))
   {
-    for (std::size_t j = i + 1; j < n; ++j)
-    {
-      difference += signX[i * n + j] * signY[i * n + j];
-    }
+    sums.pairs += t * (t - 1.0) / 2.0;
+    sums.variance += t * (t - 1.0) * (2.0 * t + 5.0);
+    sums.first += t * (t - 1.0);
+    sums.second += t * (t - 1.0) * (t - 2.0);
   }
-  const double nn = double(n);
-  const double n0 = nn * (nn - 1.0) / 2.0;
-  double       n1 = 0.0;
-  double       n2 = 0.0;
-  double       vt = 0.0;
-  double       vu = 0.0;
-  double       t1 = 0.0; // sum t(t-1)
-  double       u1 = 0.0;
-  double       t2 = 0.0; // sum t(t-1)(t-2)
-  double       u2 = 0.0;
-  for (double t : TieGroupSizes(x))
-  {
-    n1 += t * (t - 1.0) / 2.0;
-    vt += t * (t - 1.0) * (2.0 * t + 5.0);
-    t1 += t * (t - 1.0);
-    t2 += t * (t - 1.0) * (t - 2.0);
-  }
-  for (double u : TieGroupSizes(y))
-  {
-    n2 += u * (u - 1.0) / 2.0;
-    vu += u * (u - 1.0) * (2.0 * u + 5.0);
-    u1 += u * (u - 1.0);
-    u2 += u * (u - 1.0) * (u - 2.0);
-  }
-  const double s = double(difference);
-  result.coefficient = std::clamp(s / std::sqrt((n0 - n1) * (n0 - n2)), -1.0, 1.0);
-  const double v0 = nn * (nn - 1.0) * (2.0 * nn + 5.0);
-  const double variance =
-    (v0 - vt - vu) / 18.0 + t1 * u1 / (2.0 * nn * (nn - 1.0)) + t2 * u2 / (9.0 * nn * (nn - 1.0) * (nn - 2.0));
-  if (!(variance > 0.0))
-  {
-    Fail(CorrelationWhere, "the variance of Kendall's n_c - n_d is not positive (" + std::to_string(variance) + ")");
-  }
-  result.statistic = s / std::sqrt(variance);
-  const boost::math::normal distribution(0.0, 1.0);
-  result.pValueApproximate = 2.0 * boost::math::cdf(boost::math::complement(distribution, std::abs(result.statistic)));
-  if (!enumerate)
-  {
-    return;
-  }
+  return sums;
+}
+
+/** The fraction of the permutations of y whose |n_c - n_d| reaches |\a difference|, the observed one. */
+double
+KendallPermutationPValue(const std::vector<int> & signX,
+                         const std::vector<int> & signY,
+                         std::size_t              n,
+                         long long                difference)
+{
   const long long          observed = difference < 0 ? -difference : difference;
   std::vector<std::size_t> permutation(n);
   std::iota(permutation.begin(), permutation.end(), std::size_t{ 0 });
@@ -349,7 +327,50 @@ KendallTest(const std::vector<double> & x,
     reached += (sum < 0 ? -sum : sum) >= observed ? 1 : 0;
     ++total;
   } while (std::next_permutation(permutation.begin(), permutation.end()));
-  result.pValuePermutation = double(reached) / double(total);
+  return double(reached) / double(total);
+}
+
+/** Kendall tau-b with its permutation count. Permuting y keeps its groups of ties, so tau-b's denominator is
+ * fixed and the permutations compare the integer n_c - n_d exactly. */
+void
+KendallTest(const std::vector<double> & x,
+            const std::vector<double> & y,
+            bool                        enumerate,
+            CorrelationTestResult &     result)
+{
+  const std::size_t n = x.size();
+  // signX[i n + j] and signY[i n + j]: sign(x_i - x_j) and sign(y_i - y_j).
+  const std::vector<int> signX = PairSigns(x);
+  const std::vector<int> signY = PairSigns(y);
+  long long              difference = 0; // n_c - n_d
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    for (std::size_t j = i + 1; j < n; ++j)
+    {
+      difference += signX[i * n + j] * signY[i * n + j];
+    }
+  }
+  const double         nn = double(n);
+  const double         n0 = nn * (nn - 1.0) / 2.0;
+  const KendallTieSums tx = TieSums(x);
+  const KendallTieSums ty = TieSums(y);
+  const double         s = double(difference);
+  result.coefficient = std::clamp(s / std::sqrt((n0 - tx.pairs) * (n0 - ty.pairs)), -1.0, 1.0);
+  const double v0 = nn * (nn - 1.0) * (2.0 * nn + 5.0);
+  const double variance = (v0 - tx.variance - ty.variance) / 18.0 + tx.first * ty.first / (2.0 * nn * (nn - 1.0)) +
+                          tx.second * ty.second / (9.0 * nn * (nn - 1.0) * (nn - 2.0));
+  if (!(variance > 0.0))
+  {
+    Fail(CorrelationWhere, "the variance of Kendall's n_c - n_d is not positive (" + std::to_string(variance) + ")");
+  }
+  result.statistic = s / std::sqrt(variance);
+  const boost::math::normal distribution(0.0, 1.0);
+  result.pValueApproximate = 2.0 * boost::math::cdf(boost::math::complement(distribution, std::abs(result.statistic)));
+  if (!enumerate)
+  {
+    return;
+  }
+  result.pValuePermutation = KendallPermutationPValue(signX, signY, n, difference);
   result.permutationExact = true;
 }
 

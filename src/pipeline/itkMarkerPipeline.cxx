@@ -438,6 +438,28 @@ CheckMarkersInMesh(const bmr::TetrahedralMesh & mesh, const std::vector<std::str
     }
   }
 }
+
+/** The FEM model of the box in \a result's mesh: its forward model and the surface forces on \a organ, scaled and
+ * regularized; their sizes go into \a result. */
+BoxModel
+MakeBoxModel(const bmr::Scene & boxScene, std::int32_t organ, const MarkerSettings & settings, MarkerResult & result)
+{
+  const bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(boxScene, result.state.mesh);
+  auto     model = bmr::MakeForwardModel(boxScene, result.state.mesh, bmr::SceneMaterials(boxScene));
+  BoxModel box{ result.state.mesh, std::move(model), nullptr, settings };
+  box.loads = std::make_unique<bmr::OrganSurfaceForces>(result.state.mesh,
+                                                        bc.dirichletNodes,
+                                                        bc.dirichletValues,
+                                                        bmr::NodesOnLabelSurface(result.state.mesh, organ),
+                                                        settings.controlSpacing);
+  result.forceScale = ForceScale(result.state.mesh, boxScene, organ, box.loads->GetSurfaceNodes().size());
+  box.loads->SetForceScale(result.forceScale);
+  box.loads->SetRegularization(settings.regularization);
+  result.loadParameters = box.loads->GetNumberOfParameters();
+  result.surfaceNodes = box.loads->GetSurfaceNodes().size();
+  result.heldNodes = bc.dirichletNodes.size();
+  return box;
+}
 } // namespace
 
 MarkerResult
@@ -477,21 +499,7 @@ EstimateTreatmentFromMarkers(const BiomechanicalLabelImageType * planningLabels,
   CheckMarkersInMesh(r.state.mesh, r.markerIds, from);
 
   clock.Begin("FEM fit to the markers (surface forces, Levenberg-Marquardt)");
-  const bmr::BoundaryConditions bc = bmr::SceneBoundaryConditions(boxScene, r.state.mesh);
-  BoxModel                      box{
-    r.state.mesh, bmr::MakeForwardModel(boxScene, r.state.mesh, bmr::SceneMaterials(boxScene)), nullptr, settings
-  };
-  box.loads = std::make_unique<bmr::OrganSurfaceForces>(r.state.mesh,
-                                                        bc.dirichletNodes,
-                                                        bc.dirichletValues,
-                                                        bmr::NodesOnLabelSurface(r.state.mesh, organ->value),
-                                                        settings.controlSpacing);
-  r.forceScale = ForceScale(r.state.mesh, boxScene, organ->value, box.loads->GetSurfaceNodes().size());
-  box.loads->SetForceScale(r.forceScale);
-  box.loads->SetRegularization(settings.regularization);
-  r.loadParameters = box.loads->GetNumberOfParameters();
-  r.surfaceNodes = box.loads->GetSurfaceNodes().size();
-  r.heldNodes = bc.dirichletNodes.size();
+  BoxModel            box = MakeBoxModel(boxScene, organ->value, settings, r);
   std::vector<double> u;
   r.methods.push_back(FemMethod(box, from, to, leaveOneOut, u, r.surfaceForces, r.iterations));
   r.state.mesh.displacement = u;

@@ -336,6 +336,41 @@ MakePhantomPair(const PhantomSettings & s, PipelineObserver * observer)
   return MakePhantomPair(s, observer, truthMesh);
 }
 
+namespace {
+/** The fixed scan's own noise on top of the warped (noisy) moving one. */
+void
+AddFixedNoise(BiomechanicalCTImageType * fixedCT, const PhantomSettings & s)
+{
+  std::vector<float> noise(fixedCT->GetBufferedRegion().GetNumberOfPixels(), 0.0f);
+  bmr::AddGaussianNoise(noise, s.noiseHU, 2000 + s.seed);
+  float * p = fixedCT->GetBufferPointer();
+  for (std::size_t i = 0; i < noise.size(); ++i)
+  {
+    p[i] += noise[i];
+  }
+}
+
+/** The fixed organs' volume fractions and outline fractions, where \a s asks for them. */
+void
+AddFixedSubVoxelData(PhantomPair & pair, const PhantomSettings & s, pipeline::StageClock & clock)
+{
+  const auto anatomyAt = [&s](const std::vector<double> & points) { return AnatomyLabelsAt(s, points); };
+  if (s.fractions)
+  {
+    clock.Begin("volume fractions of the fixed organs");
+    pair.fixedFractions = pipeline::FixedVolumeFractions(pair.scene, pair.fixedLabels, pair.truthField, anatomyAt);
+    clock.End();
+  }
+  if (s.contourFractions)
+  {
+    clock.Begin("outline fractions of the fixed organs");
+    pair.fixedContourFractions =
+      pipeline::FixedContourFractions(pair.scene, pair.fixedLabels, pair.truthField, anatomyAt);
+    clock.End();
+  }
+}
+} // namespace
+
 PhantomPair
 MakePhantomPair(const PhantomSettings &    s,
                 PipelineObserver *         observer,
@@ -398,32 +433,12 @@ MakePhantomPair(const PhantomSettings &    s,
   clock.Begin("warp to the fixed volume");
   pair.fixedCT = WarpImage(pair.movingCT.GetPointer(), truth.pullBack.GetPointer(), false, -1000.0f);
   pair.fixedLabels = FixedLabels(s, fixedGrid, truth.pullBack);
-  // The fixed scan has its own noise on top of the warped (noisy) moving one.
-  std::vector<float> noise(pair.fixedCT->GetBufferedRegion().GetNumberOfPixels(), 0.0f);
-  bmr::AddGaussianNoise(noise, s.noiseHU, 2000 + s.seed);
-  float * p = pair.fixedCT->GetBufferPointer();
-  for (std::size_t i = 0; i < noise.size(); ++i)
-  {
-    p[i] += noise[i];
-  }
+  AddFixedNoise(pair.fixedCT, s);
   clock.End();
 
   MoveSeeds(pair, moving.seeds, truth.mesh);
   pair.trackedLandmarks = AddTrackingNoise(pair.fixedLandmarks, s.trackingNoiseMM, s.seed);
-  const auto anatomyAt = [&s](const std::vector<double> & points) { return AnatomyLabelsAt(s, points); };
-  if (s.fractions)
-  {
-    clock.Begin("volume fractions of the fixed organs");
-    pair.fixedFractions = pipeline::FixedVolumeFractions(pair.scene, pair.fixedLabels, pair.truthField, anatomyAt);
-    clock.End();
-  }
-  if (s.contourFractions)
-  {
-    clock.Begin("outline fractions of the fixed organs");
-    pair.fixedContourFractions =
-      pipeline::FixedContourFractions(pair.scene, pair.fixedLabels, pair.truthField, anatomyAt);
-    clock.End();
-  }
+  AddFixedSubVoxelData(pair, s, clock);
   return pair;
 }
 

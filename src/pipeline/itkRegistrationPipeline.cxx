@@ -405,11 +405,13 @@ StateIntervals(RegistrationResult &                r,
   }
 }
 
-/** The estimated state's nodal displacement and force, and with \a elements its per-element moduli, stress and
- * Dirichlet flags (for mesh.vtu). */
+/** The estimated state's nodal displacement and force, the gauge label's modulus, and with \a elements its
+ * per-element moduli, stress and Dirichlet flags (for mesh.vtu). */
 void
 DescribeState(RegistrationResult & r, const bmr::Scene & scene, bool elements)
 {
+  const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
+  r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   const bmr::TetrahedralMesh & mesh = r.state.mesh;
   bmr::ForwardSimulation &     s = r.state.simulation;
   s.displacement = mesh.displacement;
@@ -596,6 +598,59 @@ RunEstimation(const EstimationSetup &                                 setup,
 }
 } // namespace pipeline
 
+namespace {
+/** Refuses missing or disjoint label images, bad uncertainty settings, and premeshed moving anatomy
+ * (RegistrationSettings::meshes) made from other inputs than \a movingLabels, \a scene and \a settings. */
+void
+CheckRegistrationInputs(const BiomechanicalLabelImageType * movingLabels,
+                        const BiomechanicalLabelImageType * fixedLabels,
+                        const bmr::Scene &                  scene,
+                        const RegistrationSettings &        settings)
+{
+  if (movingLabels == nullptr || fixedLabels == nullptr)
+  {
+    bmr::Fail("RegisterSegmentedPair", "the moving and the fixed label images are required");
+  }
+  CheckOverlap(movingLabels, fixedLabels);
+  CheckUncertaintySettings(settings.uncertainty);
+  if (settings.meshes != nullptr &&
+      settings.meshes->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, scene, settings))
+  {
+    bmr::Fail("RegisterSegmentedPair",
+              "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
+              "(MeshMovingAnatomy)");
+  }
+}
+
+/** How \a setup states the modulus from label voxels of up to \a coarsestVoxel mm (whether at all, and with which
+ * thick slices' calibration) and how many threads its fine solves take; returns whether the interval resamples. */
+bool
+PlanStatement(pipeline::EstimationSetup &         setup,
+              double                              coarsestVoxel,
+              const BiomechanicalLabelImageType * movingLabels,
+              const BiomechanicalLabelImageType * fixedLabels)
+{
+  const RegistrationSettings & settings = *setup.settings;
+  const UncertaintyMethodEnum  method = settings.uncertainty.method;
+  setup.statesModulus = StatesModulus(coarsestVoxel, settings.uncertainty);
+  setup.sliceCalibration = SliceCalibrationOf(movingLabels, fixedLabels, settings);
+  const bool resamples =
+    setup.statesModulus && (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
+  // The fine solves take every core but the one the interval's prefetches may run on.
+  const unsigned threads = MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  setup.fineSolveThreads = resamples ? std::max(1U, threads - 1) : threads;
+  return resamples;
+}
+
+/** The fine mesh's stage when it was made alongside the sweep: its \a detail and how long the meshing took. */
+void
+ReportMeshedAlongside(pipeline::StageClock & clock, const std::string & detail, double seconds)
+{
+  clock.Begin("mesh (CGAL Mesh_3)");
+  clock.End(detail + " (meshed alongside the sweep: " + bmr::SecondsText(seconds) + " s)");
+}
+} // namespace
+
 RegistrationResult
 RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       const BiomechanicalLabelImageType * fixedLabels,
@@ -618,12 +673,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
                       PipelineObserver *                  observer)
 {
   const std::vector<std::string> probabilityOrgans = ProbabilityOrgans(fixedProbabilities, inputScene);
-  if (movingLabels == nullptr || fixedLabels == nullptr)
-  {
-    bmr::Fail("RegisterSegmentedPair", "the moving and the fixed label images are required");
-  }
-  CheckOverlap(movingLabels, fixedLabels);
-  CheckUncertaintySettings(settings.uncertainty);
+  CheckRegistrationInputs(movingLabels, fixedLabels, inputScene, settings);
   const bmr::Scene scene = ScaledMeshSizes(inputScene, settings.meshScale);
   scene.Validate();
   RegistrationResult   r;
@@ -632,22 +682,12 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   const double coarsestVoxel = ReadVoxels(r, clock, scene, settings, movingLabels, fixedLabels);
 
   const MovingAnatomyMeshes * premeshed = settings.meshes;
-  if (premeshed != nullptr &&
-      premeshed->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, inputScene, settings))
-  {
-    bmr::Fail("RegisterSegmentedPair",
-              "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
-              "(MeshMovingAnatomy)");
-  }
   // What is meshed (here, or by MeshMovingAnatomy() for premeshed, and by the interval's resamples): the moving
   // labels, interpolated between thick slices when asked. The fields and warps keep the labels.
   const BiomechanicalLabelImageType::ConstPointer anatomy = pipeline::MeshedAnatomy(movingLabels, settings);
   // The fine mesh (CGAL, one core) is made alongside the distance maps, the coarse mesh and the sweep.
-  std::unique_ptr<pipeline::BackgroundMesh> fineMesh;
-  if (premeshed == nullptr)
-  {
-    fineMesh = std::make_unique<pipeline::BackgroundMesh>(anatomy.GetPointer(), scene);
-  }
+  const std::unique_ptr<pipeline::BackgroundMesh> fineMesh =
+    premeshed ? nullptr : std::make_unique<pipeline::BackgroundMesh>(anatomy.GetPointer(), scene);
   // With a sweep to run, the estimation takes the fine mesh when the sweep is done (FEMElasticityOptimizer's mesh
   // source); without, it is taken before.
   const bool meshDuringSweep = fineMesh && fineMesh->Alongside() && pipeline::UsesCoarseMesh(scene, settings);
@@ -661,14 +701,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     nullptr, {}, coarse.points.empty() ? nullptr : &coarse, &scene, &settings, probabilityOrgans, &fixedProbabilities
   };
   setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
-  // The fine solves take every core but the one the interval's prefetches (below) may run on.
-  const UncertaintyMethodEnum method = settings.uncertainty.method;
-  setup.statesModulus = StatesModulus(coarsestVoxel, settings.uncertainty);
-  setup.sliceCalibration = SliceCalibrationOf(movingLabels, fixedLabels, settings);
-  const bool resamples =
-    setup.statesModulus && (method == UncertaintyMethodEnum::Bootstrap || method == UncertaintyMethodEnum::Rescan);
-  const unsigned threads = MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
-  setup.fineSolveThreads = resamples ? std::max(1U, threads - 1) : threads;
+  const bool resamples = PlanStatement(setup, coarsestVoxel, movingLabels, fixedLabels);
   // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
   // the estimation's thread that takes the mesh when it is finished during the sweep.
   std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch;
@@ -698,15 +731,12 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   Estimate(r, setup, maps, clock);
   if (meshDuringSweep)
   {
-    clock.Begin("mesh (CGAL Mesh_3)");
-    clock.End(fineMeshDetail + " (meshed alongside the sweep: " + bmr::SecondsText(fineMesh->MeshingSeconds()) + " s)");
+    ReportMeshedAlongside(clock, fineMeshDetail, fineMesh->MeshingSeconds());
   }
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
   setup.prefetch = prefetch.get();
   setup.rescanMaps = rescanMaps.get();
   StateIntervals(r, setup, anatomy.GetPointer(), fixedLabels, coarsestVoxel, clock);
-  const bmr::SceneLabel * gauge = scene.FindLabel(r.gaugeLabel);
-  r.gaugeModulus = gauge ? gauge->youngsModulus : 0.0;
   DescribeState(r, scene, settings.elementState);
 
   pipeline::ComputeFields(r.state, fixedLabels, movingLabels, settings.pushField, scene, clock);

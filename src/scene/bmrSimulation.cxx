@@ -311,6 +311,99 @@ MeshSceneFunction(const std::function<std::int32_t(double, double, double)> & la
   return FinishSceneMesh(MeshImplicitLabelsOnGrid(simulated, in.roi, in.cropped, in.parameters), scene, in);
 }
 
+namespace {
+/** Prescribes a radial-displacement load's wall motion on the nodes of its surface \a label. */
+void
+PrescribeRadialDisplacement(const SceneLoad &       load,
+                            std::int32_t            label,
+                            const TetrahedralMesh & mesh,
+                            std::vector<char> &     isDirichlet,
+                            std::vector<double> &   value)
+{
+  for (std::int32_t node : NodesOnBoundary(mesh, label))
+  {
+    double d[3], along = 0.0, r = 0.0;
+    for (int c = 0; c < 3; ++c)
+    {
+      d[c] = mesh.points[3 * node + c] - load.center[c];
+      along += d[c] * load.axis[c];
+    }
+    // Behind the center along the axis: radial from the axis (the tube); otherwise from the center (the cap).
+    // With semi-axes: the normal of the ellipsoid through the node.
+    for (int c = 0; c < 3; ++c)
+    {
+      d[c] -= std::min(along, 0.0) * load.axis[c];
+      if (load.semiAxes[c] > 0.0)
+      {
+        d[c] /= load.semiAxes[c] * load.semiAxes[c];
+      }
+      r += d[c] * d[c];
+    }
+    r = std::sqrt(r);
+    if (r <= 0.0)
+    {
+      Fail("SceneBoundaryConditions", "loads on \"" + load.surface + "\": a wall node lies on center_mm");
+    }
+    isDirichlet[node] = 1;
+    for (int c = 0; c < 3; ++c)
+    {
+      value[3 * node + c] = load.magnitude * d[c] / r;
+    }
+  }
+}
+
+/** Adds a pressure load's nodal forces on the boundary faces of its surface \a label into \a forces. */
+void
+AddPressureForces(const SceneLoad &       load,
+                  std::int32_t            label,
+                  const TetrahedralMesh & mesh,
+                  std::vector<double> &   forces)
+{
+  // Boundary faces point out of the tissue, into the lumen; the lumen's pressure pushes back into the tissue.
+  for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
+  {
+    if (mesh.boundaryFaceLabels[f] != label)
+    {
+      continue;
+    }
+    const double * x0 = &mesh.points[3 * mesh.boundaryFaces[3 * f]];
+    const double * x1 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 1]];
+    const double * x2 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 2]];
+    const double   a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
+    const double   b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
+    const double   areaNormal[3] = { 0.5 * (a[1] * b[2] - a[2] * b[1]),
+                                     0.5 * (a[2] * b[0] - a[0] * b[2]),
+                                     0.5 * (a[0] * b[1] - a[1] * b[0]) };
+    for (int k = 0; k < 3; ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        forces[3 * mesh.boundaryFaces[3 * f + k] + c] -= load.magnitude * areaNormal[c] / 3.0;
+      }
+    }
+  }
+}
+
+/** The boundary labels held fixed: the fixed labels, then the region of interest's boundary (0) when it is fixed. */
+std::vector<std::int32_t>
+FixedWallLabels(const Scene & scene)
+{
+  std::vector<std::int32_t> fixedWalls;
+  for (const auto & l : scene.labels)
+  {
+    if (l.role == LabelRoleEnum::Fixed)
+    {
+      fixedWalls.push_back(l.value);
+    }
+  }
+  if (scene.roiBoundaryFixed)
+  {
+    fixedWalls.push_back(0);
+  }
+  return fixedWalls;
+}
+} // namespace
+
 BoundaryConditions
 SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
 {
@@ -324,77 +417,14 @@ SceneBoundaryConditions(const Scene & scene, const TetrahedralMesh & mesh)
     const std::int32_t label = scene.FindLabel(load.surface)->value;
     if (load.type == SceneLoad::TypeEnum::RadialDisplacement)
     {
-      for (std::int32_t node : NodesOnBoundary(mesh, label))
-      {
-        double d[3], along = 0.0, r = 0.0;
-        for (int c = 0; c < 3; ++c)
-        {
-          d[c] = mesh.points[3 * node + c] - load.center[c];
-          along += d[c] * load.axis[c];
-        }
-        // Behind the center along the axis: radial from the axis (the tube); otherwise from the center (the cap).
-        // With semi-axes: the normal of the ellipsoid through the node.
-        for (int c = 0; c < 3; ++c)
-        {
-          d[c] -= std::min(along, 0.0) * load.axis[c];
-          if (load.semiAxes[c] > 0.0)
-          {
-            d[c] /= load.semiAxes[c] * load.semiAxes[c];
-          }
-          r += d[c] * d[c];
-        }
-        r = std::sqrt(r);
-        if (r <= 0.0)
-        {
-          Fail("SceneBoundaryConditions", "loads on \"" + load.surface + "\": a wall node lies on center_mm");
-        }
-        isDirichlet[node] = 1;
-        for (int c = 0; c < 3; ++c)
-        {
-          value[3 * node + c] = load.magnitude * d[c] / r;
-        }
-      }
+      PrescribeRadialDisplacement(load, label, mesh, isDirichlet, value);
     }
     else
     {
-      // Boundary faces point out of the tissue, into the lumen; the lumen's pressure pushes back into the tissue.
-      for (std::size_t f = 0; f < mesh.boundaryFaceLabels.size(); ++f)
-      {
-        if (mesh.boundaryFaceLabels[f] != label)
-        {
-          continue;
-        }
-        const double * x0 = &mesh.points[3 * mesh.boundaryFaces[3 * f]];
-        const double * x1 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 1]];
-        const double * x2 = &mesh.points[3 * mesh.boundaryFaces[3 * f + 2]];
-        const double   a[3] = { x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2] };
-        const double   b[3] = { x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2] };
-        const double   areaNormal[3] = { 0.5 * (a[1] * b[2] - a[2] * b[1]),
-                                         0.5 * (a[2] * b[0] - a[0] * b[2]),
-                                         0.5 * (a[0] * b[1] - a[1] * b[0]) };
-        for (int k = 0; k < 3; ++k)
-        {
-          for (int c = 0; c < 3; ++c)
-          {
-            bc.forces[3 * mesh.boundaryFaces[3 * f + k] + c] -= load.magnitude * areaNormal[c] / 3.0;
-          }
-        }
-      }
+      AddPressureForces(load, label, mesh, bc.forces);
     }
   }
-  std::vector<std::int32_t> fixedWalls;
-  for (const auto & l : scene.labels)
-  {
-    if (l.role == LabelRoleEnum::Fixed)
-    {
-      fixedWalls.push_back(l.value);
-    }
-  }
-  if (scene.roiBoundaryFixed)
-  {
-    fixedWalls.push_back(0);
-  }
-  for (std::int32_t label : fixedWalls)
+  for (std::int32_t label : FixedWallLabels(scene))
   {
     for (std::int32_t node : NodesOnBoundary(mesh, label))
     {

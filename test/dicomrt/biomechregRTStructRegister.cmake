@@ -1,10 +1,12 @@
 # biomechreg register takes an RTSTRUCT where it takes a label image: the spheres phantom's fixed labels are
 # converted by plastimatch (one mask per scene label: outer, inner) into an RTSTRUCT on the fixed CT's
-# series, and register is run once with the NRRD labels and once with the RTSTRUCT. The RTSTRUCT path
-# rasterizes onto the fixed CT's grid and maps ROI names to the scene's labels; plastimatch's contours give the
-# masks back voxel for voxel here (itkDicomRTTest measures Dice 1), so the recovered modulus, the final
-# objective and the Dice must be the same numbers. An RTSTRUCT with an ROI the scene does not name ("couch")
-# is refused in one line naming the file and the ROI.
+# series, and register is run with the NRRD labels and with the RTSTRUCT. With --rtstruct-surfaces voxels the
+# RTSTRUCT path rasterizes onto the fixed CT's grid and maps ROI names to the scene's labels; plastimatch's contours
+# give the masks back voxel for voxel here (itkDicomRTTest measures Dice 1), so the recovered modulus, the final
+# objective and the Dice must be the same numbers. By default (outlines) the objective organs' surfaces come from
+# the contours' area fractions instead: the run says so, naming the organs, and its final objective differs from
+# the voxels' (the surfaces are another). An RTSTRUCT with an ROI the scene does not name ("couch") is refused in
+# one line naming the file and the ROI.
 # Run with: cmake -DCLI=<biomechreg> -DDRIVER=<test driver> -DDIR=<spheres phantom dir> -DOUT=<scratch dir>
 #   -P biomechregRTStructRegister.cmake
 include(${CMAKE_CURRENT_LIST_DIR}/plastimatchCommon.cmake)
@@ -15,14 +17,17 @@ file(GLOB rtstruct ${OUT}/dicom/rtss_*.dcm)
 
 set(common register --moving-ct ${DIR}/moving_ct.nrrd --moving-labels ${DIR}/moving_labels.nrrd
   --fixed-ct ${DIR}/fixed_ct.nrrd --scene ${DIR}/scene.json --outputs report)
-foreach(kind nrrd rtstruct)
+foreach(kind nrrd rtstruct outlines)
+  set(labels ${rtstruct})
+  set(surfaces --rtstruct-surfaces voxels)
   if(kind STREQUAL "nrrd")
     set(labels ${DIR}/fixed_labels.nrrd)
-  else()
-    set(labels ${rtstruct})
+  elseif(kind STREQUAL "outlines")
+    set(surfaces) # the default
   endif()
-  execute_process(COMMAND ${CLI} ${common} --fixed-labels ${labels} --out ${OUT}/register_${kind}
+  execute_process(COMMAND ${CLI} ${common} --fixed-labels ${labels} ${surfaces} --out ${OUT}/register_${kind}
     RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  set(out_${kind} "${out}")
   # The phantom's 2 mm voxels are above the limit where a modulus is stated: "inner E not determined", the fit in
   # report.json.
   if(NOT rc EQUAL 0 OR NOT out MATCHES "recovered Young's moduli:  inner E not determined: label voxels of up to 2 mm")
@@ -39,6 +44,11 @@ message(STATUS "RTSTRUCT:    inner E ${E_rtstruct} kPa, Phi* ${phi_rtstruct} mm2
 # every fixed voxel, so they are compared too (as text: the same labels give the same bits).
 if(NOT E_nrrd STREQUAL E_rtstruct OR NOT phi_nrrd STREQUAL phi_rtstruct OR NOT dice_nrrd STREQUAL dice_rtstruct)
   message(FATAL_ERROR "the RTSTRUCT labels give another registration than the NRRD labels")
+endif()
+message(STATUS "outlines:    inner E ${E_outlines} kPa, Phi* ${phi_outlines} mm2, Dice ${dice_outlines}")
+if(NOT out_outlines MATCHES "fixed organs' surfaces from the RTSTRUCT's outlines: [a-z ]*inner" OR
+   out_rtstruct MATCHES "outlines" OR phi_outlines STREQUAL phi_rtstruct)
+  message(FATAL_ERROR "the RTSTRUCT's outlines are not used by default, or change nothing (Phi* ${phi_outlines})")
 endif()
 
 # An ROI that is no label of the scene: a one-line error naming the file and the ROI, exit code 1.
