@@ -23,6 +23,9 @@
 #        U(0.8, 1.2) mm, the same field of view (200 x 160 x 160 mm); OBLIQUE_DEG=A also rotates each pair's grids
 #        about z by an angle drawn from U(-A, A) degrees. Both draws come after the old ones, so SLICE_MM unset keeps
 #        the old draws of a seed. The rows record the spacing, the angle and the estimated state's inverted elements.
+#        FIXED_SURFACES=outlines: each phantom also writes the area fractions of its fixed organs' exact outlines
+#        per slice (`phantom --outline-fractions on`) and register takes them as the fixed organs
+#        (--fixed-probabilities): what an RTSTRUCT drawn on the fixed scan gives `register` by default.
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
 # diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
 set -euo pipefail
@@ -87,8 +90,19 @@ while read -r E bladder rectum s inplane angle; do
     grid=(--size "$(awk "BEGIN{printf \"%d,%d,%d\", 200 / $inplane + 0.5, 160 / $inplane + 0.5, 160 / $SLICE_MM + 0.5}")"
           --spacing "$inplane,$inplane,$SLICE_MM" --rotate-z-deg "$angle")
   fi
-  "$bin" phantom --scene pelvis "${grid[@]}" --true-E-kPa "$E" "${walls[@]}" \
+  outlines=()
+  [ "${FIXED_SURFACES:-voxels}" = outlines ] && outlines=(--outline-fractions on)
+  "$bin" phantom --scene pelvis "${grid[@]}" --true-E-kPa "$E" "${walls[@]}" "${outlines[@]}" \
     --seed "$s" $phantom_args --out "$ph" > "$work/ph.log" 2>&1 || { echo "phantom failed: pair $k"; tail -3 "$work/ph.log"; continue; }
+  fixed_surfaces=()
+  if [ "${#outlines[@]}" -gt 0 ]; then
+    list=""
+    for f in "$ph"/fixed_outline_fraction_*.nrrd; do
+      organ="$(basename "$f" .nrrd)"
+      list="${list:+$list,}${organ#fixed_outline_fraction_}=$f"
+    done
+    fixed_surfaces=(--fixed-probabilities "$list")
+  fi
   if [ -n "${FACET_SCALE:-}" ]; then
     /usr/bin/python3 -c "import json, sys; p = sys.argv[1]; s = json.load(open(p)); m = s['mesh']
 m['facet_size_mm'] *= float(sys.argv[2]); m['facet_distance_mm'] *= float(sys.argv[2]); json.dump(s, open(p, 'w'), indent=1)" \
@@ -98,7 +112,7 @@ m['facet_size_mm'] *= float(sys.argv[2]); m['facet_distance_mm'] *= float(sys.ar
   # shellcheck disable=SC2086
   "$bin" register --moving-ct "$ph/moving_ct.nrrd" --moving-labels "$ph/moving_labels.nrrd" \
     --fixed-ct "$ph/fixed_ct.nrrd" --fixed-labels "$ph/fixed_labels.nrrd" --scene "$ph/scene.json" \
-    --out "$work/reg" ${REGISTER_ARGS:-} > "$work/reg.log" 2>&1 || { echo "register failed: pair $k"; tail -3 "$work/reg.log"; continue; }
+    --out "$work/reg" "${fixed_surfaces[@]}" ${REGISTER_ARGS:-} > "$work/reg.log" 2>&1 || { echo "register failed: pair $k"; tail -3 "$work/reg.log"; continue; }
   t2=$(date +%s.%N)
   /usr/bin/python3 - "$work/reg/report.json" "$ph/truth.json" "$tag" "$k" "$E" "$bladder" "$rectum" "$s" \
     "$(awk "BEGIN{print $t1 - $t0}")" "$(awk "BEGIN{print $t2 - $t1}")" "${grid[3]}" "$angle" >> "$csv" <<'PY'
