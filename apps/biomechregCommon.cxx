@@ -110,6 +110,40 @@ Arguments::Arguments(const std::vector<std::string> & args)
     }
     m_Values[key] = args[++i];
   }
+  ExpandUncertaintyOptions();
+}
+
+void
+Arguments::ExpandUncertaintyOptions()
+{
+  const auto group = m_Values.find("--uncertainty-options");
+  if (group == m_Values.end())
+  {
+    return;
+  }
+  std::stringstream items(group->second);
+  for (std::string item; std::getline(items, item, ',');)
+  {
+    const auto        equals = item.find('=');
+    const std::string name = item.substr(0, equals);
+    if (equals == std::string::npos || equals + 1 == item.size() ||
+        std::find(std::begin(AdvancedUncertaintyOptions), std::end(AdvancedUncertaintyOptions), name) ==
+          std::end(AdvancedUncertaintyOptions))
+    {
+      std::string known;
+      for (const char * option : AdvancedUncertaintyOptions)
+      {
+        known += std::string(known.empty() ? "" : ", ") + option;
+      }
+      throw UsageError("--uncertainty-options takes NAME=VALUE pairs separated by commas, NAME one of " + known +
+                       "; got \"" + item + "\"");
+    }
+    if (!m_Values.emplace("--uncertainty-" + name, item.substr(equals + 1)).second)
+    {
+      throw UsageError("--uncertainty-" + name + " is given twice (also in --uncertainty-options)");
+    }
+  }
+  m_Used.insert(group->first);
 }
 
 std::string

@@ -184,9 +184,18 @@ IgnoreUnmappedROIs(const Arguments & args);
 
 // ------------------------------------------------------------ argument parsing
 
+/** The rarely needed settings of register's interval, given together as --uncertainty-options NAME=VALUE,... (each
+ * also as its own option --uncertainty-NAME VALUE). */
+constexpr const char * AdvancedUncertaintyOptions[] = { "mesh-jitter",     "shift-voxels",     "rotation-deg",
+                                                        "wall-slip",       "smoothing-voxels", "simulation-mesh-scale",
+                                                        "bias-correction", "warm-start",       "step-tolerance",
+                                                        "quantiles",       "voxel-limit-mm" };
+
 class Arguments
 {
 public:
+  /** The options of \a args as --NAME VALUE pairs; --uncertainty-options NAME=VALUE,... is read as the options
+   * --uncertainty-NAME VALUE (NAME one of AdvancedUncertaintyOptions; an option given both ways is an error). */
   explicit Arguments(const std::vector<std::string> & args);
   bool
   Has(const std::string & key) const
@@ -214,6 +223,9 @@ public:
   CheckAllUsed() const;
 
 private:
+  void
+  ExpandUncertaintyOptions();
+
   std::map<std::string, std::string> m_Values;
   mutable std::set<std::string>      m_Used;
 };

@@ -130,6 +130,16 @@ expect_error(probability_range "fixed probability of \"inner\": a voxel holds .*
 expect_error(bad_uncertainty "--uncertainty must be rescan, bootstrap, curvature or none"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --uncertainty guess --out ${TEMP}/r9)
+# The advanced interval settings: an unknown name, a setting given both ways, a value its own option refuses.
+expect_error(uncertainty_options_name "--uncertainty-options takes NAME=VALUE pairs .* got \"jitter=0.2\""
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --uncertainty-options jitter=0.2 --out ${TEMP}/r9)
+expect_error(uncertainty_options_twice "--uncertainty-mesh-jitter is given twice"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --uncertainty-options mesh-jitter=0.2 --uncertainty-mesh-jitter 0.1 --out ${TEMP}/r9)
+expect_error(uncertainty_options_value "--uncertainty-mesh-jitter must lie in \\[0, 0.9\\)"
+  register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
+  --uncertainty-options shift-voxels=0.3,mesh-jitter=0.95 --out ${TEMP}/r9)
 
 # Non-finite voxels, an absurd declared size, images that do not overlap in physical space.
 string(REPEAT "40 " 63 values)

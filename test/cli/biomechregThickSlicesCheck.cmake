@@ -7,7 +7,8 @@
 # - where no calibration holds (slices interpolated, which none measured) no modulus is stated: the statement says
 #   "not determined", both ends are undetermined, the reason names the 3 mm voxels, and the run's warning says the
 #   same thing (the warning and the statement must never disagree);
-# - raised by --uncertainty-voxel-limit-mm, the interval is stated and the warning then says that it is stated
+# - raised by --uncertainty-options voxel-limit-mm=3.5 (the advanced settings' group, read as
+#   --uncertainty-voxel-limit-mm), the interval is stated and the warning then says that it is stated
 #   beyond the geometry where coverage was shown.
 # Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregThickSlicesCheck.cmake
 file(REMOVE_RECURSE ${OUT})
@@ -65,7 +66,7 @@ if(at EQUAL -1)
   message(SEND_ERROR "the run's warning does not say what the statement says ('${reason}')")
 endif()
 
-register_into(raised --uncertainty-voxel-limit-mm 3.5 --resamples 3 --slice-interpolation on)
+register_into(raised --uncertainty-options voxel-limit-mm=3.5 --resamples 3 --slice-interpolation on)
 string(JSON interpolated GET "${report}" slice_interpolation)
 if(NOT interpolated)
   message(SEND_ERROR "report.json: slice_interpolation is ${interpolated} with --slice-interpolation on")
