@@ -343,9 +343,9 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   /** Thick slices (ThickSlices(): 2-3 mm slices of a 1 mm in-plane CT): both scans' organs between their slices by
    * shape-based interpolation (InterpolateLabelSlices()): the moving anatomy is meshed from its interpolated
    * labels, the fixed organs' distance maps and the rescans' anatomy are those of the interpolated fixed labels.
-   * Without thick slices nothing changes. Off by default: on 10 phantom pairs at 1 x 1 x 3 mm it halved the
-   * inverted elements but made the modulus more biased (median |error| 91 % against 32 %; docs/benchmarks.md,
-   * "Clinical geometry"); the modulus is not stated at such slices either way (StatedModulusVoxelLimitMM). */
+   * Without thick slices nothing changes. Off by default: on phantom pairs at 1 x 1 x 3 mm it halved the inverted
+   * elements but made the modulus more biased (docs/benchmarks.md, "Clinical geometry"), and no thick slices'
+   * calibration measured it, so with it the modulus is reported as not determined (SliceCalibrationOf). */
   bool interpolateSlices{ false };
   /** The estimated state's per-element moduli, von Mises stress and Dirichlet flags in state.simulation, which
    * mesh.vtu holds; false leaves them empty (state.simulation then has the nodal displacement and force only). */
