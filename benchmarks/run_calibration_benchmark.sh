@@ -137,7 +137,7 @@ PY
   tail -1 "$csv"
 done < "$work/draws.txt"
 
-# The earlier runs are kept beside it (calibration_runs_*.csv; docs/benchmarks.md): the resimulating bootstrap
+# The earlier runs are kept beside it (calibration_runs_*.csv; docs/history/benchmarks.md): the resimulating bootstrap
 # (seed 2026), the rescans on phantoms whose two scans share one grid (2027), the rescans with a sweep each (2028)
 # and warm-started at the fit (2029), the last two stated with Student's half-widths and the calibration set of
 # the conformal ones; the conformal rescans (2030, calibration_runs.csv) and variants of them; and the

@@ -58,7 +58,7 @@ struct BiomechanicalRegistration_EXPORT MeshingParameters
   bool                           optimize{ true };
   bool                           exude{ false };
   /** degrees: perturbation works on elements below this dihedral angle. 3 rather than CGAL's usual 5: several times
-   * faster on the pelvis, and the recovered modulus barely moves (docs/benchmarks.md, "Sliver bound"). */
+   * faster on the pelvis, and the recovered modulus barely moves (docs/history/benchmarks.md, "Sliver bound"). */
   double sliverBound{ 3.0 };
   /** degrees: MeshSceneLabels() refuses a mesh with a smaller dihedral angle, naming the element. Such a
    * sliver is all but flat: its stiffness matrix is near singular and the pull-back inside it ill defined. */

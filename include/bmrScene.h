@@ -29,7 +29,7 @@
 namespace bmr {
 
 /** The largest label voxel side [mm] at which an estimated modulus is stated with the rescans' interval. Its
- * coverage was shown on 1 mm phantoms; at 2-3 mm slices it was measured to miss the truth (docs/benchmarks.md,
+ * coverage was shown on 1 mm phantoms; at 2-3 mm slices it was measured to miss the truth (docs/history/benchmarks.md,
  * "Clinical geometry"), so above this limit the registration states the interval of a thick-slice calibration where
  * one holds (itk::SliceCalibrations) and otherwise reports the modulus as not determined, with this reason, and the
  * voxel warning says the same. The registration's fields are not affected. */

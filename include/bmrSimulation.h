@@ -56,7 +56,7 @@ constexpr double MinimumElementsAcross = 2.0;
 /** Warnings, one per simulated label (material or unknown material) of \a scene that \a mesh resolves
  * with fewer than MinimumElementsAcross elements across (bmr::ComputeLabelResolution), naming the label:
  * linear tetrahedra cannot bend through a layer one element thick, and the solution stiffens (the errors
- * on the two-layer sphere behind the limit: docs/benchmarks.md, "Extreme cases"). */
+ * on the two-layer sphere behind the limit: docs/history/benchmarks.md, "Extreme cases"). */
 BiomechanicalRegistration_EXPORT std::vector<std::string>
                                  MeshResolutionWarnings(const Scene & scene, const TetrahedralMesh & mesh);
 

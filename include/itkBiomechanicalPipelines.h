@@ -138,7 +138,7 @@ enum class IntervalQuantilesEnum : std::uint8_t
  * calibration_runs_facets085.csv and calibration_runs_facets085_fresh.csv, seeds 2044 and 2045; 1 mm voxels, moduli
  * log-uniform in 30-500 kPa), the pairs with no rescan on a search bound, s from each pair's 4 rescans. Checked on
  * 30 pairs not used here, drawn after the constants were committed (seed 2046,
- * calibration_runs_facets085_check2046.csv): 68 % coverage 0.73, 95 % 0.97 (docs/benchmarks.md).
+ * calibration_runs_facets085_check2046.csv): 68 % coverage 0.73, 95 % 0.97 (docs/history/benchmarks.md).
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct RescanCalibration
 {
@@ -151,7 +151,7 @@ struct RescanCalibration
 constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
 
 /** The interval at thick slices, where the rescans miss the truth (they resample the voxels' phase and the mesh; at
- * 2-3 mm slices the fit's error comes from the moving scan's slices: docs/benchmarks.md, "Clinical geometry"). Its
+ * 2-3 mm slices the fit's error comes from the moving scan's slices: docs/history/benchmarks.md, "Clinical geometry"). Its
  * calibration is the fit's own error, measured on pelvis phantom pairs whose two scans both have slices of sliceMM,
  * an in-plane spacing drawn from U(0.8, 1.2) mm, the fixed grid shifted by a random sub-voxel offset and moduli
  * log-uniform in 30-500 kPa (benchmarks/results/clinical_geometry/slice_calibration_fit.csv and the two earlier
@@ -167,7 +167,7 @@ constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
  * at 68 % and 95 % (Student's predictive factor for one more pair, with the line's two parameters). A fit on the
  * upper search bound U states the bound \f$ E \ge E_0 \exp((\log(U / E_0) - a - k s) / \beta) \f$: a smaller
  * truth would have stopped short of U but for an error beyond k s. The first calibration (a constant offset) over-
- * covered at 68 % and missed its error target at 3 mm; both are in docs/benchmarks.md ("Clinical geometry: an
+ * covered at 68 % and missed its error target at 3 mm; both are in docs/history/benchmarks.md ("Clinical geometry: an
  * interval calibrated per slice thickness"), with this line's check on pairs drawn after it was committed.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct SliceCalibration
@@ -191,7 +191,7 @@ constexpr double SliceCalibrationInPlaneMM[2] = { 0.8, 1.2 };
 /** The calibration that holds for both scans' voxels, null when none does: both scans' in-plane sides (the two
  * smaller) within SliceCalibrationInPlaneMM and their slices (the largest side) within SliceCalibrationToleranceMM
  * of one calibration's thickness. A thick moving scan with a 1 mm fixed scan (or the reverse) is not calibrated:
- * the two lean opposite ways (docs/benchmarks.md, "which scan's slices make the 3 mm bias"). */
+ * the two lean opposite ways (docs/history/benchmarks.md, "which scan's slices make the 3 mm bias"). */
 BiomechanicalRegistration_EXPORT const SliceCalibration *
 FindSliceCalibration(const std::array<double, 3> & movingSpacing, const std::array<double, 3> & fixedSpacing);
 
@@ -230,7 +230,7 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
 {
   UncertaintyMethodEnum method{ UncertaintyMethodEnum::Rescan };
   /** Re-estimations (rescan, bootstrap). 4 by default, which run in about half the time of 8; 8 (also calibrated,
-   * RescanCalibrations) give intervals about a third narrower in log E (docs/benchmarks.md). */
+   * RescanCalibrations) give intervals about a third narrower in log E (docs/history/benchmarks.md). */
   unsigned int  resamples{ 4 };
   std::uint64_t seed{ 1 }; ///< the resamples' random numbers: same seed, same interval
   /** Resamples run at once; 0 (default): ITK's global default number of threads (`--threads`). Each resample
@@ -344,7 +344,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
    * shape-based interpolation (InterpolateLabelSlices()): the moving anatomy is meshed from its interpolated
    * labels, the fixed organs' distance maps and the rescans' anatomy are those of the interpolated fixed labels.
    * Without thick slices nothing changes. Off by default: on phantom pairs at 1 x 1 x 3 mm it halved the inverted
-   * elements but made the modulus more biased (docs/benchmarks.md, "Clinical geometry"), and no thick slices'
+   * elements but made the modulus more biased (docs/history/benchmarks.md, "Clinical geometry"), and no thick slices'
    * calibration measured it, so with it the modulus is reported as not determined (SliceCalibrationOf). */
   bool interpolateSlices{ false };
   /** The estimated state's per-element moduli, von Mises stress and Dirichlet flags in state.simulation, which
@@ -483,7 +483,7 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
    * modulus is estimated (the prostate; the spheres' core), where the tissue between it and the loaded walls is thin
    * (bmr::MeshingParameters::refineNearLabels); 0: no local refinement. The pelvis's default, 1.25 mm within 6 mm
    * of the 0.5x mesh, is the converged truth: refined further (0.4x, 0.7 mm) its field changes by at most 0.8 % of its
-   * maximum in the prostate (docs/benchmarks.md, "Truth meshed from the analytic anatomy"). The spheres': 0. */
+   * maximum in the prostate (docs/history/benchmarks.md, "Truth meshed from the analytic anatomy"). The spheres': 0. */
   double truthRefineDistance{ 6.0 };
   double truthRefineSize{ 1.25 };
   /** The fixed scan's grid is the moving one shifted by U(-this, this) voxels along each axis (seeded by seed):

@@ -64,7 +64,7 @@ BiomechanicalRegistration_EXPORT std::string
 
 /** What the stated interval of a modulus is conditional on: the wall law \a motion of the estimation. The
  * rescans vary the voxelization and the mesh, not how the walls move, and on the phantoms the wall law moved
- * the modulus by more than the interval's width (docs/benchmarks.md, "Pressure-filled lumens"); one sentence
+ * the modulus by more than the interval's width (docs/history/benchmarks.md, "Pressure-filled lumens"); one sentence
  * for the printed summary and report.json's "assumes". \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string

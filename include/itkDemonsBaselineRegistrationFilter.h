@@ -83,7 +83,7 @@ operator<<(std::ostream & out, const DemonsBaselineRegistrationFilterEnums::Vari
  * the fixed point x corresponds to the moving point x + d(x) [mm]. Warp the moving image with ImageWarper.
  *
  * Defaults (documented in the README): 3 levels × 50 iterations, σ = 1.5 voxels, step ≤ 2 voxels,
- * histogram matching with 1024 levels and 7 match points (its run times: docs/benchmarks.md, side by side).
+ * histogram matching with 1024 levels and 7 match points (its run times: docs/history/benchmarks.md, side by side).
  *
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationEvaluation
  */

@@ -17,8 +17,8 @@ from collections import defaultdict
 # Public headers without a source of their own name: declarations of several sources, templates, plain structs.
 OWNERS = {
     "BiomechanicalRegistrationExport": "common",
-    "bmrError": "common", "bmrHash": "common", "bmrStopwatch": "common", "bmrGridGeometry": "common",
-    "bmrMemoryWarmUp": "common", "bmrNumerics": "common", "bmrTaskTrace": "common",
+    "bmrError": "common", "bmrGridGeometry": "common",
+    "bmrNumerics": "common", "bmrTaskTrace": "common",
     "itkGridGeometryConversion": "common",
     "bmrTetrahedralMesh": "mesh", "bmrMesher": "mesh", "itkTetrahedralMeshObject": "mesh",
     "bmrLinearElasticModel": "fem", "bmrNeoHookeanForwardModel": "fem", "bmrForwardModel": "fem",
@@ -26,9 +26,9 @@ OWNERS = {
     "bmrScene": "scene", "bmrSimulation": "scene", "itkSceneDistanceMaps": "scene", "itkSliceInterpolation": "scene",
     "itkLabelImageToTetrahedralMeshFilter": "scene",
     "bmrDataTerm": "estimation", "bmrLoadParameterization": "estimation", "bmrEstimationObjective": "estimation",
-    "bmrElasticityEstimator": "estimation", "bmrSurfaceMatchingObjective": "estimation", "bmrWallBasis": "estimation",
+    "bmrElasticityEstimator": "estimation", "bmrSurfaceMatchingObjective": "estimation",
     "bmrSignedDistanceSampler": "estimation", "bmrLandmarkTerm": "estimation", "bmrOrganSurfaceForces": "estimation",
-    "bmrCompressionBarrier": "estimation", "bmrSecantSearch": "estimation", "itkFEMElasticityOptimizer": "estimation",
+    "bmrCompressionBarrier": "estimation", "itkFEMElasticityOptimizer": "estimation",
     "bmrDisplacementFieldRasterizer": "field", "itkPhysicsDeformationFieldSource": "field",
     "itkImageWarper": "field",
     "bmrLandmarks": "evaluation", "bmrStatistics": "evaluation", "bmrMarkerAlignment": "evaluation",
@@ -39,7 +39,7 @@ OWNERS = {
     # Image reading and writing that knows DICOM series and checks their structure.
     "itkDicomRT": "dicomrt", "itkDicomRTWriters": "dicomrt", "itkDicomStructureCheck": "dicomrt",
     "itkBiomechanicalImageIO": "dicomrt",
-    "bmrAtomicFile": "io", "bmrCsvTable": "io", "bmrVtuWriter": "io",
+    "bmrAtomicFile": "io",
     "itkBiomechanicalReports": "output", "itkBiomechanicalWriters": "output",
     "bmrCohort": "cohort", "bmrCohortStudy": "cohort", "itkPhantomCohort": "cohort",
     "bmrPhantom": "synthetic",

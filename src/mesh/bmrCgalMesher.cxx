@@ -210,7 +210,7 @@ GenerateMesh(const MeshDomain &        domain,
   }
 
   // Perturbation lifts the minimum dihedral angle from near zero to the sliver bound, cheaply at small bounds;
-  // exudation costs several times more and adds little, so it is opt-in (docs/benchmarks.md, mesh quality).
+  // exudation costs several times more and adds little, so it is opt-in (docs/history/benchmarks.md, mesh quality).
   if (parameters.optimize && parameters.exude)
   {
     CGAL::refine_mesh_3(c3t3,
