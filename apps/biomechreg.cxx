@@ -217,7 +217,7 @@ PrintDemoEstimate(const itk::RegistrationResult & result, double trueE)
             << " kPa, recovered " << recovered << " kPa (" << std::showpos << 100.0 * (recovered - trueE) / trueE
             << std::noshowpos << " %), fit " << result.youngsModulus.at("prostate") << " kPa"
             << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
-            << "\n  (coverage of the interval over 30-500 kPa: docs/benchmarks.md, calibration benchmark)"
+            << "\n  (coverage of the interval over 30-500 kPa: docs/results.md)"
             << "\n  note: " << itk::WallLawCaveat(itk::RegistrationSettings().walls.motion)
             << (result.estimation.identifiable ? "" : "\n  warning: ")
             << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
@@ -234,7 +234,7 @@ int
 DemoCommand()
 {
   const std::string dir = "biomechreg-demo";
-  // A stiffness ratio of 10, mid-range of the dissertation's 50-350 kPa (docs/benchmarks.md).
+  // A stiffness ratio of 10, mid-range of the dissertation's 50-350 kPa (docs/history/benchmarks.md).
   const double trueE = 100.0;
   std::cout << "biomechreg demo: pelvis phantom -> joint estimation of wall loads and prostate modulus -> "
                "displacement fields -> warped images -> report\n"

@@ -68,7 +68,7 @@ struct GlobalOptions
 /** On Linux with glibc: when GLIBC_TUNABLES does not set glibc.malloc.hugetlb, restarts the program (the same
  * arguments) with glibc.malloc.hugetlb=1 added, so that malloc backs its large blocks with transparent huge pages.
  * Why: on virtual machines every 4 KiB page fault can cost microseconds, and meshing, assembly and the rescans
- * fault in gigabytes (measured: docs/benchmarks.md, "The library as a guest"); the results are the same bit for
+ * fault in gigabytes (measured: docs/history/benchmarks.md, "The library as a guest"); the results are the same bit for
  * bit. A user's own setting (e.g. glibc.malloc.hugetlb=0) is
  * kept; elsewhere, or when the restart fails, nothing happens. Call first in main(). */
 void
