@@ -27,7 +27,8 @@
 #        per slice (`phantom --outline-fractions on`) and register takes them as the fixed organs
 #        (--fixed-probabilities): what an RTSTRUCT drawn on the fixed scan gives `register` by default.
 # Writes benchmarks/results/calibration_runs.csv, calibration.csv (the summary), calibration.png (reliability
-# diagram and errors) and prints the tables (benchmarks/summarize_calibration.py).
+# diagram and errors) and prints the tables (benchmarks/summarize_calibration.py); with SLICE_MM the check of the
+# thick slices' calibration instead (summarize_slice_calibration.py check) into RUNS_summary/ beside the runs.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${BUILD_DIR:-$root/build}/bin/biomechreg"
@@ -145,6 +146,12 @@ done < "$work/draws.txt"
 # (calibration_runs_pressure*.csv, summarized apart in calibration_pressure.csv/png).
 if [ "$design" = table31 ]; then
   /usr/bin/python3 "$root/benchmarks/summarize_table31.py" "$csv" "$out"
+  exit 0
+fi
+# Clinical slices state the thick slices' calibration, not rescans: their own check, beside the runs.
+if [ -n "${SLICE_MM:-}" ]; then
+  mkdir -p "${csv%.csv}_summary"
+  /usr/bin/python3 "$root/benchmarks/summarize_slice_calibration.py" check "$csv" "${csv%.csv}_summary"
   exit 0
 fi
 others=()
