@@ -101,9 +101,9 @@ ReadProbabilityImages(const std::string & list)
  * (itk::ReadRTStructAreaFractions) on the fixed CT's grid, added to \a probabilities where an organ has none; nothing
  * for a label image. The fixed organs' surfaces then follow the polygons, not their voxels. */
 void
-AddOutlineFractions(const std::string &         fixedLabels,
-                    const itk::ImageBase<3> *   fixedCT,
-                    const bmr::Scene &          scene,
+AddOutlineFractions(const std::string &           fixedLabels,
+                    const itk::ImageBase<3> *     fixedCT,
+                    const bmr::Scene &            scene,
                     itk::OrganProbabilityImages & probabilities)
 {
   if (itk::ReadDicomModality(fixedLabels) != "RTSTRUCT")
@@ -117,6 +117,10 @@ AddOutlineFractions(const std::string &         fixedLabels,
     {
       organs.push_back(term.label);
     }
+  }
+  if (organs.empty())
+  {
+    return; // every objective organ has a probability image of its own
   }
   try
   {

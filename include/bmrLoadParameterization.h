@@ -129,7 +129,8 @@ struct BiomechanicalRegistration_EXPORT WallLoadSettings
 {
   double controlSpacing{ 0.0 }; ///< mm; 0: one control point per wall node (not used by UniformPressure)
   /** alpha of the prior alpha/2 |p|^2: small, it picks the least-displacement optimum along the walls'
-   * near-null directions so that Phi*(E) is smooth (docs/history/benchmarks.md, "What the walls do to the estimate"). */
+   * near-null directions so that Phi*(E) is smooth (docs/history/benchmarks.md, "What the walls do to the estimate").
+   */
   double         regularization{ 0.01 };
   WallMotionEnum motion{ WallMotionEnum::AlongNormals };
 

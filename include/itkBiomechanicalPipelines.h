@@ -151,8 +151,8 @@ struct RescanCalibration
 constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
 
 /** The interval at thick slices, where the rescans miss the truth (they resample the voxels' phase and the mesh; at
- * 2-3 mm slices the fit's error comes from the moving scan's slices: docs/history/benchmarks.md, "Clinical geometry"). Its
- * calibration is the fit's own error, measured on pelvis phantom pairs whose two scans both have slices of sliceMM,
+ * 2-3 mm slices the fit's error comes from the moving scan's slices: docs/history/benchmarks.md, "Clinical geometry").
+ * Its calibration is the fit's own error, measured on pelvis phantom pairs whose two scans both have slices of sliceMM,
  * an in-plane spacing drawn from U(0.8, 1.2) mm, the fixed grid shifted by a random sub-voxel offset and moduli
  * log-uniform in 30-500 kPa (benchmarks/results/clinical_geometry/slice_calibration_fit.csv and the two earlier
  * checks' runs, slice_calibration_check_first_runs.csv and slice_calibration_check_runs.csv: 59, 20 and 83 pairs;
@@ -465,10 +465,10 @@ struct BiomechanicalRegistration_EXPORT PhantomSettings
   std::uint64_t        seed{ 1 };
   unsigned int         numberOfSeeds{ 3 };
   double               trackingNoiseMM{ 0.5 }; ///< sigma of the tracked treatment markers' noise [mm] per axis
-  bool   fractions{ false };     ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
+  bool fractions{ false }; ///< also the fixed scan's volume fraction of every objective organ (fixedFractions)
   /** Also the area fractions of every objective organ's exact outlines on each fixed slice, as an RTSTRUCT drawn on
    * the fixed scan carries them (fixedContourFractions). */
-  bool contourFractions{ false };
+  bool   contourFractions{ false };
   double truthRefinement{ 0.5 }; ///< the truth's mesh sizes relative to the scene's (facet distance x 0.8 more)
   /** What the truth's mesh follows: the moving label map's voxels (Voxels), or the analytic anatomy those voxels
    * sample (Anatomy, the default: bmr::MeshSceneFunction(), smooth surfaces that stay put when the truth is refined,
@@ -519,7 +519,7 @@ struct BiomechanicalRegistration_EXPORT PhantomPair
   /** The fixed seed centers as a tracking system reports them: with Gaussian noise of
    * PhantomSettings::trackingNoiseMM per axis, seeded by the phantom's seed (itk::AddTrackingNoise). */
   std::vector<bmr::Landmark> trackedLandmarks;
-  OrganProbabilityImages     fixedFractions; ///< per objective organ, with PhantomSettings::fractions
+  OrganProbabilityImages     fixedFractions;        ///< per objective organ, with PhantomSettings::fractions
   OrganProbabilityImages     fixedContourFractions; ///< per objective organ, with PhantomSettings::contourFractions
   std::size_t                truthTetrahedra{ 0 }, truthNodes{ 0 };
   /** How far each loaded wall moved in the truth [mm]: the largest and the mean |u| over the truth mesh's nodes on

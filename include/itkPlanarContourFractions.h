@@ -56,9 +56,9 @@ using ContourFractionImageType = Image<float, 3>;
  * non-finite one, does not lie in one slice, lies on no slice of the grid, or leaves the grid in-plane by more than
  * half a voxel. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
 BiomechanicalRegistration_EXPORT ContourFractionImageType::Pointer
-PlanarContourAreaFractions(const std::vector<PlanarContour> & contours,
-                           const ImageBase<3> *               referenceGrid,
-                           const std::string &                what);
+                                 PlanarContourAreaFractions(const std::vector<PlanarContour> & contours,
+                                                            const ImageBase<3> *               referenceGrid,
+                                                            const std::string &                what);
 
 /** Sub-rows per voxel row of PlanarContourAreaFractions()'s midpoint rule. */
 constexpr unsigned int SubRowsPerVoxel = 16;

@@ -69,7 +69,8 @@ ContourEdgesPerSlice(const std::vector<PlanarContour> & contours,
     {
       if (std::abs(index[2] - static_cast<double>(slice)) > 0.5 + tolerance)
       {
-        bmr::Fail(where, what + at.str() + " does not lie in one slice of the reference grid (it is not parallel to them)");
+        bmr::Fail(where,
+                  what + at.str() + " does not lie in one slice of the reference grid (it is not parallel to them)");
       }
     }
     if (slice < 0 || slice >= static_cast<long>(region.GetSize(2)))
@@ -157,7 +158,8 @@ PlanarContourAreaFractions(const std::vector<PlanarContour> & contours,
   {
     for (long j = 0; j < ny; ++j)
     {
-      float * row = fractions->GetBufferPointer() + static_cast<std::size_t>(nx) * static_cast<std::size_t>(j + ny * slice);
+      float * row =
+        fractions->GetBufferPointer() + static_cast<std::size_t>(nx) * static_cast<std::size_t>(j + ny * slice);
       for (unsigned int s = 0; s < SubRowsPerVoxel; ++s)
       {
         detail::RowCrossings(edges, j - 0.5 + (s + 0.5) * weight, crossings);

@@ -86,9 +86,9 @@ Levels()
  * bmr::ConfigureNumerics()). Debian's CHOLMOD runs the copy loops of its supernodal factorization in teams of 4 OpenMP
  * threads (CHOLMOD_OMP_NUM_THREADS) whose idle workers spin. The estimation factorizes on two threads at once (the
  * sweep's coarse model and the fine one) beside the mesher, so those teams take CPU from the work that matters
- * (measured in docs/history/benchmarks.md). The loops only copy, so the results are the same bit for bit. Max active levels 0
- * makes every parallel region of the calling thread run on that thread alone; it is a per-thread setting, restored on
- * exit so that a program's own OpenMP on that thread is left as it was. */
+ * (measured in docs/history/benchmarks.md). The loops only copy, so the results are the same bit for bit. Max active
+ * levels 0 makes every parallel region of the calling thread run on that thread alone; it is a per-thread setting,
+ * restored on exit so that a program's own OpenMP on that thread is left as it was. */
 SingleThreadedCholmod::SingleThreadedCholmod()
 {
   if (Levels().get)

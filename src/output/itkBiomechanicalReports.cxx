@@ -364,16 +364,19 @@ WallLawCaveat(bmr::WallMotionEnum motion)
              "(docs/history/benchmarks.md, pressure-filled lumens)";
     case bmr::WallMotionEnum::Free:
       return "the interval assumes walls that may also slide (--wall-motion free), which read the prostate a fifth "
-             "to a third too soft on walls that move along their normals (docs/history/benchmarks.md); its coverage is not "
+             "to a third too soft on walls that move along their normals (docs/history/benchmarks.md); its coverage is "
+             "not "
              "calibrated";
     case bmr::WallMotionEnum::NormalTraction:
       return "the interval assumes lumens loaded by normal tractions (--wall-motion traction): on pressure-filled "
              "lumens it covered 12 of 12 truths at 95 % and 9 of 12 at 68 % with the default half-widths; such "
-             "tractions cannot fit walls that move along their normals (docs/history/benchmarks.md, pressure-filled lumens)";
+             "tractions cannot fit walls that move along their normals (docs/history/benchmarks.md, pressure-filled "
+             "lumens)";
     case bmr::WallMotionEnum::UniformPressure:
       return "the interval assumes one uniform pressure per lumen (--wall-motion pressure); its half-widths were "
              "calibrated on walls that move along their normals: on 8 neo-Hookean pressure-filled truths it covered "
-             "all 8 at 68 % and 95 %, 6 of them only as a one-sided bound or not determined (docs/history/benchmarks.md, one "
+             "all 8 at 68 % and 95 %, 6 of them only as a one-sided bound or not determined "
+             "(docs/history/benchmarks.md, one "
              "uniform pressure per lumen)";
   }
   return std::string();

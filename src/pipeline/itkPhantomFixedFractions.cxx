@@ -65,9 +65,10 @@ MixedVoxels(const BiomechanicalLabelImageType * labels)
   std::vector<std::size_t> mixed;
   for (std::size_t v = 0; v < grid.GetNumberOfVoxels(); ++v)
   {
-    const std::array<long, 3> i{ { long(v % grid.size[0]), long((v / grid.size[0]) % grid.size[1]),
-                                   long(v / (grid.size[0] * grid.size[1])) } };
-    bool                      uniform = true;
+    const std::array<long, 3> i{
+      { long(v % grid.size[0]), long((v / grid.size[0]) % grid.size[1]), long(v / (grid.size[0] * grid.size[1])) }
+    };
+    bool uniform = true;
     for (int n = 0; n < 27 && uniform; ++n)
     {
       const std::array<long, 3> j{ { i[0] + n % 3 - 1, i[1] + n / 3 % 3 - 1, i[2] + n / 9 - 1 } };
@@ -143,12 +144,12 @@ BracketOf(const BiomechanicalLabelImageType * labels, std::int32_t value, double
 
 /** Halves every bracket \a halvings times against the anatomy (\a labelsAt of the pulled-back midpoints). */
 void
-Bisect(std::vector<EdgeBracket> &                                               brackets,
-       std::int32_t                                                             value,
-       const BiomechanicalLabelImageType *                                      labels,
-       const BiomechanicalFieldType *                                           field,
-       const AnatomyLabelsFunction &                                            labelsAt,
-       unsigned int                                                             halvings)
+Bisect(std::vector<EdgeBracket> &          brackets,
+       std::int32_t                        value,
+       const BiomechanicalLabelImageType * labels,
+       const BiomechanicalFieldType *      field,
+       const AnatomyLabelsFunction &       labelsAt,
+       unsigned int                        halvings)
 {
   std::vector<ContinuousIndex<double, 3>> middles(brackets.size());
   for (unsigned int h = 0; h < halvings; ++h)
@@ -171,14 +172,14 @@ Bisect(std::vector<EdgeBracket> &                                               
 } // namespace
 
 OrganProbabilityImages
-FixedVolumeFractions(const bmr::Scene &                                                          scene,
-                     const BiomechanicalLabelImageType *                                         labels,
-                     const BiomechanicalFieldType *                                              field,
+FixedVolumeFractions(const bmr::Scene &                  scene,
+                     const BiomechanicalLabelImageType * labels,
+                     const BiomechanicalFieldType *      field,
                      const AnatomyLabelsFunction &       labelsAt)
 {
-  const bmr::GridGeometry        grid = GridGeometryOf(labels);
-  const std::vector<std::size_t> mixed = MixedVoxels(labels);
-  constexpr int                  sub = 4;
+  const bmr::GridGeometry                 grid = GridGeometryOf(labels);
+  const std::vector<std::size_t>          mixed = MixedVoxels(labels);
+  constexpr int                           sub = 4;
   std::vector<ContinuousIndex<double, 3>> indices;
   indices.reserve(mixed.size() * sub * sub * sub);
   for (std::size_t v : mixed)
@@ -219,9 +220,9 @@ FixedVolumeFractions(const bmr::Scene &                                         
 }
 
 OrganProbabilityImages
-FixedContourFractions(const bmr::Scene &                                                          scene,
-                      const BiomechanicalLabelImageType *                                         labels,
-                      const BiomechanicalFieldType *                                              field,
+FixedContourFractions(const bmr::Scene &                  scene,
+                      const BiomechanicalLabelImageType * labels,
+                      const BiomechanicalFieldType *      field,
                       const AnatomyLabelsFunction &       labelsAt)
 {
   constexpr unsigned int halvings = 12; // 1/4096 of a voxel: far below what the outlines' chords differ by
@@ -229,9 +230,9 @@ FixedContourFractions(const bmr::Scene &                                        
   OrganProbabilityImages fractions;
   for (const bmr::ObjectiveTerm & term : scene.objective)
   {
-    const std::int32_t              value = scene.FindLabel(term.label)->value;
-    std::vector<EdgeBracket>        brackets;
-    std::vector<std::size_t>        ringEnds; // brackets[ringEnds[r - 1] .. ringEnds[r]) form ring r
+    const std::int32_t       value = scene.FindLabel(term.label)->value;
+    std::vector<EdgeBracket> brackets;
+    std::vector<std::size_t> ringEnds; // brackets[ringEnds[r - 1] .. ringEnds[r]) form ring r
     for (long k = 0; k < slices; ++k)
     {
       bool       any = false;
@@ -248,8 +249,8 @@ FixedContourFractions(const bmr::Scene &                                        
       {
         const auto & vertices = *extractor->GetOutput(c)->GetVertexList();
         // A closed ring repeats its first vertex at the end.
-        const std::size_t n = vertices.size() > 1 && vertices.front() == vertices.back() ? vertices.size() - 1
-                                                                                          : vertices.size();
+        const std::size_t n =
+          vertices.size() > 1 && vertices.front() == vertices.back() ? vertices.size() - 1 : vertices.size();
         for (std::size_t p = 0; p < n; ++p)
         {
           brackets.push_back(BracketOf(labels, value, vertices[p][0], vertices[p][1], k));

@@ -174,13 +174,14 @@ CheckHexagon()
     kinks += std::abs(cot(v + hexagon.size() - 1) - cot(v));
   }
   const double h = 1.0 / itk::SubRowsPerVoxel;
-  ok &= bmr::test::Expect(worst <= maxCot * h * h, "hexagon: every voxel's fraction within max|cot| h^2 = " +
-                                                     bmr::test::ToString(maxCot * h * h) +
-                                                     " of its clipped area, worst " + bmr::test::ToString(worst));
-  ok &= bmr::test::Expect(std::abs(sum - ShoelaceArea(hexagon)) <= kinks * h * h / 8,
-                          "hexagon: fractions sum to its area within sum |jump| h^2 / 8 = " +
-                            bmr::test::ToString(kinks * h * h / 8) + ": " + bmr::test::ToString(sum) + " vs " +
-                            bmr::test::ToString(ShoelaceArea(hexagon)));
+  ok &=
+    bmr::test::Expect(worst <= maxCot * h * h,
+                      "hexagon: every voxel's fraction within max|cot| h^2 = " + bmr::test::ToString(maxCot * h * h) +
+                        " of its clipped area, worst " + bmr::test::ToString(worst));
+  ok &= bmr::test::Expect(
+    std::abs(sum - ShoelaceArea(hexagon)) <= kinks * h * h / 8,
+    "hexagon: fractions sum to its area within sum |jump| h^2 / 8 = " + bmr::test::ToString(kinks * h * h / 8) + ": " +
+      bmr::test::ToString(sum) + " vs " + bmr::test::ToString(ShoelaceArea(hexagon)));
   ok &= bmr::test::Expect(elsewhere == 0.0, "hexagon: the other slices are 0");
 
   const auto turned = itk::MakeImageOnGrid<ImageType>(Grid(30.0), {});
@@ -190,8 +191,10 @@ CheckHexagon()
   {
     difference = std::max(difference, double(std::abs(f->GetBufferPointer()[v] - g->GetBufferPointer()[v])));
   }
-  ok &= bmr::test::Expect(difference <= 1e-5, "a grid turned 30 degrees with its contour: the same fractions, max "
-                                                "difference " + bmr::test::ToString(difference));
+  ok &= bmr::test::Expect(difference <= 1e-5,
+                          "a grid turned 30 degrees with its contour: the same fractions, max "
+                          "difference " +
+                            bmr::test::ToString(difference));
   return ok;
 }
 
@@ -201,8 +204,9 @@ CheckRing()
   const auto                grid = itk::MakeImageOnGrid<ImageType>(Grid(0.0), {});
   const std::vector<Vertex> outer{ { { 3.3, 2.6 } }, { { 19.7, 2.6 } }, { { 19.7, 16.2 } }, { { 3.3, 16.2 } } };
   const std::vector<Vertex> hole{ { { 8.2, 6.4 } }, { { 8.2, 11.8 } }, { { 14.1, 11.8 } }, { { 14.1, 6.4 } } };
-  const auto f = itk::PlanarContourAreaFractions({ ContourOf(outer, grid, 1.0), ContourOf(hole, grid, 1.0) }, grid, "ring");
-  double     sum = 0.0;
+  const auto                f =
+    itk::PlanarContourAreaFractions({ ContourOf(outer, grid, 1.0), ContourOf(hole, grid, 1.0) }, grid, "ring");
+  double sum = 0.0;
   for (long j = 0; j < 20; ++j)
   {
     for (long i = 0; i < 24; ++i)
@@ -229,8 +233,8 @@ CheckCylinderDistance()
   g.size = { { 40, 40, 8 } };
   g.spacing = { { 1.0, 1.0, 3.0 } };
   g.origin = { { 0, 0, 0 } };
-  const auto   grid = itk::MakeImageOnGrid<ImageType>(g, {});
-  const double R = 11.37, cx = 19.61, cy = 20.27;
+  const auto          grid = itk::MakeImageOnGrid<ImageType>(g, {});
+  const double        R = 11.37, cx = 19.61, cy = 20.27;
   std::vector<Vertex> disc;
   for (int k = 0; k < 720; ++k)
   {
@@ -283,13 +287,25 @@ CheckRefusals()
   const double nan = std::numeric_limits<double>::quiet_NaN();
   bool         ok = true;
   ok &= bmr::test::ExpectException(
-    "2 points", [&] { fractions({ { { 1, 1 } }, { { 5, 5 } } }, 1.0, 0.0); }, "the test's contours, contour 1");
+    "2 points",
+    [&] {
+      fractions({ { { 1, 1 } }, { { 5, 5 } } }, 1.0, 0.0);
+    },
+    "the test's contours, contour 1");
   ok &= bmr::test::ExpectException(
-    "NaN", [&] { fractions({ { { 1, 1 } }, { { 5, nan } }, { { 5, 1 } } }, 1.0, 0.0); }, "not a finite number");
+    "NaN",
+    [&] {
+      fractions({ { { 1, 1 } }, { { 5, nan } }, { { 5, 1 } } }, 1.0, 0.0);
+    },
+    "not a finite number");
   ok &= bmr::test::ExpectException(
     "two slices", [&] { fractions(Hexagon(), 1.0, 4.0); }, "does not lie in one slice");
   ok &= bmr::test::ExpectException(
-    "off the grid", [&] { fractions({ { { 1, 1 } }, { { 30, 1 } }, { { 5, 5 } } }, 1.0, 0.0); }, "outside the reference grid");
+    "off the grid",
+    [&] {
+      fractions({ { { 1, 1 } }, { { 30, 1 } }, { { 5, 5 } } }, 1.0, 0.0);
+    },
+    "outside the reference grid");
   ok &= bmr::test::ExpectException(
     "no slice", [&] { fractions(Hexagon(), 7.0, 0.0); }, "lies on no slice");
   return ok;

@@ -158,12 +158,12 @@ CheckSliceCalibration()
   const double E0 = itk::SliceCalibrationReferenceKPa, a = three->offset, beta = three->slope, s = three->logSigma;
   const double m = three->pairs;
   // t_(m-2) from Student's half-widths of m - 1 draws, t_(m-2) sqrt(1 + 1/(m-1)), with the factor for m.
-  const auto   student = itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student,
-                                               three->pairs - 1);
+  const auto student =
+    itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, three->pairs - 1);
   const double predictive = std::sqrt(1.0 + 1.0 / m) / std::sqrt(1.0 + 1.0 / (m - 1));
   const double k = student[0] * predictive, k95 = student[1] * predictive;
-  const auto   inverse = [&](double fit, double shift) { return E0 * std::exp((std::log(fit / E0) - a + shift) / beta); };
-  const auto   near = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
+  const auto inverse = [&](double fit, double shift) { return E0 * std::exp((std::log(fit / E0) - a + shift) / beta); };
+  const auto near = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
   const itk::ModulusInterval i = itk::SliceCalibratedInterval(100.0, *three, unknown);
   ok &= bmr::test::Expect(near(i.estimate, inverse(100.0, 0.0)) && near(i.interval68[0], inverse(100.0, -k * s)) &&
                             near(i.interval68[1], inverse(100.0, k * s)) &&

@@ -25,12 +25,12 @@
 //
 // Coverage is not checked here: one realization cannot check it, since a calibrated 95 % interval misses one pair in
 // twenty by design. This pair is such a miss (fit +8.8 %, the truth 1.45 half-widths below the 95 % interval's lower
-// end); the calibration benchmark checks coverage on 30 fresh pairs (0.73 / 0.97 at 68 / 95 %, docs/history/benchmarks.md).
-// Why 20 %: one mesh's estimate scatters about the mean of other meshes of nearly the same sizes with an SD of 4-8 %
-// (docs/history/benchmarks.md, mesh convergence), and single pairs at 30-150 kPa in the calibration and Table 3.1 runs
-// erred by up to 15.6 % (90th percentile 10-11.5 %). With the sliver bound of 3 degrees (session 44) this pair's
-// mesh gives +11 % (+8.8 % at 5 degrees), while the mean over 15 meshes moved by at most 0.3 %. 20 % still fails an
-// estimator that is off by the 25-76 % of the stiff-organ misses issue 15 reported.
+// end); the calibration benchmark checks coverage on 30 fresh pairs (0.73 / 0.97 at 68 / 95 %,
+// docs/history/benchmarks.md). Why 20 %: one mesh's estimate scatters about the mean of other meshes of nearly the same
+// sizes with an SD of 4-8 % (docs/history/benchmarks.md, mesh convergence), and single pairs at 30-150 kPa in the
+// calibration and Table 3.1 runs erred by up to 15.6 % (90th percentile 10-11.5 %). With the sliver bound of 3 degrees
+// (session 44) this pair's mesh gives +11 % (+8.8 % at 5 degrees), while the mean over 15 meshes moved by at most 0.3
+// %. 20 % still fails an estimator that is off by the 25-76 % of the stiff-organ misses issue 15 reported.
 #include "itkBiomechanicalPipelines.h"
 #include "bmrTestUtilities.h"
 #include "itkBiomechanicalWriters.h"
