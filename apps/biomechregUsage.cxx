@@ -93,7 +93,7 @@ const std::pair<const char *, const char *> commands[] = {
     "    cohort.csv for biomechreg cohort, truth.csv, truth_fractions.csv, truth_correlations.csv\n" },
   { "cohort",
     "  biomechreg cohort --cohort FILE.csv --out DIR [--cores N (all)] [--threads-per-job T (1)]\n"
-    "                    [--mem-mb M (1000) --runtime-min T (30): per job, for a cluster profile]\n"
+    "                    [--mem-mb M (2000) --runtime-min T (30): per job, for a cluster profile]\n"
     "                    [--profile DIR (a Snakemake profile, e.g. workflows/cohort/profiles/slurm)]\n"
     "                    [--register-options \"OPTIONS\" (for every register; default --outputs report)]\n"
     "                    [--dry-run off|on]\n"

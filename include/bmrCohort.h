@@ -97,10 +97,10 @@ struct BiomechanicalRegistration_EXPORT CohortWorkflowSettings
   std::string              executable;      ///< biomechreg, absolute
   std::vector<std::string> registerOptions; ///< passed to every biomechreg register (default: --outputs report)
   unsigned int             threadsPerJob{ 1 };
-  /** Per job, for a cluster's scheduler: the measured peak resident memory of one registration with the default
-   * rescan interval on a 1 mm pelvis of 200 x 160 x 160 voxels (769 MB, benchmarks/results/side_by_side_runs.csv),
-   * plus 30 %. */
-  unsigned int memoryMB{ 1000 };
+  /** Per job, for a cluster's scheduler: the largest peak resident memory measured for one registration with the
+   * default rescan interval on a 1 mm pelvis of 200 x 160 x 160 voxels (docs/history/benchmarks.md, the side-by-side
+   * runs), plus about a quarter: a job the scheduler kills for its memory costs more than an idle reservation. */
+  unsigned int memoryMB{ 2000 };
   unsigned int runtimeMinutes{ 30 }; ///< per job, for a cluster's scheduler
 };
 
