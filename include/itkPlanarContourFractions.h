@@ -21,6 +21,8 @@
 #include "BiomechanicalRegistrationExport.h"
 #include "itkImage.h"
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -59,6 +61,15 @@ BiomechanicalRegistration_EXPORT ContourFractionImageType::Pointer
                                  PlanarContourAreaFractions(const std::vector<PlanarContour> & contours,
                                                             const ImageBase<3> *               referenceGrid,
                                                             const std::string &                what);
+
+/** \brief The outlines of \a value's voxels on slice \a k of \a labels, in the continuous index (i, j) of the
+ * slice: marching squares (itk::ContourExtractor2DImageFilter) at the 0.5 level of the slice's indicator padded by
+ * one voxel of background, so every ring closes and runs halfway between the outermost voxel centres and their
+ * neighbours, one vertex per voxel edge the border crosses; holes are rings of their own; no ring repeats its first
+ * vertex. Empty when the slice holds no such voxel.
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT std::vector<std::vector<std::array<double, 2>>>
+LabelOutlinesOnSlice(const Image<std::int32_t, 3> * labels, std::int32_t value, IndexValueType k);
 
 /** Sub-rows per voxel row of PlanarContourAreaFractions()'s midpoint rule. */
 constexpr unsigned int SubRowsPerVoxel = 16;

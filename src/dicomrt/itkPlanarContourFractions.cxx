@@ -20,6 +20,8 @@
 #include "itkPlanarContours.h"
 
 #include "bmrError.h"
+#include "itkContourExtractor2DImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
 #include "itkGridGeometryConversion.h"
 
 #include <algorithm>
@@ -137,6 +139,57 @@ AddCoveredLengths(double x0, double x1, double weight, float * row, long n)
 }
 
 } // namespace
+
+std::vector<std::vector<std::array<double, 2>>>
+LabelOutlinesOnSlice(const Image<std::int32_t, 3> * labels, std::int32_t value, IndexValueType k)
+{
+  using SliceImageType = Image<float, 2>;
+  const auto &               region = labels->GetLargestPossibleRegion();
+  SliceImageType::RegionType padded;
+  for (unsigned int a = 0; a < 2; ++a)
+  {
+    padded.SetIndex(a, region.GetIndex(a) - 1);
+    padded.SetSize(a, region.GetSize(a) + 2);
+  }
+  auto slice = SliceImageType::New();
+  slice->SetRegions(padded);
+  slice->Allocate(true);
+  bool           any = false;
+  ImageRegion<3> plane = region;
+  plane.SetIndex(2, k);
+  plane.SetSize(2, 1);
+  for (ImageRegionConstIteratorWithIndex<Image<std::int32_t, 3>> it(labels, plane); !it.IsAtEnd(); ++it)
+  {
+    if (it.Get() == value)
+    {
+      slice->SetPixel({ { it.GetIndex()[0], it.GetIndex()[1] } }, 1.0f);
+      any = true;
+    }
+  }
+  std::vector<std::vector<std::array<double, 2>>> rings;
+  if (!any)
+  {
+    return rings;
+  }
+  auto extractor = ContourExtractor2DImageFilter<SliceImageType>::New();
+  extractor->SetInput(slice);
+  extractor->SetContourValue(0.5);
+  extractor->Update();
+  for (unsigned int c = 0; c < extractor->GetNumberOfIndexedOutputs(); ++c)
+  {
+    std::vector<std::array<double, 2>> ring;
+    for (const auto & v : *extractor->GetOutput(c)->GetVertexList())
+    {
+      ring.push_back({ { v[0], v[1] } });
+    }
+    if (ring.size() > 1 && ring.front() == ring.back())
+    {
+      ring.pop_back();
+    }
+    rings.push_back(std::move(ring));
+  }
+  return rings;
+}
 
 ContourFractionImageType::Pointer
 PlanarContourAreaFractions(const std::vector<PlanarContour> & contours,

@@ -17,11 +17,10 @@
  *=========================================================================*/
 // WriteRTStruct: a label map's organs as the closed planar contours of a DICOM RT Structure Set.
 #include "itkDicomRTWriters.h"
+#include "itkPlanarContourFractions.h"
 
 #include "bmrError.h"
-#include "itkContourExtractor2DImageFilter.h"
 #include "itkDicomRTCommon.h"
-#include "itkImageRegionConstIteratorWithIndex.h"
 
 #include <cmath>
 #include <set>
@@ -33,7 +32,6 @@ constexpr const char * Where = "WriteRTStruct";
 constexpr const char * RTStructStorage = "1.2.840.10008.5.1.4.1.1.481.3";
 constexpr const char * StudyComponentManagement = "1.2.840.10008.3.1.2.3.1"; // what a study is referenced as
 
-using SliceImageType = Image<float, 2>;
 using Vertex = std::array<double, 2>; // continuous index (i, j) in a slice
 
 /** One closed planar contour: its slice and its points [LPS mm], 3 per vertex. */
@@ -42,35 +40,6 @@ struct Contour
   std::size_t         image; ///< index in the referenced series
   std::vector<double> points;
 };
-
-/** The indicator of \a value on slice \a k, padded by one background voxel on every side (index -1 .. n). */
-SliceImageType::Pointer
-PaddedSlice(const DicomRTLabelImageType * labels, std::int32_t value, IndexValueType k, bool & any)
-{
-  const auto &               region = labels->GetLargestPossibleRegion();
-  SliceImageType::Pointer    slice = SliceImageType::New();
-  SliceImageType::RegionType padded;
-  for (unsigned int a = 0; a < 2; ++a)
-  {
-    padded.SetIndex(a, region.GetIndex(a) - 1);
-    padded.SetSize(a, region.GetSize(a) + 2);
-  }
-  slice->SetRegions(padded);
-  slice->Allocate(true);
-  any = false;
-  DicomRTLabelImageType::RegionType plane = region;
-  plane.SetIndex(2, k);
-  plane.SetSize(2, 1);
-  for (ImageRegionConstIteratorWithIndex<DicomRTLabelImageType> it(labels, plane); !it.IsAtEnd(); ++it)
-  {
-    if (it.Get() == value)
-    {
-      slice->SetPixel({ { it.GetIndex()[0], it.GetIndex()[1] } }, 1.0f);
-      any = true;
-    }
-  }
-  return slice;
-}
 
 /** \a ring without its closing duplicate and without vertices on the line through their neighbours (the
  * marching squares put one on every voxel edge; they are exact half-integers, so the test is exact). */
@@ -99,24 +68,9 @@ Simplified(std::vector<Vertex> ring)
 std::vector<std::vector<double>>
 SliceContours(const DicomRTLabelImageType * labels, std::int32_t value, IndexValueType k)
 {
-  bool       any = false;
-  const auto slice = PaddedSlice(labels, value, k, any);
-  if (!any)
-  {
-    return {};
-  }
-  auto extractor = ContourExtractor2DImageFilter<SliceImageType>::New();
-  extractor->SetInput(slice);
-  extractor->SetContourValue(0.5);
-  extractor->Update();
   std::vector<std::vector<double>> contours;
-  for (unsigned int c = 0; c < extractor->GetNumberOfIndexedOutputs(); ++c)
+  for (std::vector<Vertex> ring : LabelOutlinesOnSlice(labels, value, k))
   {
-    std::vector<Vertex> ring;
-    for (const auto & v : *extractor->GetOutput(c)->GetVertexList())
-    {
-      ring.push_back({ { v[0], v[1] } });
-    }
     ring = Simplified(ring);
     if (ring.size() < 3)
     {

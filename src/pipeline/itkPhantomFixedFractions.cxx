@@ -19,7 +19,6 @@
 // fractions of their exact outlines on each slice (an RTSTRUCT drawn on the fixed scan).
 #include "itkPipelineStages.h"
 
-#include "itkContourExtractor2DImageFilter.h"
 #include "itkGridGeometryConversion.h"
 #include "itkPlanarContourFractions.h"
 #include "itkVectorLinearInterpolateImageFunction.h"
@@ -84,35 +83,6 @@ MixedVoxels(const BiomechanicalLabelImageType * labels)
     }
   }
   return mixed;
-}
-
-using SliceImageType = Image<float, 2>;
-
-/** The indicator of \a value on slice \a k of \a labels, padded by one voxel of background on every side. */
-SliceImageType::Pointer
-PaddedIndicator(const BiomechanicalLabelImageType * labels, std::int32_t value, long k, bool & any)
-{
-  const auto &               size = labels->GetLargestPossibleRegion().GetSize();
-  SliceImageType::RegionType padded;
-  padded.SetIndex({ { -1, -1 } });
-  padded.SetSize({ { size[0] + 2, size[1] + 2 } });
-  auto slice = SliceImageType::New();
-  slice->SetRegions(padded);
-  slice->Allocate(true);
-  const std::int32_t * l = labels->GetBufferPointer() + std::size_t(k) * size[0] * size[1];
-  any = false;
-  for (long j = 0; j < long(size[1]); ++j)
-  {
-    for (long i = 0; i < long(size[0]); ++i)
-    {
-      if (l[j * size[0] + i] == value)
-      {
-        slice->SetPixel({ { i, j } }, 1.0f);
-        any = true;
-      }
-    }
-  }
-  return slice;
 }
 
 /** One outline vertex being moved onto the anatomy's boundary: the voxel-edge ends inside and outside the organ. */
@@ -235,25 +205,11 @@ FixedContourFractions(const bmr::Scene &                  scene,
     std::vector<std::size_t> ringEnds; // brackets[ringEnds[r - 1] .. ringEnds[r]) form ring r
     for (long k = 0; k < slices; ++k)
     {
-      bool       any = false;
-      const auto slice = PaddedIndicator(labels, value, k, any);
-      if (!any)
+      for (const auto & ring : LabelOutlinesOnSlice(labels, value, k))
       {
-        continue;
-      }
-      auto extractor = ContourExtractor2DImageFilter<SliceImageType>::New();
-      extractor->SetInput(slice);
-      extractor->SetContourValue(0.5);
-      extractor->Update();
-      for (unsigned int c = 0; c < extractor->GetNumberOfIndexedOutputs(); ++c)
-      {
-        const auto & vertices = *extractor->GetOutput(c)->GetVertexList();
-        // A closed ring repeats its first vertex at the end.
-        const std::size_t n =
-          vertices.size() > 1 && vertices.front() == vertices.back() ? vertices.size() - 1 : vertices.size();
-        for (std::size_t p = 0; p < n; ++p)
+        for (const auto & vertex : ring)
         {
-          brackets.push_back(BracketOf(labels, value, vertices[p][0], vertices[p][1], k));
+          brackets.push_back(BracketOf(labels, value, vertex[0], vertex[1], k));
         }
         ringEnds.push_back(brackets.size());
       }

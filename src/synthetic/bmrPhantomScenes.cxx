@@ -43,12 +43,10 @@ PelvisPhantomScene(double prostateE, bool unknown, double prostateNu)
   s.forceSurfaces = { "bladder", "rectum" };
   s.objective = { { "prostate", 1.0 }, { "bladder", 1.0 }, { "rectum", 1.0 } };
   s.roiMargin = 25.0;
-  // The estimation's sizes are 0.75 x the truth's base sizes, its surface criteria a further 0.85 x (140k
-  // tetrahedra on the 1 mm phantom). The surfaces carry most of the discretization error: with them at 0.75 x
-  // (105k) the recovered modulus was -4.8 / -6.3 / -10.8 % of the converged mean (uniform meshes of 300k-490k
-  // tetrahedra) at 60 / 100 / 150 kPa, at 0.75 x 0.85 -1.8 / -0.5 / -2.6 % (nine meshes each;
-  // docs/history/benchmarks.md, mesh convergence, session 44). The truth refines its own base sizes
-  // (PhantomSettings::truthRefinement).
+  // The estimation's sizes are 0.75 x the truth's base sizes, its surface criteria a further 0.85 x: the surfaces
+  // carry most of the discretization error, and the finer surfaces brought the recovered modulus close to the
+  // converged mean of much finer uniform meshes (docs/history/benchmarks.md, mesh convergence). The truth refines
+  // its own base sizes (PhantomSettings::truthRefinement).
   const double scale = unknown ? 0.75 : 1.0;
   const double surfaces = unknown ? 0.85 : 1.0;
   s.mesh.cellSize = 7.0 * scale;

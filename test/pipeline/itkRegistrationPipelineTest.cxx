@@ -28,9 +28,9 @@
 // end); the calibration benchmark checks coverage on 30 fresh pairs (0.73 / 0.97 at 68 / 95 %,
 // docs/history/benchmarks.md). Why 20 %: one mesh's estimate scatters about the mean of other meshes of nearly the same
 // sizes with an SD of 4-8 % (docs/history/benchmarks.md, mesh convergence), and single pairs at 30-150 kPa in the
-// calibration and Table 3.1 runs erred by up to 15.6 % (90th percentile 10-11.5 %). With the sliver bound of 3 degrees
-// (session 44) this pair's mesh gives +11 % (+8.8 % at 5 degrees), while the mean over 15 meshes moved by at most 0.3
-// %. 20 % still fails an estimator that is off by the 25-76 % of the stiff-organ misses issue 15 reported.
+// calibration and Table 3.1 runs erred by up to 15.6 % (90th percentile 10-11.5 %). The sliver bound moves this one
+// pair's estimate by a few percent while the mean over many meshes stays put, so the tolerance leaves room for it.
+// 20 % still fails an estimator that is off by the 25-76 % of the stiff-organ misses issue 15 reported.
 #include "itkBiomechanicalPipelines.h"
 #include "bmrTestUtilities.h"
 #include "itkBiomechanicalWriters.h"
