@@ -30,6 +30,12 @@ namespace bmr {
 [[noreturn]] BiomechanicalRegistration_EXPORT void
 Fail(const std::string & where, const std::string & message);
 
+/** As Fail(), for input the caller can correct (a scene entry, a grid, an image, a setting out of range): throws
+ * itk::InvalidArgumentError, a subclass of itk::ExceptionObject, so that a caller may tell bad input from a failed
+ * computation (the Python package raises ValueError for it, RuntimeError for the rest). */
+[[noreturn]] BiomechanicalRegistration_EXPORT void
+FailInput(const std::string & where, const std::string & message);
+
 } // namespace bmr
 
 #endif

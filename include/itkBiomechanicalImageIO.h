@@ -64,7 +64,7 @@ CheckImageIsFinite(const TImage * image, const std::string & what)
       {
         std::ostringstream os;
         os << what << ": voxel " << it.GetIndex() << " is not finite (NaN or infinite)";
-        bmr::Fail("CheckImageIsFinite", os.str());
+        bmr::FailInput("CheckImageIsFinite", os.str());
       }
     }
   }
@@ -108,7 +108,7 @@ ReadDicomSeries(const std::string & path, const std::string & what)
   const auto & series = names->GetSeriesUIDs();
   if (series.empty())
   {
-    bmr::Fail("ReadBiomechanicalImage", what + " \"" + path + "\" is a directory without a DICOM series");
+    bmr::FailInput("ReadBiomechanicalImage", what + " \"" + path + "\" is a directory without a DICOM series");
   }
   auto reader = ImageSeriesReader<TImage>::New();
   reader->SetImageIO(GDCMImageIO::New());
@@ -128,7 +128,7 @@ ReadImageFile(const std::string & path, const std::string & what)
   const unsigned int dim = reader->GetImageIO()->GetNumberOfDimensions();
   if (dim != 3)
   {
-    bmr::Fail("ReadBiomechanicalImage",
+    bmr::FailInput("ReadBiomechanicalImage",
               what + " \"" + path + "\" is " + std::to_string(dim) + "-D; a 3-D image is required");
   }
   double voxels = 1.0;
@@ -140,7 +140,7 @@ ReadImageFile(const std::string & path, const std::string & what)
   {
     std::ostringstream os;
     os << what << " \"" << path << "\" declares " << voxels << " voxels (more than 2^31)";
-    bmr::Fail("ReadBiomechanicalImage", os.str());
+    bmr::FailInput("ReadBiomechanicalImage", os.str());
   }
   reader->Update();
   return reader->GetOutput();
@@ -177,7 +177,7 @@ ReadBiomechanicalImage(const std::string & path, const std::string & what)
   }
   if (!failure.empty())
   {
-    bmr::Fail("ReadBiomechanicalImage", failure.substr(0, failure.find('\n')));
+    bmr::FailInput("ReadBiomechanicalImage", failure.substr(0, failure.find('\n')));
   }
   GridGeometryOf(image).Validate((what + " \"" + path + "\"").c_str());
   CheckImageIsFinite(image.GetPointer(), what + " \"" + path + "\"");

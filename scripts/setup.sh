@@ -13,6 +13,7 @@ jobs="${JOBS:-$(nproc)}"
 
 packages=(build-essential cmake ninja-build libinsighttoolkit5-dev libvtk9-dev libeigen3-dev libcgal-dev
   libgdcm-dev libfftw3-dev libsuitesparse-dev libopenblas-dev libmetis-dev libtbb-dev nlohmann-json3-dev time python3-matplotlib python3-numpy
+  python3-dev pybind11-dev python3-pytest libxml2-utils
   snakemake plastimatch dicom3tools)
 missing=()
 for p in "${packages[@]}"; do
@@ -31,7 +32,10 @@ if command -v update-alternatives >/dev/null; then
   case "$blas" in *openblas*|"") ;; *) echo "warning: libblas.so.3 is $blas, not OpenBLAS; CHOLMOD will be slow" >&2 ;; esac
 fi
 
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON
+# The Python package is built for Debian's python3 (which has numpy), not for another python3 earlier on the PATH.
+python=()
+[ -x /usr/bin/python3 ] && python=(-DPython3_EXECUTABLE=/usr/bin/python3)
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON "${python[@]}"
 cmake --build "$build" -j "$jobs"
 
 case "$mode" in

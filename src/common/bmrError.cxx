@@ -27,4 +27,10 @@ Fail(const std::string & where, const std::string & message)
   throw itk::ExceptionObject(__FILE__, __LINE__, message, where);
 }
 
+void
+FailInput(const std::string & where, const std::string & message)
+{
+  throw itk::InvalidArgumentError(__FILE__, __LINE__, message, where);
+}
+
 } // namespace bmr

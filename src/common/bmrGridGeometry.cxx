@@ -119,19 +119,19 @@ GridGeometry::Validate(const char * what) const
     {
       std::ostringstream os;
       os << "size[" << a << "] is 0 (size " << this->size[0] << " x " << this->size[1] << " x " << this->size[2] << ")";
-      Fail(where, GridMessage(what, os.str()));
+      FailInput(where, GridMessage(what, os.str()));
     }
     if (!std::isfinite(this->spacing[a]) || !(this->spacing[a] > 0.0))
     {
       std::ostringstream os;
       os << "spacing[" << a << "] = " << this->spacing[a] << " is not positive and finite";
-      Fail(where, GridMessage(what, os.str()));
+      FailInput(where, GridMessage(what, os.str()));
     }
     if (!std::isfinite(this->origin[a]))
     {
       std::ostringstream os;
       os << "origin[" << a << "] = " << this->origin[a] << " is not finite";
-      Fail(where, GridMessage(what, os.str()));
+      FailInput(where, GridMessage(what, os.str()));
     }
   }
   for (unsigned int e = 0; e < 9; ++e)
@@ -140,7 +140,7 @@ GridGeometry::Validate(const char * what) const
     {
       std::ostringstream os;
       os << "direction[" << e << "] = " << this->direction[e] << " is not finite";
-      Fail(where, GridMessage(what, os.str()));
+      FailInput(where, GridMessage(what, os.str()));
     }
   }
   const double det = Determinant3(this->direction);
@@ -148,7 +148,7 @@ GridGeometry::Validate(const char * what) const
   {
     std::ostringstream os;
     os << "the direction matrix is singular (|det| = " << std::abs(det) << " < 1e-6)";
-    Fail(where, GridMessage(what, os.str()));
+    FailInput(where, GridMessage(what, os.str()));
   }
 }
 

@@ -85,7 +85,7 @@ MeshMovingAnatomy(const BiomechanicalLabelImageType * movingLabels,
 {
   if (movingLabels == nullptr)
   {
-    bmr::Fail("MeshMovingAnatomy", "the moving label image is required");
+    bmr::FailInput("MeshMovingAnatomy", "the moving label image is required");
   }
   const bmr::Scene scaled = ScaledMeshSizes(scene, settings.meshScale);
   scaled.Validate();

@@ -465,7 +465,7 @@ DrawPhantomSet(unsigned int count, std::uint64_t seed, const PhantomSetRanges & 
   {
     if (!(std::isfinite(range[0]) && std::isfinite(range[1]) && range[0] > 0.0 && range[0] <= range[1]))
     {
-      bmr::Fail("DrawPhantomSet", std::string("the ") + name + " range must satisfy 0 < low <= high");
+      bmr::FailInput("DrawPhantomSet", std::string("the ") + name + " range must satisfy 0 < low <= high");
     }
   }
   // std::mt19937_64's sequence is fixed by the standard (its distributions are not, so the uniform numbers are

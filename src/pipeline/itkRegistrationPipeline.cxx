@@ -73,7 +73,7 @@ CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed)
   {
     if (movingBox[a][1] <= fixedBox[a][0] || fixedBox[a][1] <= movingBox[a][0])
     {
-      bmr::Fail("RegisterSegmentedPair",
+      bmr::FailInput("RegisterSegmentedPair",
                 "the moving and fixed label images do not overlap in physical space (axis " + std::to_string(a) +
                   ": moving " + std::to_string(movingBox[a][0]) + " .. " + std::to_string(movingBox[a][1]) +
                   " mm, fixed " + std::to_string(fixedBox[a][0]) + " .. " + std::to_string(fixedBox[a][1]) + " mm)");
@@ -245,7 +245,7 @@ ProbabilityOrgans(const OrganProbabilityImages & probabilities, const bmr::Scene
                                        [&kv](const bmr::ObjectiveTerm & t) { return t.label == kv.first; });
     if (!objective || !kv.second)
     {
-      bmr::Fail("RegisterSegmentedPair",
+      bmr::FailInput("RegisterSegmentedPair",
                 "a fixed probability image is given for \"" + kv.first +
                   "\", which is not an objective organ of the scene (or the image is null)");
     }
@@ -268,16 +268,16 @@ CheckUncertaintySettings(const UncertaintySettings & u)
   {
     if (!(value >= 0.0) || !std::isfinite(value))
     {
-      bmr::Fail("RegisterSegmentedPair", std::string("UncertaintySettings::") + name + " must be finite and >= 0");
+      bmr::FailInput("RegisterSegmentedPair", std::string("UncertaintySettings::") + name + " must be finite and >= 0");
     }
   }
   if (!(u.statedVoxelLimitMM > 0.0))
   {
-    bmr::Fail("RegisterSegmentedPair", "UncertaintySettings::statedVoxelLimitMM must be > 0 [mm]");
+    bmr::FailInput("RegisterSegmentedPair", "UncertaintySettings::statedVoxelLimitMM must be > 0 [mm]");
   }
   if (u.meshJitter >= 0.9 || !(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
   {
-    bmr::Fail("RegisterSegmentedPair",
+    bmr::FailInput("RegisterSegmentedPair",
               "UncertaintySettings: meshJitter must lie in [0, 0.9) and simulationMeshScale in [0.25, 2]");
   }
 }
@@ -609,14 +609,14 @@ CheckRegistrationInputs(const BiomechanicalLabelImageType * movingLabels,
 {
   if (movingLabels == nullptr || fixedLabels == nullptr)
   {
-    bmr::Fail("RegisterSegmentedPair", "the moving and the fixed label images are required");
+    bmr::FailInput("RegisterSegmentedPair", "the moving and the fixed label images are required");
   }
   CheckOverlap(movingLabels, fixedLabels);
   CheckUncertaintySettings(settings.uncertainty);
   if (settings.meshes != nullptr &&
       settings.meshes->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, scene, settings))
   {
-    bmr::Fail("RegisterSegmentedPair",
+    bmr::FailInput("RegisterSegmentedPair",
               "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
               "(MeshMovingAnatomy)");
   }

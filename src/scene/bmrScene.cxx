@@ -449,7 +449,7 @@ ParseLabelList(const std::string & text, const Scene * scene)
     const long v = std::strtol(item.c_str(), &end, 10);
     if (end == item.c_str() || *end != '\0')
     {
-      Fail("ParseLabelList", "label \"" + item + "\" is neither an integer nor a label of the scene");
+      FailInput("ParseLabelList", "label \"" + item + "\" is neither an integer nor a label of the scene");
     }
     labels.push_back(static_cast<std::int32_t>(v));
   }

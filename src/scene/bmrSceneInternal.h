@@ -29,7 +29,7 @@ namespace bmr::detail {
 [[noreturn]] inline void
 SceneError(const std::string & source, const std::string & entry, const std::string & message)
 {
-  Fail("Scene", source + ": " + entry + ": " + message);
+  FailInput("Scene", source + ": " + entry + ": " + message);
 }
 
 } // namespace bmr::detail

@@ -602,7 +602,7 @@ ReadScene(const std::string & fileName)
   std::ifstream in(fileName);
   if (!in)
   {
-    Fail("ReadScene", "cannot open scene file \"" + fileName + "\"");
+    FailInput("ReadScene", "cannot open scene file \"" + fileName + "\"");
   }
   std::ostringstream text;
   text << in.rdbuf();

@@ -48,7 +48,7 @@ CheckPhantomGrid(const GridGeometry & grid, const char * what, const char * wher
     std::ostringstream os;
     os << what << ": size " << grid.size[0] << " x " << grid.size[1] << " x " << grid.size[2]
        << " exceeds the maximum of 2^31 voxels";
-    Fail(where, os.str());
+    FailInput(where, os.str());
   }
 }
 
@@ -75,7 +75,7 @@ PhantomCenter(const GridGeometry & grid, bool useGridCenter, const Vec3 & center
   }
   if (!std::isfinite(center[0]) || !std::isfinite(center[1]) || !std::isfinite(center[2]))
   {
-    Fail(where, "the phantom center is not finite");
+    FailInput(where, "the phantom center is not finite");
   }
   return center;
 }
@@ -385,7 +385,7 @@ MakePelvisPhantom(const PelvisPhantomParameters & parameters)
   {
     std::ostringstream os;
     os << "noiseSigmaHU = " << parameters.noiseSigmaHU << " must be non-negative and finite";
-    Fail(where, os.str());
+    FailInput(where, os.str());
   }
   const Vec3 center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
 
@@ -415,7 +415,7 @@ MakeSpherePhantom(const SpherePhantomParameters & parameters)
     std::ostringstream os;
     os << "the radii must satisfy 0 < innerRadius < outerRadius (got " << parameters.innerRadius << " and "
        << parameters.outerRadius << ")";
-    Fail(where, os.str());
+    FailInput(where, os.str());
   }
   const Vec3 center = PhantomCenter(parameters.grid, parameters.useGridCenter, parameters.center, where);
 
@@ -433,7 +433,7 @@ AddGaussianNoise(std::vector<float> & values, double sigma, std::uint64_t seed)
   {
     std::ostringstream os;
     os << "sigma = " << sigma << " must be non-negative and finite";
-    Fail("AddGaussianNoise", os.str());
+    FailInput("AddGaussianNoise", os.str());
   }
   if (sigma == 0.0)
   {

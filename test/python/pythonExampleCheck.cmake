@@ -1,0 +1,16 @@
+# examples/python/register_demo.py as a user runs it: exit status 0, the modulus line printed, the register
+# outputs and the picture written. Run with: cmake -DPYTHON=<python3> -DSCRIPT=<register_demo.py> -DOUT=<dir> -P ...
+file(REMOVE_RECURSE ${OUT})
+execute_process(COMMAND ${PYTHON} ${SCRIPT} ${OUT} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "register_demo.py exited with ${rc}: ${err}")
+endif()
+if(NOT out MATCHES "E = [0-9.]+ kPa \\(68 %: [0-9.]+ to [0-9.]+ kPa, 95 %: [0-9.]+ to [0-9.]+ kPa")
+  message(FATAL_ERROR "register_demo.py did not print the stated modulus")
+endif()
+foreach(f register/field.nrrd register/warped_ct.nrrd register/report.json register_demo.png)
+  if(NOT EXISTS ${OUT}/${f})
+    message(FATAL_ERROR "register_demo.py did not write ${f}")
+  endif()
+endforeach()

@@ -1,0 +1,193 @@
+"""The package's functions: the C++ pipelines (itkBiomechanicalPipelines.h) on numpy arrays. Units: mm, kPa,
+mN; images in LPS with ITK's geometry."""
+
+import numpy as np
+
+from . import _biomechreg as _engine
+from ._images import Image, engine_tuple, from_engine
+
+__all__ = ["register", "simulate", "make_phantom", "warp", "read_image", "write_image", "read_scene",
+           "parse_scene", "configure_numerics", "set_number_of_threads", "get_number_of_threads"]
+
+# register()'s keywords: biomechreg register's options, each a field of RegistrationSettings.
+_REGISTER_KEYWORDS = {
+    "uncertainty": "uncertainty.method",          # --uncertainty rescan|bootstrap|curvature|none
+    "resamples": "uncertainty.resamples",         # --resamples
+    "uncertainty_seed": "uncertainty.seed",       # --uncertainty-seed
+    "uncertainty_threads": "uncertainty.threads",  # --uncertainty-threads
+    "quantiles": "uncertainty.quantiles",         # --uncertainty-quantiles calibrated|student
+    "mesh_scale": "mesh_scale",                   # --mesh-scale
+    "coarse_factor": "coarse_factor",             # --coarse-factor
+    "sweep_samples": "estimator.number_of_sweep_samples",
+    "max_outer_iterations": "estimator.maximum_outer_iterations",
+    "outer_tolerance": "estimator.outer_gradient_tolerance",
+    "limit_element_inversion": "estimator.limit_element_inversion",  # --element-inversion limit
+    "wall_motion": "walls.motion",                # --wall-motion normal|free|traction|pressure
+    "wall_spacing_mm": "walls.control_spacing",   # --wall-spacing-mm
+    "wall_regularization": "walls.regularization",
+    "interpolate_slices": "interpolate_slices",   # --slice-interpolation on
+    "push_field": "push_field",
+    "element_state": "element_state",
+}
+
+# make_phantom()'s keywords beyond PhantomSettings' own fields: biomechreg phantom's names.
+_PHANTOM_ALIASES = {"true_E_kPa": "prostate_E", "true_nu": "prostate_nu", "tissue_E_kPa": "tissue_E",
+                    "tumour_E_kPa": "tumour_E", "truth_mesh_scale": "truth_refinement"}
+
+
+def _set_path(settings, path, value, keyword):
+    *parents, leaf = path.split(".")
+    target = settings
+    for name in parents:
+        target = getattr(target, name)
+    try:
+        setattr(target, leaf, value)
+    except TypeError as error:
+        raise TypeError("%s: %s" % (keyword, error)) from None
+
+
+def _registration_settings(settings, keywords):
+    settings = _engine.RegistrationSettings() if settings is None else settings
+    for keyword, value in keywords.items():
+        if keyword not in _REGISTER_KEYWORDS:
+            raise TypeError("register() got an unexpected keyword argument %r (known: %s)" % (
+                keyword, ", ".join(sorted(_REGISTER_KEYWORDS))))
+        _set_path(settings, _REGISTER_KEYWORDS[keyword], value, keyword)
+    return settings
+
+
+def register(moving_labels, fixed_labels, scene, *, moving_ct=None, fixed_probabilities=None, settings=None,
+             callback=None, **keywords):
+    """Joint estimation of boundary loads and Young's moduli (itk::RegisterSegmentedPair, ``biomechreg
+    register``): the moving labels meshed, the fixed organs' signed distance maps, FEMElasticityOptimizer, the
+    fields, the warped images and the stated interval of every unknown modulus.
+
+    moving_labels, fixed_labels: label maps (integer arrays [z, y, x] with geometry: Image, itk.Image,
+    SimpleITK.Image); scene: a Scene (read_scene(), or a phantom's ``scene``); moving_ct: warped too when given
+    (on the moving labels' grid); fixed_probabilities: {organ: image in [0, 1]} for sub-voxel fixed surfaces;
+    settings: a RegistrationSettings (all of them; the keywords override it); callback(event: dict): stages,
+    progress, warnings and every inner solve, on any thread, one at a time; raising in it stops the run.
+
+    Keywords (biomechreg register's options, the defaults its): uncertainty ("rescan", "bootstrap",
+    "curvature", "none"), resamples (4), uncertainty_seed (1), uncertainty_threads (0: all), quantiles
+    ("calibrated", "student"), mesh_scale (1.0), coarse_factor (1.6), sweep_samples (10),
+    max_outer_iterations (20), outer_tolerance (1e-4), limit_element_inversion (False), wall_motion
+    ("normal", "free", "traction", "pressure"), wall_spacing_mm (0), wall_regularization (0.01),
+    interpolate_slices (False), push_field (False), element_state (True).
+
+    Returns a Registration: youngs_modulus [kPa], intervals, modulus_text, report (report.json as a dict),
+    field (fixed -> moving [mm]), warped_labels, warped_ct, mesh, dice, warnings, stages, write(directory).
+    Raises ValueError for bad input, RuntimeError when the computation fails, KeyboardInterrupt on Ctrl-C
+    (the run stops at its next event)."""
+    settings = _registration_settings(settings, keywords)
+    probabilities = {organ: engine_tuple(image, "fixed_probabilities[%s]" % organ, np.float32)
+                     for organ, image in (fixed_probabilities or {}).items()}
+    ct = None if moving_ct is None else engine_tuple(moving_ct, "moving_ct", np.float32)
+    return _engine.register_pair(engine_tuple(moving_labels, "moving_labels", np.int32),
+                                 engine_tuple(fixed_labels, "fixed_labels", np.int32),
+                                 ct, probabilities, _scene(scene), settings, callback)
+
+
+def simulate(moving_labels, scene, *, reference=None, push_field=True, callback=None):
+    """The scene's forward problem (itk::SimulateLabelImage, ``biomechreg simulate``): the labels meshed, the
+    known loads applied, the pull-back field fixed -> moving [mm] on ``reference``'s grid (default: the
+    labels') and, with push_field, the push field on the labels' grid. Returns a Simulation (field,
+    push_field, mesh, inverted_elements, warnings, stages)."""
+    labels = engine_tuple(moving_labels, "moving_labels", np.int32)
+    grid = None if reference is None else engine_tuple(reference, "reference", np.float32)
+    return _engine.simulate(labels, _scene(scene), grid, bool(push_field), callback)
+
+
+def make_phantom(anatomy="pelvis", *, size=None, spacing=None, origin=None, rotate_z_deg=0.0, callback=None,
+                 **keywords):
+    """A moving/fixed pair with its ground truth (itk::MakePhantomPair, ``biomechreg phantom``): anatomy
+    "pelvis" or "spheres"; size (voxels x, y, z) and spacing [mm] of the grid, centred on the origin unless
+    ``origin`` is given, rotated by rotate_z_deg about z (an oblique volume); keywords: the fields of PhantomSettings (prostate_E [kPa], bladder_mm, rectum_mm,
+    seed, noise_HU, fractions, contour_fractions, model, fixed_grid_shift_voxels, ...) or biomechreg
+    phantom's names (true_E_kPa, tissue_E_kPa, truth_mesh_scale, ...). Returns a Phantom (moving_ct,
+    fixed_ct, moving_labels, fixed_labels, truth_field, scene, truth_scene, truth, landmarks, write())."""
+    settings = _engine.PhantomSettings(anatomy)
+    if size is not None or spacing is not None or rotate_z_deg:
+        size = tuple(int(n) for n in (size if size is not None else settings.size))
+        spacing = tuple(float(s) for s in (spacing if spacing is not None else settings.spacing))
+        # Centred on the physical origin, as the command line's --size/--spacing/--rotate-z-deg make it.
+        centre, direction = _engine.centered_grid(size, spacing, float(rotate_z_deg) * np.pi / 180.0)
+        settings.size, settings.spacing, settings.origin, settings.direction = size, spacing, centre, direction
+    if origin is not None:
+        settings.origin = tuple(float(o) for o in origin)
+    for keyword, value in keywords.items():
+        name = _PHANTOM_ALIASES.get(keyword, keyword)
+        if name.startswith("_") or not hasattr(settings, name):
+            raise TypeError("make_phantom() got an unexpected keyword argument %r" % keyword)
+        _set_path(settings, name, value, keyword)
+    return _engine.make_phantom(settings, callback)
+
+
+def warp(image, field, *, labels=False, outside=None):
+    """``image`` resampled through the fixed -> moving ``field`` [mm] onto the field's grid (ImageWarper):
+    nearest neighbour for a label map (labels=True), linear otherwise; points mapped outside take ``outside``
+    (default 0, or -1000 HU for a CT)."""
+    values = engine_tuple(image, "image", np.int32 if labels else np.float32)
+    displacement = engine_tuple(field, "field", np.float64, components=3)
+    fill = (0.0 if labels else -1000.0) if outside is None else float(outside)
+    return from_engine(_engine.warp(values, displacement, bool(labels), fill))
+
+
+def read_image(path, kind="ct"):
+    """An image file or DICOM series as an Image: kind "ct" or "probability" (float32), "labels" (int32),
+    "field" (float64 vectors)."""
+    return from_engine(_engine.read_image(str(path), kind))
+
+
+def write_image(image, path):
+    """Writes an Image (NRRD, NIfTI, MetaImage by the extension) through a temporary name: an int32 array as a
+    label map, a [z, y, x, 3] array as a field, anything else as float32."""
+    image = image if isinstance(image, Image) else Image(np.asarray(image))
+    array = image.array
+    if array.ndim == 4:
+        parts = engine_tuple(image, "image", np.float64, components=3)
+    elif np.issubdtype(array.dtype, np.integer):
+        parts = engine_tuple(image, "image", np.int32)
+    else:
+        parts = engine_tuple(image, "image", np.float32)
+    _engine.write_image(parts, str(path))
+
+
+def read_scene(path):
+    """A scene file (JSON, docs/scenes.md) as a Scene; ValueError naming the entry at fault."""
+    return _engine.read_scene(str(path))
+
+
+def parse_scene(text, source="<string>"):
+    """A scene from JSON text."""
+    return _engine.parse_scene(text, source)
+
+
+def _scene(scene):
+    if isinstance(scene, _engine.Scene):
+        return scene
+    if isinstance(scene, str) and scene.lstrip().startswith("{"):
+        return parse_scene(scene)
+    if isinstance(scene, str) or hasattr(scene, "__fspath__"):
+        return read_scene(scene)
+    raise TypeError("scene: expected a Scene, a scene file's path or JSON text, got %s" % type(scene).__name__)
+
+
+def configure_numerics(blas_threads=1):
+    """The process-wide numerical settings the command line makes (bmr::ConfigureNumerics): OpenBLAS on
+    ``blas_threads`` threads (1: the same bits on any machine; 0: left alone). The library never calls it on its
+    own; call it once, early, when this process is yours. Returns (OpenBLAS found, its thread count)."""
+    return _engine.configure_numerics(int(blas_threads))
+
+
+def set_number_of_threads(threads):
+    """ITK's global default number of threads, the library's thread budget (the command line's --threads);
+    process-wide, as in ITK."""
+    if int(threads) < 1:
+        raise ValueError("threads must be >= 1")
+    _engine.set_number_of_threads(int(threads))
+
+
+def get_number_of_threads():
+    """ITK's global default number of threads."""
+    return _engine.get_number_of_threads()
