@@ -33,6 +33,7 @@
 // Every error is one line on stderr and a non-zero exit (2 for usage errors, 1 otherwise); outputs are
 // written to temporary names and renamed when complete.
 #include "biomechregCommon.h"
+#include "biomechregSlicer.h"
 #include "bmrTaskTrace.h"
 #include "itkBiomechanicalReports.h"
 #include "itkMultiThreaderBase.h"
@@ -338,6 +339,7 @@ RunSubcommand(const std::string & command, const Arguments & options)
     { "simulate", SimulateCommand },
     { "register", RegisterCommand },
     { "demons", bmrcli::DemonsCommand },
+    { "warp", bmrcli::WarpCommand },
     { "compare", bmrcli::CompareCommand },
     { "phantom-set", bmrcli::PhantomSetCommand },
     { "phantom-cohort", bmrcli::PhantomCohortCommand },
@@ -393,11 +395,20 @@ private:
 int
 main(int argc, char * argv[])
 {
-  bmrcli::RestartWithHugePageMalloc(argv);
+  // Run as a 3D Slicer module (a link named after it), biomechreg speaks Slicer's protocol instead.
+  const bmrcli::SlicerModule * slicer = bmrcli::FindSlicerModule(argv[0]);
+  if (slicer == nullptr)
+  {
+    bmrcli::RestartWithHugePageMalloc(argv);
+  }
   try
   {
     std::vector<std::string> args(argv + 1, argv + argc);
-    const GlobalOptions      global = TakeGlobalOptions(args);
+    if (slicer != nullptr)
+    {
+      return bmrcli::RunSlicerModule(*slicer, args, bmrcli::RunSubcommand);
+    }
+    const GlobalOptions global = TakeGlobalOptions(args);
     ApplyGlobalOptions(global);
     const TaskTraceFile trace(global.taskTrace);
     const std::string   command = args.empty() ? std::string() : args.front();

@@ -33,14 +33,24 @@ StageTimer::StageBegin(const std::string & name)
   m_StageStart = Clock::now();
   m_Solves = 0;
   OpenStageLine(line.str());
+  if (SlicerProgress())
+  {
+    PrintLine("<filter-start><filter-name>" + name + "</filter-name><filter-comment> \"" + name +
+              "\" </filter-comment></filter-start>");
+  }
 }
 
 void
-StageTimer::StageEnd(const std::string &, double seconds, const std::string & detail)
+StageTimer::StageEnd(const std::string & name, double seconds, const std::string & detail)
 {
   std::ostringstream time;
   time << std::fixed << std::setprecision(2) << std::setw(7) << seconds << " s";
   CloseStageLine(time.str() + (detail.empty() ? "" : "  ") + detail);
+  if (SlicerProgress())
+  {
+    PrintLine("<filter-end><filter-name>" + name + "</filter-name><filter-time>" + std::to_string(seconds) +
+              "</filter-time></filter-end>");
+  }
 }
 
 void
@@ -53,6 +63,10 @@ void
 StageTimer::Progress(double fraction, const std::string & detail)
 {
   ShowProgress(fraction, std::chrono::duration<double>(Clock::now() - m_StageStart).count(), detail);
+  if (SlicerProgress() && fraction >= 0.0)
+  {
+    PrintLine("<filter-progress>" + std::to_string(std::min(1.0, fraction)) + "</filter-progress>");
+  }
 }
 
 void

@@ -74,6 +74,14 @@ struct GlobalOptions
 void
 RestartWithHugePageMalloc(char * argv[]);
 
+/** From now on the stages are also reported in 3D Slicer's progress tags (<filter-start>, <filter-progress>,
+ * <filter-end>) on stdout, each on a line of its own: biomechreg runs as a Slicer module (biomechregSlicer.h). */
+void
+UseSlicerProgress();
+/** Whether UseSlicerProgress() was called. */
+bool
+SlicerProgress();
+
 /** Removes --help/-h, --version, --quiet/-q, --verbose/-v, --threads N and --task-trace FILE from \a args. */
 GlobalOptions
 TakeGlobalOptions(std::vector<std::string> & args);
@@ -279,6 +287,9 @@ ParseDemonsSettings(const Arguments & args);
 
 int
 DemonsCommand(const Arguments & args);
+/** biomechreg warp (biomechregWarp.cxx). */
+int
+WarpCommand(const Arguments & args);
 int
 CompareCommand(const Arguments & args);
 int

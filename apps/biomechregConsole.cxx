@@ -32,6 +32,7 @@ namespace bmrcli {
 namespace {
 
 Verbosity g_Verbosity = Verbosity::Normal;
+bool      g_SlicerProgress = false;
 // The stage line that StageBegin() left open (no newline yet), so that a warning does not land mid-line.
 std::string g_OpenStage;
 bool        g_StageOpen = false;
@@ -105,6 +106,18 @@ StripITKPrefix(const std::string & text)
   }
   const auto last = message.find_last_not_of(' ');
   return last == std::string::npos ? std::string() : message.substr(0, last + 1);
+}
+
+void
+UseSlicerProgress()
+{
+  g_SlicerProgress = true;
+}
+
+bool
+SlicerProgress()
+{
+  return g_SlicerProgress;
 }
 
 Verbosity

@@ -70,6 +70,10 @@ const std::pair<const char *, const char *> commands[] = {
     "0)]\n"
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
     "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
+  { "warp",
+    "  biomechreg warp --image FILE --field FILE --out DIR [--labels off|on (on: a label map, nearest neighbour)]\n"
+    "                  [--outside V (-1000, labels 0)]\n"
+    "    the image resampled through a fixed -> moving field [mm] onto the field's grid: DIR/warped.nrrd\n" },
   { "demons",
     "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
     "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"

@@ -37,6 +37,11 @@ python=()
 [ -x /usr/bin/python3 ] && python=(-DPython3_EXECUTABLE=/usr/bin/python3)
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON "${python[@]}"
 cmake --build "$build" -j "$jobs"
+# The Python package into python3's site-packages, so that `python3 -c "import biomechreg"` works (when built).
+if grep -q "^BMR_WRAP_PYTHON:BOOL=ON" "$build/CMakeCache.txt"; then
+  sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd cmake --install "$build" --component python >/dev/null
+fi
 
 case "$mode" in
   demo) cd "$root" && "$root/scripts/run_demo.sh" "$build" ;;

@@ -7,7 +7,7 @@ import pytest
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "cli: compares the package with the biomechreg command line (needs "
-                                       "BIOMECHREG_CLI and BIOMECHREG_SPHERES)")
+                                       "BIOMECHREG_CLI)")
 
 
 @pytest.fixture(scope="session")
@@ -15,14 +15,6 @@ def cli():
     path = os.environ.get("BIOMECHREG_CLI")
     if not path:
         pytest.skip("BIOMECHREG_CLI is not set")
-    return path
-
-
-@pytest.fixture(scope="session")
-def spheres_dir():
-    path = os.environ.get("BIOMECHREG_SPHERES")
-    if not path:
-        pytest.skip("BIOMECHREG_SPHERES is not set")
     return path
 
 

@@ -1,7 +1,8 @@
-"""The package against the command line: the same registration, the same bits. On the spheres phantom of the CLI
-tests (40^3 voxels of 2 mm): `biomechreg register` with the rescans' interval, then register() on the images it
-read; the modulus, the interval's ends and every voxel of the field (written as doubles) must be equal, not close:
-both run the same library code on the same inputs with the BLAS on one thread (configure_numerics(), as the CLI)."""
+"""The package against the command line: the same registration, the same bits. On a spheres phantom of 64^3 voxels
+of 1 mm (voxels at which register states the rescans' interval, and a fit inside the search bounds):
+`biomechreg register` with the interval, then register() on the images it read; the modulus, the interval and every
+voxel of the field (written as doubles) must be equal, not close: both run the same library code on the same inputs
+with the BLAS on one thread (configure_numerics(), as the CLI)."""
 
 import json
 import subprocess
@@ -13,6 +14,14 @@ import pytest
 import biomechreg
 
 pytestmark = pytest.mark.cli
+
+
+@pytest.fixture(scope="module")
+def spheres_dir(cli, tmp_path_factory):
+    out = tmp_path_factory.mktemp("spheres")
+    subprocess.run([cli, "phantom", "--scene", "spheres", "--size", "64,64,64", "--spacing", "1,1,1",
+                    "--true-E-kPa", "60", "--out", str(out)], check=True, stdout=subprocess.DEVNULL)
+    return out
 
 
 def run_cli(cli, spheres_dir, out):
@@ -41,6 +50,9 @@ def test_register_equals_the_command_line(cli, spheres_dir, tmp_path):
 
     (name, modulus), = result.youngs_modulus.items()
     assert modulus == report["youngs_modulus_kPa"][name]
+    interval = report["youngs_modulus_interval"][name]
+    assert interval["lower_end_determined"] and interval["upper_end_determined"]  # an interval is stated
+    assert result.intervals[name]["interval95"] == interval["interval_95_kPa"]
     assert result.report["youngs_modulus_kPa"] == report["youngs_modulus_kPa"]
     assert result.report["youngs_modulus_interval"] == report["youngs_modulus_interval"]
     cli_field = biomechreg.read_image(tmp_path / "cli" / "field.nrrd", "field")
