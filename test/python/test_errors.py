@@ -68,6 +68,14 @@ def _jittered(jitter):
     return settings
 
 
+def test_marker_errors(small_pair):
+    with pytest.raises(ValueError, match=r"treatment_markers\[s1\]: expected three finite numbers"):
+        biomechreg.markers(small_pair.moving_labels, small_pair.moving_ct, small_pair.scene, {"s1": (0, 0, 0)},
+                           {"s1": (0, float("nan"), 0)})
+    with pytest.raises(TypeError, match="planning_markers: expected"):
+        biomechreg.markers(small_pair.moving_labels, small_pair.moving_ct, small_pair.scene, [(0, 0, 0)], {})
+
+
 def test_scene_errors(tmp_path):
     with pytest.raises(ValueError, match="cannot open scene file"):
         biomechreg.read_scene(tmp_path / "nothing.json")

@@ -82,6 +82,16 @@ ImageTuple(py::array array, const bmr::GridGeometry & grid)
                         py::cast(std::vector<double>(grid.direction.begin(), grid.direction.end())));
 }
 
+py::object
+ToImage(const py::tuple & parts)
+{
+  if (parts.empty())
+  {
+    return py::none();
+  }
+  return py::module_::import("biomechreg._images").attr("Image")(parts[0], parts[1], parts[2], parts[3]);
+}
+
 void
 SetGeometry(itk::ImageBase<3> * image, const bmr::GridGeometry & grid)
 {

@@ -42,6 +42,11 @@ GeometryOf(const py::tuple & image, const std::string & what);
 py::tuple
 ImageTuple(py::array array, const bmr::GridGeometry & grid);
 
+/** A biomechreg.Image of the engine's (array, spacing, origin, direction); None for an empty tuple (a null
+ * image). */
+py::object
+ToImage(const py::tuple & parts);
+
 /** Sets \a image's spacing, origin and direction to \a grid's (its size is the region's). */
 void
 SetGeometry(itk::ImageBase<3> * image, const bmr::GridGeometry & grid);

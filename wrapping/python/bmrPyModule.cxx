@@ -259,5 +259,6 @@ PYBIND11_MODULE(_biomechreg, m)
   bmrpy::TranslateExceptions();
   bmrpy::BindSettings(m);
   bmrpy::BindResults(m);
+  bmrpy::BindClinical(m);
   bmrpy::BindFunctions(m);
 }

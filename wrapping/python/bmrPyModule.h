@@ -22,6 +22,7 @@
 // the functions (bmrPyModule.cxx).
 #include "bmrScene.h"
 #include "itkBiomechanicalPipelines.h"
+#include "itkMarkerPipeline.h"
 
 #include <pybind11/pybind11.h>
 
@@ -45,6 +46,13 @@ struct Phantom
   itk::PhantomSettings settings;
 };
 
+/** What markers() estimated, with its settings (for the report). */
+struct Markers
+{
+  itk::MarkerResult   result;
+  itk::MarkerSettings settings;
+};
+
 /** A forward simulation's result. */
 struct Simulation
 {
@@ -54,6 +62,10 @@ struct Simulation
 /** EstimatorSettings, WallLoadSettings, UncertaintySettings, RegistrationSettings and PhantomSettings. */
 void
 BindSettings(py::module_ & m);
+
+/** markers() and its MarkerSettings and Markers; dose(), conformal_plan(), read_landmarks() and their settings. */
+void
+BindClinical(py::module_ & m);
 
 /** Scene, Registration, Phantom and Simulation. */
 void

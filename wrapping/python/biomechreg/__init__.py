@@ -11,15 +11,17 @@ numpy arrays, itk.Image or SimpleITK.Image. Units: mm, kPa, mN. The computation 
 callback(event) hears its stages and progress; Ctrl-C stops it. docs/python.md has the guide.
 """
 
-from ._api import (configure_numerics, get_number_of_threads, make_phantom, parse_scene, read_image, read_scene,
-                   register, set_number_of_threads, simulate, warp, write_image)
-from ._biomechreg import (EstimatorSettings, Phantom, PhantomSettings, Registration, RegistrationSettings, Scene,
-                          Simulation, UncertaintySettings, WallLoadSettings)
+from ._api import (configure_numerics, conformal_plan, dose, get_number_of_threads, make_phantom, markers,
+                   parse_scene, read_image, read_landmarks, read_scene, register, set_number_of_threads, simulate,
+                   warp, write_image)
+from ._biomechreg import (EstimatorSettings, Markers, Phantom, PhantomSettings, Registration, RegistrationSettings,
+                          Scene, Simulation, UncertaintySettings, WallLoadSettings)
 from ._images import Image, as_image
 
 __version__ = "0.1.0"
 
-__all__ = ["Image", "as_image", "register", "simulate", "make_phantom", "warp", "read_image", "write_image",
-           "read_scene", "parse_scene", "configure_numerics", "set_number_of_threads", "get_number_of_threads",
-           "RegistrationSettings", "UncertaintySettings", "EstimatorSettings", "WallLoadSettings",
-           "PhantomSettings", "Registration", "Simulation", "Phantom", "Scene"]
+__all__ = ["Image", "as_image", "register", "simulate", "make_phantom", "markers", "dose", "conformal_plan", "warp",
+           "read_image", "write_image", "read_scene", "parse_scene", "read_landmarks", "configure_numerics",
+           "set_number_of_threads", "get_number_of_threads", "RegistrationSettings", "UncertaintySettings",
+           "EstimatorSettings", "WallLoadSettings", "PhantomSettings", "Registration", "Simulation", "Phantom",
+           "Markers", "Scene"]

@@ -6,8 +6,9 @@ import numpy as np
 from . import _biomechreg as _engine
 from ._images import Image, engine_tuple, from_engine
 
-__all__ = ["register", "simulate", "make_phantom", "warp", "read_image", "write_image", "read_scene",
-           "parse_scene", "configure_numerics", "set_number_of_threads", "get_number_of_threads"]
+__all__ = ["register", "simulate", "make_phantom", "markers", "dose", "conformal_plan", "warp", "read_image",
+           "write_image", "read_scene", "parse_scene", "read_landmarks", "configure_numerics",
+           "set_number_of_threads", "get_number_of_threads"]
 
 # register()'s keywords: biomechreg register's options, each a field of RegistrationSettings.
 _REGISTER_KEYWORDS = {
@@ -121,6 +122,70 @@ def make_phantom(anatomy="pelvis", *, size=None, spacing=None, origin=None, rota
             raise TypeError("make_phantom() got an unexpected keyword argument %r" % keyword)
         _set_path(settings, name, value, keyword)
     return _engine.make_phantom(settings, callback)
+
+
+def _landmarks(points, what):
+    if isinstance(points, (str, bytes)) or hasattr(points, "__fspath__"):
+        return read_landmarks(points)
+    if not isinstance(points, dict):
+        raise TypeError("%s: expected {id: (x, y, z)} [mm, LPS] or a landmark file, got %s"
+                        % (what, type(points).__name__))
+    return {str(k): tuple(float(c) for c in v) for k, v in points.items()}
+
+
+def read_landmarks(path):
+    """A landmark file as {id: (x, y, z)} [mm, LPS]: CSV (id,x_mm,y_mm,z_mm), 3D Slicer .fcsv or markups .json
+    (RAS converted to LPS as the file says)."""
+    return _engine.read_landmarks(str(path))
+
+
+def markers(planning_labels, planning_ct, scene, planning_markers, treatment_markers, *, treatment_labels=None,
+            organ="prostate", box_margin_mm=25.0, control_spacing_mm=8.0, regularization=1e-3, mesh_scale=1.0,
+            moduli=None, leave_one_out=True, callback=None):
+    """The treatment anatomy from tracked markers (itk::EstimateTreatmentFromMarkers, ``biomechreg markers``,
+    dissertation chapter 4): forces on ``organ``'s surface in a static box fitted so that the planning markers
+    move onto the treatment ones, against rigid alignment and a thin-plate spline, with leave-one-out errors.
+
+    Markers: {id: (x, y, z)} [mm, LPS] or landmark files, paired by id. moduli: {label: kPa} for the scene's
+    unknown labels. treatment_labels (optional): the real treatment organs, for IoU and D per method.
+    Returns a Markers: field (treatment -> planning [mm]), warped_ct, methods ({fem, rigid, tps}: residuals,
+    leave-one-out errors, IoU, D, warped_labels, field), report (report.json as a dict)."""
+    settings = _engine.MarkerSettings()
+    settings.organ, settings.box_margin_mm, settings.control_spacing_mm = organ, box_margin_mm, control_spacing_mm
+    settings.regularization, settings.mesh_scale = regularization, mesh_scale
+    settings.moduli, settings.leave_one_out = dict(moduli or {}), bool(leave_one_out)
+    evaluation = None if treatment_labels is None else engine_tuple(treatment_labels, "treatment_labels", np.int32)
+    return _engine.markers(engine_tuple(planning_labels, "planning_labels", np.int32),
+                           engine_tuple(planning_ct, "planning_ct", np.float32), _scene(scene),
+                           _landmarks(planning_markers, "planning_markers"),
+                           _landmarks(treatment_markers, "treatment_markers"), evaluation, settings, callback)
+
+
+def dose(labels, dose_Gy, scene, *, field=None, bin_width_Gy=0.1, volume_doses_Gy=(50.0, 60.0, 65.0, 70.0, 75.0),
+         eud_a=None, anterior_rectal_wall=True):
+    """DVHs and dose metrics per scene structure (itk::EvaluateDose, ``biomechreg dose``): ``dose_Gy`` [Gy] on
+    ``labels``, after warping it through the fixed -> moving ``field`` when given (out(x) = dose(x + d(x))).
+    Returns a dict: structures ({name: volume_cc, mean_Gy, D95_Gy, D98_Gy, D2_Gy, gEUD_Gy, eud_a,
+    volume_fraction_at_dose, dvh_cumulative, dvh_differential, ...}), bin_width_Gy, dose (the Image evaluated),
+    metrics_csv and dvh_csv (the CLI's files' text)."""
+    settings = _engine.DoseEvaluationSettings()
+    settings.bin_width_Gy = float(bin_width_Gy)
+    settings.volume_doses_Gy = [float(d) for d in volume_doses_Gy]
+    settings.eud_parameters = dict(eud_a or {})
+    settings.anterior_rectal_wall = bool(anterior_rectal_wall)
+    displacement = None if field is None else engine_tuple(field, "field", np.float64, components=3)
+    return _engine.dose(engine_tuple(labels, "labels", np.int32), engine_tuple(dose_Gy, "dose", np.float32),
+                        _scene(scene), displacement, settings)
+
+
+def conformal_plan(labels, scene, *, margin_mm=5.0, prescription_Gy=78.0, penumbra_mm=6.0, bath_fraction=0.0,
+                   bath_length_mm=30.0, prostate="prostate"):
+    """A synthetic conformal plan's dose [Gy] on ``labels`` (itk::MakeConformalDosePlan, ``biomechreg dose
+    --plan-margin``): the prescription inside the PTV (the prostate grown by margin_mm), an erfc penumbra."""
+    settings = _engine.ConformalPlanSettings()
+    settings.margin_mm, settings.prescription_Gy, settings.penumbra_mm = margin_mm, prescription_Gy, penumbra_mm
+    settings.bath_fraction, settings.bath_length_mm = bath_fraction, bath_length_mm
+    return _engine.conformal_plan(engine_tuple(labels, "labels", np.int32), _scene(scene), prostate, settings)
 
 
 def warp(image, field, *, labels=False, outside=None):
