@@ -185,6 +185,30 @@ ReadLabelsOrRTStruct(const std::string &       path,
                      bool                      ignoreUnmappedROIs = false);
 
 class Arguments;
+/** register's label inputs, its scene (empty: the built-in pelvis scene of two structure sets), --roi-map and --out. */
+struct RegistrationPaths
+{
+  std::string movingLabels, fixedLabels, scene, roiMap, out;
+};
+
+/** The scene and label maps register works on; with structure sets, the fixed ROI of each objective organ. */
+struct RegistrationAnatomy
+{
+  bmr::Scene                         scene;
+  LabelImageType::Pointer            movingLabels, fixedLabels;
+  std::map<std::string, std::string> fixedROIOfOrgan;
+};
+
+/** With a scene: it and the label maps (or RTSTRUCTs named as its labels, ReadLabelsOrRTStruct()). Without: both
+ * label inputs must be RTSTRUCTs, read with the built-in pelvis scene (itk::ReadClinicalPelvisAnatomy(), --roi-map
+ * overrides), the mapping printed and written to structure_set.json, the label maps to *_labels_from_rois.nrrd
+ * (biomechregStructureSet.cxx). */
+RegistrationAnatomy
+ReadRegistrationAnatomy(const RegistrationPaths & paths,
+                        const CTImageType *       movingCT,
+                        const CTImageType *       fixedCT,
+                        bool                      ignoreROIs);
+
 /** --unmapped-rois ignore|refuse (default refuse): what ReadLabelsOrRTStruct() does with ROIs of an RTSTRUCT that
  * are no scene label. */
 bool

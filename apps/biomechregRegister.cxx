@@ -99,23 +99,26 @@ ReadProbabilityImages(const std::string & list)
 
 /** The objective organs of an RTSTRUCT given as \a fixedLabels as the area fractions of their outlines
  * (itk::ReadRTStructAreaFractions) on the fixed CT's grid, added to \a probabilities where an organ has none; nothing
- * for a label image. The fixed organs' surfaces then follow the polygons, not their voxels. */
+ * for a label image. The fixed organs' surfaces then follow the polygons, not their voxels. An organ's ROI is named
+ * as the organ unless \a roiOfOrgan says otherwise (a structure set's TG-263 names). */
 void
-AddOutlineFractions(const std::string &           fixedLabels,
-                    const itk::ImageBase<3> *     fixedCT,
-                    const bmr::Scene &            scene,
-                    itk::OrganProbabilityImages & probabilities)
+AddOutlineFractions(const std::string &                        fixedLabels,
+                    const itk::ImageBase<3> *                  fixedCT,
+                    const bmr::Scene &                         scene,
+                    const std::map<std::string, std::string> & roiOfOrgan,
+                    itk::OrganProbabilityImages &              probabilities)
 {
   if (itk::ReadDicomModality(fixedLabels) != "RTSTRUCT")
   {
     return;
   }
-  std::vector<std::string> organs;
+  std::vector<std::string> organs, rois;
   for (const bmr::ObjectiveTerm & term : scene.objective)
   {
     if (probabilities.count(term.label) == 0)
     {
       organs.push_back(term.label);
+      rois.push_back(roiOfOrgan.count(term.label) ? roiOfOrgan.at(term.label) : term.label);
     }
   }
   if (organs.empty())
@@ -124,21 +127,22 @@ AddOutlineFractions(const std::string &           fixedLabels,
   }
   try
   {
-    for (auto & [organ, fractions] : itk::ReadRTStructAreaFractions(fixedLabels, fixedCT, organs))
+    const auto fractions = itk::ReadRTStructAreaFractions(fixedLabels, fixedCT, rois);
+    for (std::size_t i = 0; i < organs.size(); ++i)
     {
-      probabilities[organ] = fractions;
+      probabilities[organs[i]] = fractions.at(rois[i]);
     }
   }
   catch (const itk::ExceptionObject & e)
   {
     bmr::Fail("AddOutlineFractions", "fixed label image: " + std::string(e.GetDescription()));
   }
-  std::cout << "  fixed organs' surfaces from the RTSTRUCT's outlines:";
+  std::string names;
   for (const auto & organ : organs)
   {
-    std::cout << " " << organ;
+    names += " " + organ;
   }
-  std::cout << std::endl;
+  PrintLine("  fixed organs' surfaces from the RTSTRUCT's outlines:" + names);
 }
 
 itk::RegistrationSettings
@@ -250,14 +254,14 @@ PrintOuterIterations(const itk::RegistrationResult & result)
 int
 RegisterCommand(const Arguments & args)
 {
-  const std::string movingCT = args.Require("--moving-ct");
-  const std::string movingLabels = args.Require("--moving-labels");
-  const std::string fixedCT = args.Require("--fixed-ct");
-  const std::string fixedLabels = args.Require("--fixed-labels");
-  const std::string scenePath = args.Require("--scene");
-  const std::string out = args.Require("--out");
-  const auto        outputs = ParseRegistrationOutputs(args);
-  auto              settings = ParseRegistrationSettings(args);
+  const std::string       movingCT = args.Require("--moving-ct");
+  const std::string       movingLabels = args.Require("--moving-labels");
+  const std::string       fixedCT = args.Require("--fixed-ct");
+  const std::string       fixedLabels = args.Require("--fixed-labels");
+  const std::string       out = args.Require("--out");
+  const RegistrationPaths paths{ movingLabels, fixedLabels, args.Get("--scene"), args.Get("--roi-map"), out };
+  const auto              outputs = ParseRegistrationOutputs(args);
+  auto                    settings = ParseRegistrationSettings(args);
   settings.pushField = outputs.forwardField; // computed only when written
   settings.elementState = outputs.mesh;
   const std::string probabilities = args.Get("--fixed-probabilities");
@@ -270,27 +274,31 @@ RegisterCommand(const Arguments & args)
   StageTimer timer(true);
   std::cout << "biomechreg register -> " << out << std::endl;
   timer.Begin("read inputs");
-  bmr::Scene scene = bmr::ReadScene(scenePath);
+  // A label input may be an RTSTRUCT, rasterized on the grid of the CT of the same scan; the fixed CT is read to
+  // check it (and to grid an RTSTRUCT); the fixed label image defines the output grid.
+  const auto   moving = ReadImage<CTImageType>(movingCT, "moving CT");
+  const auto   fixed = ReadImage<CTImageType>(fixedCT, "fixed CT");
+  auto         anatomy = ReadRegistrationAnatomy(paths, moving, fixed, ignoreROIs);
+  bmr::Scene & scene = anatomy.scene;
   if (!labelSurfaces.empty())
   {
     scene.mesh.labelSurfaces = labelSurfaces == "distance" ? bmr::MeshingParameters::LabelSurfaces::Distance
                                                            : bmr::MeshingParameters::LabelSurfaces::Voxels;
   }
-  const auto moving = ReadImage<CTImageType>(movingCT, "moving CT");
-  // A label input may be an RTSTRUCT, rasterized on the grid of the CT of the same scan.
-  const auto movingMap = ReadLabelsOrRTStruct(movingLabels, "moving label image", moving, scene, ignoreROIs);
-  // The fixed CT is read to check it (and to grid an RTSTRUCT); the fixed label image defines the output grid.
-  const auto fixed = ReadImage<CTImageType>(fixedCT, "fixed CT");
-  const auto fixedMap = ReadLabelsOrRTStruct(fixedLabels, "fixed label image", fixed, scene, ignoreROIs);
-  auto       fixedProbabilities = ReadProbabilityImages(probabilities);
+  auto fixedProbabilities = ReadProbabilityImages(probabilities);
   if (outlines)
   {
-    AddOutlineFractions(fixedLabels, fixed, scene, fixedProbabilities);
+    AddOutlineFractions(fixedLabels, fixed, scene, anatomy.fixedROIOfOrgan, fixedProbabilities);
   }
   timer.End();
   // The moving CT is warped only when the warped CT is written.
-  const auto result = itk::RegisterSegmentedPair(
-    movingMap, fixedMap, fixedProbabilities, outputs.warpedCT ? moving : nullptr, scene, settings, &timer);
+  const auto result = itk::RegisterSegmentedPair(anatomy.movingLabels,
+                                                 anatomy.fixedLabels,
+                                                 fixedProbabilities,
+                                                 outputs.warpedCT ? moving : nullptr,
+                                                 scene,
+                                                 settings,
+                                                 &timer);
   timer.stages.insert(timer.stages.end(), result.state.stages.begin(), result.state.stages.end());
   WriteRegistration(out, result, settings, outputs, timer);
 

@@ -114,7 +114,14 @@ ReadDicomSeries(const std::string & path, const std::string & what)
   reader->SetImageIO(GDCMImageIO::New());
   reader->SetFileNames(names->GetFileNames(series.front()));
   reader->Update();
-  return reader->GetOutput();
+  typename TImage::Pointer image = reader->GetOutput();
+  // The first slice's DICOM attributes (frame of reference, patient, study) travel with the volume.
+  const auto * slices = reader->GetMetaDataDictionaryArray();
+  if (slices != nullptr && !slices->empty() && slices->front() != nullptr)
+  {
+    image->SetMetaDataDictionary(*slices->front());
+  }
+  return image;
 }
 
 template<typename TImage>

@@ -55,6 +55,12 @@ BiomechanicalRegistration_EXPORT std::string
 BiomechanicalRegistration_EXPORT std::vector<std::string>
                                  ReadRTStructROINames(const std::string & rtstructPath);
 
+/** \brief The Frame of Reference UIDs (0020,0052) an RTSTRUCT's Referenced Frame of Reference Sequence (3006,0010)
+ * names: the patient coordinate systems its contours are in. Throws as ReadRTStructROINames().
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT std::vector<std::string>
+                                 ReadRTStructFrameOfReferenceUIDs(const std::string & rtstructPath);
+
 /** How ReadRTStructAsLabelImage() treats what the map does not cover.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT */
 struct BiomechanicalRegistration_EXPORT RTStructRasterizationOptions

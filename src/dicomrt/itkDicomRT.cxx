@@ -430,6 +430,27 @@ ReadRTStructROINames(const std::string & rtstructPath)
   return names;
 }
 
+std::vector<std::string>
+ReadRTStructFrameOfReferenceUIDs(const std::string & rtstructPath)
+{
+  gdcm::Reader reader;
+  CheckDicomFile("ReadRTStructFrameOfReferenceUIDs", "RTSTRUCT", rtstructPath);
+  ReadParsedFile(reader, "ReadRTStructFrameOfReferenceUIDs", "RTSTRUCT", rtstructPath);
+  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
+  CheckModality(ds, "RTSTRUCT", "ReadRTStructFrameOfReferenceUIDs", rtstructPath);
+  std::vector<std::string> uids;
+  const auto               frames = Sequence(ds, ReferencedFrameOfReferenceSequenceTag);
+  for (gdcm::SequenceOfItems::SizeType f = 1; frames && f <= frames->GetNumberOfItems(); ++f)
+  {
+    const std::string uid = StringValue(frames->GetItem(f).GetNestedDataSet(), gdcm::Tag(0x0020, 0x0052));
+    if (!uid.empty())
+    {
+      uids.push_back(uid);
+    }
+  }
+  return uids;
+}
+
 DicomRTLabelImageType::Pointer
 ReadRTStructAsLabelImage(const std::string &                         rtstructPath,
                          const ImageBase<3> *                        referenceGrid,

@@ -8,6 +8,8 @@ import pytest
 def pytest_configure(config):
     config.addinivalue_line("markers", "cli: compares the package with the biomechreg command line (needs "
                                        "BIOMECHREG_CLI)")
+    config.addinivalue_line("markers", "structure_set: clinical structure sets without a scene (slow; needs "
+                                       "BIOMECHREG_CLI and plastimatch)")
 
 
 @pytest.fixture(scope="session")
