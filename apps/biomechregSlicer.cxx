@@ -21,6 +21,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <utility>
 #include <unistd.h>
 
 namespace bmrcli {
@@ -28,283 +29,271 @@ namespace bmrcli {
 namespace {
 namespace fs = std::filesystem;
 
-// Parameters several modules share.
+// The parameters' kinds; every field not set is empty.
 SlicerParameter
-Image(const char * name,
-      const char * label,
+Parameter(const char * tag, const char * name, const char * label, const char * description)
+{
+  SlicerParameter p;
+  p.tag = tag;
+  p.name = name;
+  p.label = label;
+  p.description = description;
+  return p;
+}
+
+/** An input file (image, transform, file, pointfile) passed to biomechreg as \a option. */
+SlicerParameter
+Input(const char * tag,
       const char * type,
-      const char * channel,
+      const char * name,
+      const char * label,
       const char * option,
-      const char * file,
       const char * description)
 {
-  return { "image", name, label, description, channel, type, option, file, "", {}, "", "" };
+  SlicerParameter p = Parameter(tag, name, label, description);
+  p.channel = "input";
+  p.type = type;
+  p.option = option;
+  return p;
+}
+
+/** An output file: biomechreg's \a file in its --out directory, moved to the path Slicer gives. */
+SlicerParameter
+Output(const char * tag,
+       const char * type,
+       const char * name,
+       const char * label,
+       const char * file,
+       const char * description)
+{
+  SlicerParameter p = Parameter(tag, name, label, description);
+  p.channel = "output";
+  p.type = type;
+  p.file = file;
+  return p;
+}
+
+/** A setting passed as \a option, with its default and, for numbers, its range. */
+SlicerParameter
+Setting(const char * tag,
+        const char * name,
+        const char * label,
+        const char * option,
+        const char * defaultValue,
+        const char * description,
+        const char * minimum = "",
+        const char * maximum = "")
+{
+  SlicerParameter p = Parameter(tag, name, label, description);
+  p.option = option;
+  p.defaultValue = defaultValue;
+  p.minimum = minimum;
+  p.maximum = maximum;
+  return p;
 }
 
 SlicerParameter
-Field(const char * name, const char * channel, const char * option, const char * file)
+Enumeration(const char *              name,
+            const char *              label,
+            const char *              option,
+            std::vector<const char *> elements,
+            const char *              description)
 {
-  return { "transform",
-           name,
-           "Displacement field",
-           "fixed -> moving [mm, LPS] on the fixed grid: the resampling transform of the moving images",
-           channel,
-           "nonlinear",
-           option,
-           file,
-           "",
-           {},
-           "",
-           "" };
+  SlicerParameter p = Setting("string-enumeration", name, label, option, elements.front(), description);
+  p.elements = std::move(elements);
+  return p;
+}
+
+/** A value returned to Slicer through --returnparameterfile (read from the run's report.json). */
+SlicerParameter
+Returned(const char * tag, const char * name, const char * label, const char * description)
+{
+  SlicerParameter p = Parameter(tag, name, label, description);
+  p.channel = "output";
+  return p;
+}
+
+SlicerParameter
+Field(const char * channel, const char * name, const char * option, const char * file)
+{
+  const char * description =
+    "fixed -> moving [mm, LPS] on the fixed grid: the resampling transform of the moving images";
+  SlicerParameter p = std::string(channel) == "input"
+                        ? Input("transform", "nonlinear", name, "Displacement field", option, description)
+                        : Output("transform", "nonlinear", name, "Displacement field", file, description);
+  return p;
 }
 
 SlicerParameter
 SceneFile()
 {
-  return { "file",  "scene", "Scene",   "The scene JSON: labels, roles, materials, loads, objective (docs/scenes.md)",
-           "input", "",      "--scene", "",
-           "",      {},      "",        "" };
+  return Input("file",
+               "",
+               "scene",
+               "Scene",
+               "--scene",
+               "The scene JSON: labels, roles, materials, loads, objective (docs/scenes.md)");
 }
 
 SlicerParameter
 Threads()
 {
-  return { "integer", "threads", "Threads",   "The library's threads (0: all cores); the results do not depend on it",
-           "",        "",        "--threads", "",
-           "0",       {},        "0",         "256" };
+  return Setting("integer",
+                 "threads",
+                 "Threads",
+                 "--threads",
+                 "0",
+                 "The library's threads (0: all cores); the results do not depend on it",
+                 "0",
+                 "256");
 }
 
 SlicerModule
 RegistrationModule()
 {
-  return { "BiomechanicalRegistration",
-           "register",
-           "Biomechanical Registration",
-           "Physics-based registration of segmented CT with joint estimation of an organ's Young's modulus "
-           "(biomechreg register): the moving labels meshed, the scene's wall loads and the unknown modulus fitted "
-           "so that the simulated organs match the fixed labels.",
-           { { "Inputs",
-               false,
-               { Image("movingCT", "Moving CT", "scalar", "input", "--moving-ct", "", "The planning CT [HU]"),
-                 Image("movingLabels",
-                       "Moving labels",
-                       "label",
-                       "input",
-                       "--moving-labels",
-                       "",
-                       "The planning scan's organs, labelled as the scene says"),
-                 Image("fixedCT", "Fixed CT", "scalar", "input", "--fixed-ct", "", "The daily CT [HU]"),
-                 Image("fixedLabels",
-                       "Fixed labels",
-                       "label",
-                       "input",
-                       "--fixed-labels",
-                       "",
-                       "The daily scan's organs, on its grid"),
-                 SceneFile() } },
-             { "Estimation",
-               false,
-               { { "string-enumeration",
-                   "uncertainty",
-                   "Uncertainty",
-                   "How the modulus' interval is stated",
-                   "",
-                   "",
-                   "--uncertainty",
-                   "",
-                   "rescan",
-                   { "rescan", "bootstrap", "curvature", "none" },
-                   "",
-                   "" },
-                 { "integer",
-                   "resamples",
-                   "Resamples",
-                   "Re-estimations of the interval",
-                   "",
-                   "",
-                   "--resamples",
-                   "",
-                   "4",
-                   {},
-                   "3",
-                   "1000" },
-                 { "string-enumeration",
-                   "wallMotion",
-                   "Wall motion",
-                   "How the hollow organs' walls move",
-                   "",
-                   "",
-                   "--wall-motion",
-                   "",
-                   "normal",
-                   { "normal", "free", "traction", "pressure" },
-                   "",
-                   "" },
-                 { "double",
-                   "meshScale",
-                   "Mesh scale",
-                   "Mesh sizes relative to the scene's (> 1: coarser, faster)",
-                   "",
-                   "",
-                   "--mesh-scale",
-                   "",
-                   "1",
-                   {},
-                   "0.25",
-                   "4" },
-                 Threads() } },
-             { "Outputs",
-               false,
-               { Field("outputField", "output", "", "field.nrrd"),
-                 Image("warpedCT",
-                       "Warped CT",
-                       "scalar",
-                       "output",
-                       "",
-                       "warped_ct.nrrd",
-                       "The moving CT resampled onto the fixed grid"),
-                 Image("warpedLabels",
-                       "Warped labels",
-                       "label",
-                       "output",
-                       "",
-                       "warped_labels.nrrd",
-                       "The moving labels resampled onto the fixed grid"),
-                 { "file",
-                   "report",
-                   "Report",
-                   "report.json: moduli, intervals, distances, Dice, wall times",
-                   "output",
-                   "",
-                   "",
-                   "report.json",
-                   "",
-                   {},
-                   "",
-                   "" },
-                 { "double",
-                   "youngsModulus",
-                   "Young's modulus [kPa]",
-                   "The estimated modulus of the unknown organ",
-                   "output",
-                   "",
-                   "",
-                   "",
-                   "",
-                   {},
-                   "",
-                   "" },
-                 { "string",
-                   "modulusStatement",
-                   "Statement",
-                   "The estimate with its interval, as register states it",
-                   "output",
-                   "",
-                   "",
-                   "",
-                   "",
-                   {},
-                   "",
-                   "" } } } } };
+  return {
+    "BiomechanicalRegistration",
+    "register",
+    "Biomechanical Registration",
+    "Physics-based registration of segmented CT with joint estimation of an organ's Young's modulus "
+    "(biomechreg register): the moving labels meshed, the scene's wall loads and the unknown modulus fitted "
+    "so that the simulated organs match the fixed labels.",
+    { { "Inputs",
+        false,
+        { Input("image", "scalar", "movingCT", "Moving CT", "--moving-ct", "The planning CT [HU]"),
+          Input("image",
+                "label",
+                "movingLabels",
+                "Moving labels",
+                "--moving-labels",
+                "The planning scan's organs, labelled as the scene says"),
+          Input("image", "scalar", "fixedCT", "Fixed CT", "--fixed-ct", "The daily CT [HU]"),
+          Input(
+            "image", "label", "fixedLabels", "Fixed labels", "--fixed-labels", "The daily scan's organs, on its grid"),
+          SceneFile() } },
+      { "Estimation",
+        false,
+        { Enumeration("uncertainty",
+                      "Uncertainty",
+                      "--uncertainty",
+                      { "rescan", "bootstrap", "curvature", "none" },
+                      "How the modulus' interval is stated"),
+          Setting(
+            "integer", "resamples", "Resamples", "--resamples", "4", "Re-estimations of the interval", "3", "1000"),
+          Enumeration("wallMotion",
+                      "Wall motion",
+                      "--wall-motion",
+                      { "normal", "free", "traction", "pressure" },
+                      "How the hollow organs' walls move"),
+          Setting("double",
+                  "meshScale",
+                  "Mesh scale",
+                  "--mesh-scale",
+                  "1",
+                  "Mesh sizes relative to the scene's (> 1: coarser, faster)",
+                  "0.25",
+                  "4"),
+          Threads() } },
+      { "Outputs",
+        false,
+        { Field("output", "outputField", "", "field.nrrd"),
+          Output("image",
+                 "scalar",
+                 "warpedCT",
+                 "Warped CT",
+                 "warped_ct.nrrd",
+                 "The moving CT resampled onto the fixed grid"),
+          Output("image",
+                 "label",
+                 "warpedLabels",
+                 "Warped labels",
+                 "warped_labels.nrrd",
+                 "The moving labels resampled onto the fixed grid"),
+          Output("file",
+                 "",
+                 "report",
+                 "Report",
+                 "report.json",
+                 "report.json: moduli, intervals, distances, Dice, wall times"),
+          Returned("double", "youngsModulus", "Young's modulus [kPa]", "The estimated modulus of the unknown organ"),
+          Returned(
+            "string", "modulusStatement", "Statement", "The estimate with its interval, as register states it") } } }
+  };
 }
 
 SlicerModule
 SimulationModule()
 {
-  return {
-    "BiomechanicalSimulation",
-    "simulate",
-    "Biomechanical Simulation",
-    "The forward problem of a scene (biomechreg simulate): the labels meshed, the scene's known loads "
-    "applied with finite elements, the displacement field and the warped images.",
-    { { "Inputs",
-        false,
-        { Image("movingLabels", "Labels", "label", "input", "--moving-labels", "", "The anatomy's labels"),
-          Image("movingCT", "CT", "scalar", "input", "--moving-ct", "", "Warped too (optional)"),
-          SceneFile(),
-          Image("reference",
-                "Reference",
-                "scalar",
-                "input",
-                "--reference",
-                "",
-                "The grid of the field (optional; default: the labels')"),
-          Threads() } },
-      { "Outputs",
-        false,
-        { Field("outputField", "output", "", "field.nrrd"),
-          Image("warpedLabels", "Warped labels", "label", "output", "", "warped_labels.nrrd", "Nearest neighbour"),
-          Image("warpedCT", "Warped CT", "scalar", "output", "", "warped_ct.nrrd", "Linear (with a CT)") } } }
-  };
+  return { "BiomechanicalSimulation",
+           "simulate",
+           "Biomechanical Simulation",
+           "The forward problem of a scene (biomechreg simulate): the labels meshed, the scene's known loads "
+           "applied with finite elements, the displacement field and the warped images.",
+           { { "Inputs",
+               false,
+               { Input("image", "label", "movingLabels", "Labels", "--moving-labels", "The anatomy's labels"),
+                 Input("image", "scalar", "movingCT", "CT", "--moving-ct", "Warped too (optional)"),
+                 SceneFile(),
+                 Input("image",
+                       "scalar",
+                       "reference",
+                       "Reference",
+                       "--reference",
+                       "The grid of the field (optional; default: the labels')"),
+                 Threads() } },
+             { "Outputs",
+               false,
+               { Field("output", "outputField", "", "field.nrrd"),
+                 Output("image", "label", "warpedLabels", "Warped labels", "warped_labels.nrrd", "Nearest neighbour"),
+                 Output("image", "scalar", "warpedCT", "Warped CT", "warped_ct.nrrd", "Linear (with a CT)") } } } };
 }
 
 SlicerModule
 MarkersModule()
 {
-  return { "BiomechanicalMarkers",
-           "markers",
-           "Biomechanical Markers",
-           "An organ's deformation from tracked markers (biomechreg markers): forces on the organ's surface fitted "
-           "so that the planning markers move onto the treatment ones.",
-           { { "Inputs",
-               false,
-               { Image("planningCT", "Planning CT", "scalar", "input", "--planning-ct", "", "The planning CT [HU]"),
-                 Image("planningLabels",
-                       "Planning labels",
-                       "label",
-                       "input",
-                       "--planning-labels",
-                       "",
-                       "The planning scan's organs"),
-                 SceneFile(),
-                 { "pointfile",
-                   "planningMarkers",
-                   "Planning markers",
-                   "The markers on the planning scan",
-                   "input",
-                   "point",
-                   "--planning-markers",
-                   "",
-                   "",
-                   {},
-                   "",
-                   "" },
-                 { "pointfile",
-                   "treatmentMarkers",
-                   "Treatment markers",
-                   "The same markers at treatment",
-                   "input",
-                   "point",
-                   "--treatment-markers",
-                   "",
-                   "",
-                   {},
-                   "",
-                   "" },
-                 { "string",
-                   "organ",
-                   "Organ",
-                   "The organ whose surface carries the forces",
-                   "",
-                   "",
-                   "--organ",
-                   "",
-                   "prostate",
-                   {},
-                   "",
-                   "" },
-                 Threads() } },
-             { "Outputs",
-               false,
-               { Field("outputField", "output", "", "field.nrrd"),
-                 Image("warpedCT", "Warped CT", "scalar", "output", "", "warped_ct.nrrd", "The planning CT deformed"),
-                 Image("warpedLabels",
-                       "Warped labels",
-                       "label",
-                       "output",
-                       "",
-                       "warped_labels.nrrd",
-                       "The planning labels deformed") } } } };
+  return {
+    "BiomechanicalMarkers",
+    "markers",
+    "Biomechanical Markers",
+    "An organ's deformation from tracked markers (biomechreg markers): forces on the organ's surface fitted "
+    "so that the planning markers move onto the treatment ones.",
+    { { "Inputs",
+        false,
+        { Input("image", "scalar", "planningCT", "Planning CT", "--planning-ct", "The planning CT [HU]"),
+          Input(
+            "image", "label", "planningLabels", "Planning labels", "--planning-labels", "The planning scan's organs"),
+          SceneFile(),
+          Input("pointfile",
+                "point",
+                "planningMarkers",
+                "Planning markers",
+                "--planning-markers",
+                "The markers on the planning scan"),
+          Input("pointfile",
+                "point",
+                "treatmentMarkers",
+                "Treatment markers",
+                "--treatment-markers",
+                "The same markers at treatment"),
+          Setting("string", "organ", "Organ", "--organ", "prostate", "The organ whose surface carries the forces"),
+          Setting("string",
+                  "moduli",
+                  "Moduli",
+                  "--modulus",
+                  "",
+                  "Young's moduli of the scene's unknown labels: NAME=E_kPa,... (kPa)"),
+          Threads() } },
+      { "Outputs",
+        false,
+        { Field("output", "outputField", "", "field.nrrd"),
+          Output("image", "scalar", "warpedCT", "Warped CT", "warped_ct.nrrd", "The planning CT deformed"),
+          Output("image",
+                 "label",
+                 "warpedLabels",
+                 "Warped labels",
+                 "warped_labels.nrrd",
+                 "The planning labels deformed") } } }
+  };
 }
 
 SlicerModule
@@ -318,23 +307,17 @@ WarpModule()
     "nearest neighbour for a label map.",
     { { "Inputs",
         false,
-        { Image("inputVolume", "Image", "scalar", "input", "--image", "", "The image to warp"),
-          Field("inputField", "input", "--field", ""),
-          { "boolean",
-            "labels",
-            "Label map",
-            "Nearest neighbour (a label map) instead of linear",
-            "",
-            "",
-            "--labels",
-            "",
-            "false",
-            {},
-            "",
-            "" } } },
+        { Input("image", "scalar", "inputVolume", "Image", "--image", "The image to warp"),
+          Field("input", "inputField", "--field", ""),
+          Setting("boolean",
+                  "labels",
+                  "Label map",
+                  "--labels",
+                  "false",
+                  "Nearest neighbour (a label map) instead of linear") } },
       { "Outputs",
         false,
-        { Image("outputVolume", "Warped image", "scalar", "output", "", "warped.nrrd", "On the field's grid") } } }
+        { Output("image", "scalar", "outputVolume", "Warped image", "warped.nrrd", "On the field's grid") } } }
   };
 }
 

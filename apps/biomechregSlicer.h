@@ -32,18 +32,18 @@ namespace bmrcli {
 /** One parameter of a module's description; where it goes on biomechreg's command line. */
 struct SlicerParameter
 {
-  const char *              tag;  ///< element: image, transform, file, pointfile, integer, double, boolean, ...
-  const char *              name; ///< also the longflag (Slicer's names: [_a-zA-Z][_a-zA-Z0-9]*)
-  const char *              label;
-  const char *              description;
-  const char *              channel; ///< "input" or "output" (empty: a setting)
-  const char *              type;    ///< image/transform/pointfile type attribute, or empty
-  const char *              option;  ///< the biomechreg option it sets; empty for outputs and return values
-  const char *              file;    ///< output: the file biomechreg writes into --out that Slicer gets
-  const char *              defaultValue;
+  const char *              tag{ "" };  ///< element: image, transform, file, pointfile, integer, double, ...
+  const char *              name{ "" }; ///< also the longflag (Slicer's names: [_a-zA-Z][_a-zA-Z0-9]*)
+  const char *              label{ "" };
+  const char *              description{ "" };
+  const char *              channel{ "" }; ///< "input" or "output" (empty: a setting)
+  const char *              type{ "" };    ///< image/transform/pointfile type attribute, or empty
+  const char *              option{ "" };  ///< the biomechreg option it sets; empty for outputs and return values
+  const char *              file{ "" };    ///< output: the file biomechreg writes into --out that Slicer gets
+  const char *              defaultValue{ "" };
   std::vector<const char *> elements; ///< enumeration values
-  const char *              minimum;
-  const char *              maximum;
+  const char *              minimum{ "" };
+  const char *              maximum{ "" };
 };
 
 struct SlicerGroup

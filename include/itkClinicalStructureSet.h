@@ -40,14 +40,14 @@ struct BiomechanicalRegistration_EXPORT PelvisROIMapping
 {
   std::map<std::string, std::string> partOfROI; ///< ROI name as in the file -> part
   std::vector<std::string>           leftOut;   ///< the file's other ROIs (PTVs, bowel, couch, ...)
-  /** The ROIs of \a part, in the file's order. */
+  /** The ROIs of \a part, in the order of their names. */
   std::vector<std::string>
   ROIsOf(const std::string & part) const;
 };
 
 /** \brief Maps \a roiNames to the pelvis scene's parts by their TG-263 names and documented synonyms, matched
  * case-insensitively and ignoring spaces, underscores and hyphens:
- * - prostate: Prostate, ProstateGland, CTV_Prostate is not (a CTV is a margin, left out);
+ * - prostate: Prostate, ProstateGland (a CTV or PTV, a margin around it, is left out);
  * - bladder: Bladder, UrinaryBladder; rectum: Rectum;
  * - body: External, Body, Skin, Outline, BodyContour;
  * - bone: Femur_Head_L/R, Femur_L/R, FemoralHead_L/R, Femur_Neck_L/R, Bone_Pelvic, Pelvis, PelvicBone, Bones,

@@ -46,20 +46,15 @@ GridGeometryOf(const ImageBase<3> * image)
   }
   return g;
 }
-/** A new image on \a grid (size, spacing, origin, direction) holding \a values, index 0 fastest
- * (the buffer layout of the bmr core). */
-template<typename TImage>
-typename TImage::Pointer
-MakeImageOnGrid(const bmr::GridGeometry & grid, const std::vector<typename TImage::PixelType> & values)
+/** Sets \a image's spacing, origin and direction to \a grid's (its regions are left as they are). */
+inline void
+ApplyGridGeometry(ImageBase<3> * image, const bmr::GridGeometry & grid)
 {
-  auto                           image = TImage::New();
-  typename TImage::RegionType    region;
-  typename TImage::SpacingType   spacing;
-  typename TImage::PointType     origin;
-  typename TImage::DirectionType direction;
+  ImageBase<3>::SpacingType   spacing;
+  ImageBase<3>::PointType     origin;
+  ImageBase<3>::DirectionType direction;
   for (unsigned int i = 0; i < 3; ++i)
   {
-    region.SetSize(i, grid.size[i]);
     spacing[i] = grid.spacing[i];
     origin[i] = grid.origin[i];
     for (unsigned int j = 0; j < 3; ++j)
@@ -67,10 +62,25 @@ MakeImageOnGrid(const bmr::GridGeometry & grid, const std::vector<typename TImag
       direction(i, j) = grid.direction[3 * i + j];
     }
   }
-  image->SetRegions(region);
   image->SetSpacing(spacing);
   image->SetOrigin(origin);
   image->SetDirection(direction);
+}
+
+/** A new image on \a grid (size, spacing, origin, direction) holding \a values, index 0 fastest
+ * (the buffer layout of the bmr core). */
+template<typename TImage>
+typename TImage::Pointer
+MakeImageOnGrid(const bmr::GridGeometry & grid, const std::vector<typename TImage::PixelType> & values)
+{
+  auto                        image = TImage::New();
+  typename TImage::RegionType region;
+  for (unsigned int i = 0; i < 3; ++i)
+  {
+    region.SetSize(i, grid.size[i]);
+  }
+  image->SetRegions(region);
+  ApplyGridGeometry(image.GetPointer(), grid);
   image->Allocate();
   std::copy(values.begin(), values.end(), image->GetBufferPointer());
   return image;

@@ -40,7 +40,8 @@ cmake --build "$build" -j "$jobs"
 # The Python package into python3's site-packages, so that `python3 -c "import biomechreg"` works (when built).
 if grep -q "^BMR_WRAP_PYTHON:BOOL=ON" "$build/CMakeCache.txt"; then
   sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
-  $sudo_cmd cmake --install "$build" --component python >/dev/null
+  $sudo_cmd cmake --install "$build" --component python >/dev/null ||
+    echo "note: the Python package was not installed (no permission); use PYTHONPATH=$build/python" >&2
 fi
 
 case "$mode" in

@@ -119,7 +119,7 @@ CheckRequiredParts(const PelvisROIMapping & mapping, const std::string & source)
       bmr::FailInput(Where,
                      source + ": the built-in pelvis scene needs one ROI for the " + part + " (TG-263 " +
                        (std::string(part) == "body" ? "External" : std::string(1, std::toupper(part[0])) + (part + 1)) +
-                       ", or --roi-map NAME=" + part + "); found " + found);
+                       ", or an override NAME=" + part + ", --roi-map on the command line); found " + found);
     }
   }
 }

@@ -118,6 +118,17 @@ struct ROI
   std::int32_t               label{ 0 };
 };
 
+/** Parses \a path into \a reader after the file checks, refuses another modality than RTSTRUCT; its data set. */
+const gdcm::DataSet &
+ReadRTStructFile(gdcm::Reader & reader, const char * where, const std::string & path)
+{
+  CheckDicomFile(where, "RTSTRUCT", path);
+  ReadParsedFile(reader, where, "RTSTRUCT", path);
+  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
+  CheckModality(ds, "RTSTRUCT", where, path);
+  return ds;
+}
+
 /** Requires a Referenced Frame of Reference Sequence naming at least one referenced series: the structures
  * must say which images they were drawn on. */
 void
@@ -417,11 +428,8 @@ ReadDicomModality(const std::string & path)
 std::vector<std::string>
 ReadRTStructROINames(const std::string & rtstructPath)
 {
-  gdcm::Reader reader;
-  CheckDicomFile("ReadRTStructROINames", "RTSTRUCT", rtstructPath);
-  ReadParsedFile(reader, "ReadRTStructROINames", "RTSTRUCT", rtstructPath);
-  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
-  CheckModality(ds, "RTSTRUCT", "ReadRTStructROINames", rtstructPath);
+  gdcm::Reader             reader;
+  const gdcm::DataSet &    ds = ReadRTStructFile(reader, "ReadRTStructROINames", rtstructPath);
   std::vector<std::string> names;
   for (const auto & roi : ReadROIs(ds, rtstructPath))
   {
@@ -433,11 +441,8 @@ ReadRTStructROINames(const std::string & rtstructPath)
 std::vector<std::string>
 ReadRTStructFrameOfReferenceUIDs(const std::string & rtstructPath)
 {
-  gdcm::Reader reader;
-  CheckDicomFile("ReadRTStructFrameOfReferenceUIDs", "RTSTRUCT", rtstructPath);
-  ReadParsedFile(reader, "ReadRTStructFrameOfReferenceUIDs", "RTSTRUCT", rtstructPath);
-  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
-  CheckModality(ds, "RTSTRUCT", "ReadRTStructFrameOfReferenceUIDs", rtstructPath);
+  gdcm::Reader             reader;
+  const gdcm::DataSet &    ds = ReadRTStructFile(reader, "ReadRTStructFrameOfReferenceUIDs", rtstructPath);
   std::vector<std::string> uids;
   const auto               frames = Sequence(ds, ReferencedFrameOfReferenceSequenceTag);
   for (gdcm::SequenceOfItems::SizeType f = 1; frames && f <= frames->GetNumberOfItems(); ++f)
@@ -461,11 +466,8 @@ ReadRTStructAsLabelImage(const std::string &                         rtstructPat
   {
     FailFile(RTStructWhere, "RTSTRUCT", rtstructPath, "no reference grid given");
   }
-  gdcm::Reader reader;
-  CheckDicomFile(RTStructWhere, "RTSTRUCT", rtstructPath);
-  ReadParsedFile(reader, RTStructWhere, "RTSTRUCT", rtstructPath);
-  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
-  CheckModality(ds, "RTSTRUCT", RTStructWhere, rtstructPath);
+  gdcm::Reader          reader;
+  const gdcm::DataSet & ds = ReadRTStructFile(reader, RTStructWhere, rtstructPath);
   CheckReferencedSeries(ds, rtstructPath);
   std::vector<ROI> rois = ReadROIs(ds, rtstructPath);
   MapROIs(rois, roiNameToLabel, options.ignoreUnmappedROIs, rtstructPath);
@@ -518,11 +520,8 @@ ReadRTStructAreaFractions(const std::string &              rtstructPath,
   {
     FailFile(RTStructWhere, "RTSTRUCT", rtstructPath, "no reference grid given");
   }
-  gdcm::Reader reader;
-  CheckDicomFile(RTStructWhere, "RTSTRUCT", rtstructPath);
-  ReadParsedFile(reader, RTStructWhere, "RTSTRUCT", rtstructPath);
-  const gdcm::DataSet & ds = reader.GetFile().GetDataSet();
-  CheckModality(ds, "RTSTRUCT", RTStructWhere, rtstructPath);
+  gdcm::Reader          reader;
+  const gdcm::DataSet & ds = ReadRTStructFile(reader, RTStructWhere, rtstructPath);
   CheckReferencedSeries(ds, rtstructPath);
   std::vector<ROI>                    rois = ReadROIs(ds, rtstructPath);
   std::map<std::string, std::int32_t> wanted;

@@ -92,24 +92,4 @@ ToImage(const py::tuple & parts)
   return py::module_::import("biomechreg._images").attr("Image")(parts[0], parts[1], parts[2], parts[3]);
 }
 
-void
-SetGeometry(itk::ImageBase<3> * image, const bmr::GridGeometry & grid)
-{
-  itk::ImageBase<3>::SpacingType   spacing;
-  itk::ImageBase<3>::PointType     origin;
-  itk::ImageBase<3>::DirectionType direction;
-  for (unsigned int i = 0; i < 3; ++i)
-  {
-    spacing[i] = grid.spacing[i];
-    origin[i] = grid.origin[i];
-    for (unsigned int j = 0; j < 3; ++j)
-    {
-      direction(i, j) = grid.direction[3 * i + j];
-    }
-  }
-  image->SetSpacing(spacing);
-  image->SetOrigin(origin);
-  image->SetDirection(direction);
-}
-
 } // namespace bmrpy

@@ -47,10 +47,6 @@ ImageTuple(py::array array, const bmr::GridGeometry & grid);
 py::object
 ToImage(const py::tuple & parts);
 
-/** Sets \a image's spacing, origin and direction to \a grid's (its size is the region's). */
-void
-SetGeometry(itk::ImageBase<3> * image, const bmr::GridGeometry & grid);
-
 /** The number of scalars per pixel (3 for a displacement vector) and their type. */
 template<typename TPixel>
 struct PixelLayout
@@ -88,7 +84,7 @@ ImportImage(const py::tuple & image, const std::string & what)
   container->SetImportPointer(pixels, region.GetNumberOfPixels(), false);
   result->SetRegions(region);
   result->SetPixelContainer(container);
-  SetGeometry(result.GetPointer(), grid);
+  itk::ApplyGridGeometry(result.GetPointer(), grid);
   return result;
 }
 

@@ -46,7 +46,7 @@ GridOnly(const py::tuple & image, const std::string & what)
     region.SetSize(i, grid.size[i]);
   }
   reference->SetRegions(region);
-  SetGeometry(reference.GetPointer(), grid);
+  itk::ApplyGridGeometry(reference.GetPointer(), grid);
   return reference.GetPointer();
 }
 
