@@ -91,6 +91,34 @@ def test_structure_sets_register_without_a_scene(cli, scans, tmp_path):
         dice = 2.0 * np.sum(derived & truth) / (np.sum(derived) + np.sum(truth))
         print("%s bone Dice %.4f" % (scan, dice))
         assert dice >= 0.95
+        # The package reads the structure set into the same label map (from the CT series' directory the CLI
+        # read, so with its frame of reference).
+        ct_dir, rtss = dicom(scans, scan)
+        labels, from_python = biomechreg.read_structure_set(rtss, ct_dir)
+        np.testing.assert_array_equal(labels.array, biomechreg.read_image(
+            tmp_path / "rois" / f"{scan}_labels_from_rois.nrrd", "labels").array)
+        assert from_python["part_of_roi"] == mapping[scan]["part_of_roi"]
+
+
+def test_the_package_registers_structure_sets_as_the_command_line(cli, scans, tmp_path):
+    # What register does without a scene, in Python: the label maps from the structure sets, the fixed organs'
+    # outlines as their surfaces, the built-in scene; the same modulus and field as the command line, bit for bit.
+    run = register(cli, tmp_path / "cli", dicom(scans, "moving"), dicom(scans, "fixed"), "--uncertainty", "none",
+                   "--field-precision", "double")
+    assert run.returncode == 0, run.stderr
+    biomechreg.configure_numerics()
+    (moving_ct, moving_rtss), (fixed_ct, fixed_rtss) = dicom(scans, "moving"), dicom(scans, "fixed")
+    moving, _ = biomechreg.read_structure_set(moving_rtss, moving_ct)
+    fixed, mapping = biomechreg.read_structure_set(fixed_rtss, fixed_ct)
+    roi = {part: name for name, part in mapping["part_of_roi"].items()}
+    outlines = biomechreg.read_outline_fractions(fixed_rtss, fixed_ct, [roi[o] for o in ("prostate", "bladder", "rectum")])
+    result = biomechreg.register(moving, fixed, biomechreg.builtin_pelvis_scene(),
+                                 fixed_probabilities={o: outlines[roi[o]] for o in ("prostate", "bladder", "rectum")},
+                                 uncertainty="none")
+    report = json.loads((tmp_path / "cli" / "report.json").read_text())
+    assert result.youngs_modulus["prostate"] == report["youngs_modulus_kPa"]["prostate"]
+    np.testing.assert_array_equal(result.field.array,
+                                  biomechreg.read_image(tmp_path / "cli" / "field.nrrd", "field").array)
 
 
 def one_line_error(run, name):
@@ -114,3 +142,7 @@ def test_malformed_structure_sets_are_refused_in_one_line(cli, scans, tmp_path):
     fixed_ct, _ = dicom(scans, "fixed")
     print(one_line_error(register(cli, tmp_path / "c", dicom(scans, "moving"), (fixed_ct, moving_rtss)),
                          "frame of reference"))
+    with pytest.raises(ValueError, match="needs one ROI for the body"):
+        biomechreg.read_structure_set(moving_without_body[1], biomechreg.read_image(moving_without_body[0]))
+    with pytest.raises(ValueError, match="another frame of reference"):
+        biomechreg.read_structure_set(moving_rtss, fixed_ct)

@@ -21,6 +21,9 @@
 #include "bmrPyImages.h"
 #include "bmrPyModule.h"
 #include "bmrPyObserver.h"
+#include "itkBiomechanicalImageIO.h"
+#include "itkClinicalStructureSet.h"
+#include "itkDicomRT.h"
 #include "itkDoseEvaluation.h"
 #include "itkMarkerPipeline.h"
 
@@ -181,6 +184,86 @@ ConformalPlan(const py::tuple &                  labels,
   return ToImage(ExportImage(plan.GetPointer()));
 }
 
+/** The CT of a structure set: the path of its series (read with its DICOM attributes) or an image. */
+CTImage::Pointer
+StructureSetCT(const py::object & ct)
+{
+  if (!py::isinstance<py::str>(ct))
+  {
+    return ImportImage<CTImage>(ct.cast<py::tuple>(), "ct");
+  }
+  const auto             path = ct.cast<std::string>();
+  py::gil_scoped_release released;
+  return itk::ReadBiomechanicalImage<CTImage>(path, "ct");
+}
+
+/** Each ROI's area fractions per voxel of the CT's grid (itk::ReadRTStructAreaFractions), by ROI name. */
+py::dict
+ReadOutlineFractions(const std::string & rtstruct, const py::object & ct, const std::vector<std::string> & rois)
+{
+  const CTImage::Pointer                                                 grid = StructureSetCT(ct);
+  std::map<std::string, itk::BiomechanicalProbabilityImageType::Pointer> fractions;
+  {
+    py::gil_scoped_release released;
+    for (auto & [name, image] : itk::ReadRTStructAreaFractions(rtstruct, grid, rois))
+    {
+      fractions[name] = image;
+    }
+  }
+  py::dict result;
+  for (const auto & [name, image] : fractions)
+  {
+    result[py::str(name)] = ToImage(ExportImage(image.GetPointer()));
+  }
+  return result;
+}
+
+/** The built-in pelvis scene's label map from a structure set (itk::ReadClinicalPelvisAnatomy) and its mapping; the
+ * CT given as an image (no DICOM attributes) or as the path of its series (its frame of reference checked). */
+py::tuple
+ReadStructureSet(const std::string &                        rtstruct,
+                 const py::object &                         ct,
+                 const std::map<std::string, std::string> & overrides,
+                 const itk::ClinicalAnatomySettings &       settings)
+{
+  CTImage::Pointer image;
+  if (py::isinstance<py::str>(ct))
+  {
+    const auto             path = ct.cast<std::string>();
+    py::gil_scoped_release released;
+    image = itk::ReadBiomechanicalImage<CTImage>(path, "ct");
+  }
+  else
+  {
+    image = ImportImage<CTImage>(ct.cast<py::tuple>(), "ct");
+  }
+  itk::ClinicalAnatomy anatomy;
+  {
+    py::gil_scoped_release released;
+    anatomy = itk::ReadClinicalPelvisAnatomy(rtstruct, image, overrides, settings);
+  }
+  py::dict mapping;
+  mapping["part_of_roi"] = anatomy.mapping.partOfROI;
+  mapping["left_out"] = anatomy.mapping.leftOut;
+  mapping["bone_from_ct"] = anatomy.boneFromCT;
+  mapping["bone_voxels"] = anatomy.boneVoxels;
+  mapping["bone_pieces_dropped"] = anatomy.bonePiecesDropped;
+  return py::make_tuple(ToImage(ExportImage(anatomy.labels.GetPointer())), mapping);
+}
+
+void
+BindStructureSets(py::module_ & m)
+{
+  using C = itk::ClinicalAnatomySettings;
+  py::class_<C>(m, "ClinicalAnatomySettings", "How bone is found in the CT (itk::ClinicalAnatomySettings).")
+    .def(py::init<>())
+    .def_readwrite("bone_threshold_HU", &C::boneThresholdHU)
+    .def_readwrite("minimum_bone_volume_cc", &C::minimumBoneVolumeCC);
+  m.def("read_structure_set", &ReadStructureSet);
+  m.def("read_outline_fractions", &ReadOutlineFractions);
+  m.def("builtin_pelvis_scene", &itk::BuiltInPelvisScene);
+}
+
 void
 BindMarkers(py::module_ & m)
 {
@@ -260,6 +343,7 @@ BindClinical(py::module_ & m)
 {
   BindMarkers(m);
   BindDose(m);
+  BindStructureSets(m);
 }
 
 } // namespace bmrpy

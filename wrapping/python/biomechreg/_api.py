@@ -133,6 +133,39 @@ def _landmarks(points, what):
     return {str(k): tuple(float(c) for c in v) for k, v in points.items()}
 
 
+def builtin_pelvis_scene():
+    """The scene a clinical structure set is registered with (itk::BuiltInPelvisScene): the pelvis phantoms'
+    estimation scene, whose stated intervals were calibrated; labels air 0, soft_tissue 1, prostate 2 (modulus
+    unknown), bladder 3, rectum 4, bone 5."""
+    return _engine.builtin_pelvis_scene()
+
+
+def read_structure_set(rtstruct, ct, *, roi_map=None, bone_threshold_HU=250.0, minimum_bone_volume_cc=1.0):
+    """A planning system's RTSTRUCT, drawn on ``ct``, as the built-in pelvis scene's label map
+    (itk::ReadClinicalPelvisAnatomy, what ``biomechreg register`` does without --scene): ROIs matched by TG-263 names
+    and synonyms (``roi_map`` {ROI: part} overrides; parts prostate, bladder, rectum, body, bone, ignore), the body
+    less the organs as soft tissue, bone from the CT unless a non-femoral bone ROI exists. ``ct``: the path of its
+    DICOM series (then the RTSTRUCT's frame of reference is checked against it) or an image. Returns (labels Image,
+    mapping dict: part_of_roi, left_out, bone_from_ct, bone_voxels). ValueError naming the file for a missing part
+    or an RTSTRUCT of another frame of reference."""
+    settings = _engine.ClinicalAnatomySettings()
+    settings.bone_threshold_HU, settings.minimum_bone_volume_cc = bone_threshold_HU, minimum_bone_volume_cc
+    labels, mapping = _engine.read_structure_set(str(rtstruct), _ct_grid(ct), dict(roi_map or {}), settings)
+    return labels, mapping
+
+
+def read_outline_fractions(rtstruct, ct, rois):
+    """Each ROI's exact outlines as area fractions per voxel of ``ct``'s grid (itk::ReadRTStructAreaFractions): the
+    fixed organs' sub-voxel surfaces ``biomechreg register`` uses for a fixed RTSTRUCT (--rtstruct-surfaces
+    outlines); pass them as register(fixed_probabilities={organ: fractions}). ``ct``: the path of its DICOM series
+    or an image. Returns {ROI name: Image in [0, 1]}."""
+    return _engine.read_outline_fractions(str(rtstruct), _ct_grid(ct), [str(r) for r in rois])
+
+
+def _ct_grid(ct):
+    return str(ct) if isinstance(ct, str) or hasattr(ct, "__fspath__") else engine_tuple(ct, "ct", np.float32)
+
+
 def read_landmarks(path):
     """A landmark file as {id: (x, y, z)} [mm, LPS]: CSV (id,x_mm,y_mm,z_mm), 3D Slicer .fcsv or markups .json
     (RAS converted to LPS as the file says)."""
