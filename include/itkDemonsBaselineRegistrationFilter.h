@@ -24,6 +24,7 @@
 #include "itkVector.h"
 
 #include <cstdint>
+#include <array>
 #include <vector>
 
 namespace itk {
@@ -193,6 +194,12 @@ protected:
   PrintSelf(std::ostream & os, Indent indent) const override;
 
 private:
+  using FloatImageType = Image<float, ImageDimension>;
+  /** The fixed and the moving image as float, the flattened labels replaced by their means, the moving one matched
+   * to the fixed one's histogram when asked. */
+  std::array<typename FloatImageType::Pointer, 2>
+  PreparedImages() const;
+
   VariantEnum               m_Variant{ VariantEnum::Diffeomorphic };
   unsigned int              m_NumberOfLevels{ 3 };
   std::vector<unsigned int> m_NumberOfIterations{ 50, 50, 50 };

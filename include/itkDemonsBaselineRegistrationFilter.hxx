@@ -212,21 +212,14 @@ FlattenLabels(TFloatImage * image, const TLabelImage * labels, const std::vector
 } // namespace DemonsBaselineDetail
 
 template<typename TImage, typename TDisplacementField, typename TLabelImage>
-void
-DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GenerateData()
+auto
+DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::PreparedImages() const
+  -> std::array<typename FloatImageType::Pointer, 2>
 {
-  using FloatImageType = Image<float, ImageDimension>;
   using CastType = CastImageFilter<ImageType, FloatImageType>;
-  using MultiResolutionType =
-    MultiResolutionPDEDeformableRegistration<FloatImageType, FloatImageType, DisplacementFieldType, float>;
-  using DiffeomorphicType =
-    DiffeomorphicDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
-  using SymmetricType =
-    FastSymmetricForcesDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
-
-  typename FloatImageType::Pointer images[2];
-  const ImageType *                inputs[2] = { this->GetFixedImage(), this->GetMovingImage() };
-  const char *                     labelNames[2] = { "FixedLabelImage", "MovingLabelImage" };
+  std::array<typename FloatImageType::Pointer, 2> images;
+  const ImageType *                               inputs[2] = { this->GetFixedImage(), this->GetMovingImage() };
+  const char *                                    labelNames[2] = { "FixedLabelImage", "MovingLabelImage" };
   for (int i = 0; i < 2; ++i)
   {
     auto cast = CastType::New();
@@ -242,7 +235,6 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
         m_FlattenLabels);
     }
   }
-  typename FloatImageType::Pointer moving = images[1];
   if (m_HistogramMatching)
   {
     using MatchingType = HistogramMatchingImageFilter<FloatImageType, FloatImageType>;
@@ -253,8 +245,24 @@ DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::Gener
     matching->SetNumberOfMatchPoints(m_MatchPoints);
     matching->ThresholdAtMeanIntensityOn();
     matching->Update();
-    moving = matching->GetOutput();
+    images[1] = matching->GetOutput();
   }
+  return images;
+}
+
+template<typename TImage, typename TDisplacementField, typename TLabelImage>
+void
+DemonsBaselineRegistrationFilter<TImage, TDisplacementField, TLabelImage>::GenerateData()
+{
+  using MultiResolutionType =
+    MultiResolutionPDEDeformableRegistration<FloatImageType, FloatImageType, DisplacementFieldType, float>;
+  using DiffeomorphicType =
+    DiffeomorphicDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
+  using SymmetricType =
+    FastSymmetricForcesDemonsRegistrationFilter<FloatImageType, FloatImageType, DisplacementFieldType>;
+
+  const auto images = this->PreparedImages();
+  const auto moving = images[1];
 
   typename MultiResolutionType::RegistrationType::Pointer demons;
   typename DiffeomorphicType::Pointer                     diffeomorphic;

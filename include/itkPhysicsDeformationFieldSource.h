@@ -181,6 +181,9 @@ private:
    * the deformed mesh), where: their labels and what they lie against (bmr::InvertedElementsByLabel()). */
   void
   WarnInvertedElements(const bmr::TetrahedralMesh & mesh, bool locate) const;
+  /** The output's voxels from \a field (3 doubles per voxel, index 0 fastest), plane by plane on the threader. */
+  void
+  CopyToOutput(const double * field, const bmr::GridGeometry & grid);
 
   FieldDirectionEnum                  m_FieldDirection{ FieldDirectionEnum::FixedToMoving };
   bool                                m_FillOutside{ true };

@@ -179,24 +179,33 @@ PhysicsDeformationFieldSource<TOutputImage>::GenerateData()
   this->UpdateProgress(0.9f);
   if constexpr (!inPlace)
   {
-    threader->ParallelizeArray(
-      0,
-      grid.size[2],
-      [&](SizeValueType k) {
-        PixelType *       out = output->GetBufferPointer() + k * grid.size[0] * grid.size[1];
-        const double *    in = field + 3 * k * grid.size[0] * grid.size[1];
-        const std::size_t planeSize = grid.size[0] * grid.size[1];
-        for (std::size_t v = 0; v < planeSize; ++v)
-        {
-          for (unsigned int c = 0; c < 3; ++c)
-          {
-            out[v][c] = static_cast<ValueType>(in[3 * v + c]);
-          }
-        }
-      },
-      nullptr);
+    this->CopyToOutput(field, grid);
   }
   this->UpdateProgress(1.0f);
+}
+
+template<typename TOutputImage>
+void
+PhysicsDeformationFieldSource<TOutputImage>::CopyToOutput(const double * field, const bmr::GridGeometry & grid)
+{
+  using ValueType = typename PixelType::ValueType;
+  OutputImageType * output = this->GetOutput();
+  this->GetMultiThreader()->ParallelizeArray(
+    0,
+    grid.size[2],
+    [&](SizeValueType k) {
+      PixelType *       out = output->GetBufferPointer() + k * grid.size[0] * grid.size[1];
+      const double *    in = field + 3 * k * grid.size[0] * grid.size[1];
+      const std::size_t planeSize = grid.size[0] * grid.size[1];
+      for (std::size_t v = 0; v < planeSize; ++v)
+      {
+        for (unsigned int c = 0; c < 3; ++c)
+        {
+          out[v][c] = static_cast<ValueType>(in[3 * v + c]);
+        }
+      }
+    },
+    nullptr);
 }
 
 template<typename TOutputImage>
