@@ -136,7 +136,7 @@ ReadImageFile(const std::string & path, const std::string & what)
   if (dim != 3)
   {
     bmr::FailInput("ReadBiomechanicalImage",
-              what + " \"" + path + "\" is " + std::to_string(dim) + "-D; a 3-D image is required");
+                   what + " \"" + path + "\" is " + std::to_string(dim) + "-D; a 3-D image is required");
   }
   double voxels = 1.0;
   for (unsigned int a = 0; a < dim; ++a)

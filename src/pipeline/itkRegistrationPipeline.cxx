@@ -74,9 +74,10 @@ CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed)
     if (movingBox[a][1] <= fixedBox[a][0] || fixedBox[a][1] <= movingBox[a][0])
     {
       bmr::FailInput("RegisterSegmentedPair",
-                "the moving and fixed label images do not overlap in physical space (axis " + std::to_string(a) +
-                  ": moving " + std::to_string(movingBox[a][0]) + " .. " + std::to_string(movingBox[a][1]) +
-                  " mm, fixed " + std::to_string(fixedBox[a][0]) + " .. " + std::to_string(fixedBox[a][1]) + " mm)");
+                     "the moving and fixed label images do not overlap in physical space (axis " + std::to_string(a) +
+                       ": moving " + std::to_string(movingBox[a][0]) + " .. " + std::to_string(movingBox[a][1]) +
+                       " mm, fixed " + std::to_string(fixedBox[a][0]) + " .. " + std::to_string(fixedBox[a][1]) +
+                       " mm)");
     }
   }
 }
@@ -246,8 +247,8 @@ ProbabilityOrgans(const OrganProbabilityImages & probabilities, const bmr::Scene
     if (!objective || !kv.second)
     {
       bmr::FailInput("RegisterSegmentedPair",
-                "a fixed probability image is given for \"" + kv.first +
-                  "\", which is not an objective organ of the scene (or the image is null)");
+                     "a fixed probability image is given for \"" + kv.first +
+                       "\", which is not an objective organ of the scene (or the image is null)");
     }
     organs.push_back(kv.first);
   }
@@ -278,7 +279,7 @@ CheckUncertaintySettings(const UncertaintySettings & u)
   if (u.meshJitter >= 0.9 || !(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
   {
     bmr::FailInput("RegisterSegmentedPair",
-              "UncertaintySettings: meshJitter must lie in [0, 0.9) and simulationMeshScale in [0.25, 2]");
+                   "UncertaintySettings: meshJitter must lie in [0, 0.9) and simulationMeshScale in [0.25, 2]");
   }
 }
 
@@ -616,9 +617,10 @@ CheckRegistrationInputs(const BiomechanicalLabelImageType * movingLabels,
   if (settings.meshes != nullptr &&
       settings.meshes->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, scene, settings))
   {
-    bmr::FailInput("RegisterSegmentedPair",
-              "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
-              "(MeshMovingAnatomy)");
+    bmr::FailInput(
+      "RegisterSegmentedPair",
+      "RegistrationSettings::meshes were made for other moving labels, another scene or other mesh settings "
+      "(MeshMovingAnatomy)");
   }
 }
 
