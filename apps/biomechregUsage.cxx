@@ -66,16 +66,16 @@ const std::pair<const char *, const char *> commands[] = {
     "                      bias-correction, warm-start, step-tolerance, quantiles, voxel-limit-mm; docs/cli.md)]\n"
     "                      [--fixed-probabilities ORGAN=FILE,...] [--unmapped-rois refuse|ignore]\n"
     "                      [--rtstruct-surfaces outlines|voxels (an RTSTRUCT's fixed organs: polygons or voxels)]\n"
-    "                      [--outputs LIST|all|default (field,warped_ct,warped_labels,report; also "
-    "forward_field,mesh,\n"
-    "                      history,sweep)] [--field-precision float|double] [--compression-level 0-9 (labels 1, others "
-    "0)]\n"
+    "                      [--outputs LIST|all|default (field,warped_ct,warped_labels,report; also\n"
+    "                      forward_field,mesh,history,sweep,field_npz (Learn2Reg voxels))]\n"
+    "                      [--field-precision float|double] [--compression-level 0-9 (labels 1, others 0)]\n"
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
     "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
   { "warp",
     "  biomechreg warp --image FILE --field FILE --out DIR [--labels off|on (on: a label map, nearest neighbour)]\n"
     "                  [--outside V (-1000, labels 0)]\n"
-    "    the image resampled through a fixed -> moving field [mm] onto the field's grid: DIR/warped.nrrd\n" },
+    "    the image resampled through a fixed -> moving field [mm] onto the field's grid: DIR/warped.nrrd; the\n"
+    "    field an image or a DICOM Deformable Spatial Registration (REG, e.g. from rt-export or SlicerRT)\n" },
   { "demons",
     "  biomechreg demons --moving-ct FILE --fixed-ct FILE --out DIR [--moving-labels FILE --fixed-labels FILE\n"
     "                    --flatten LABELS] [--demons-variant diffeomorphic|symmetric] [--demons-levels N]\n"
@@ -136,9 +136,11 @@ const std::pair<const char *, const char *> commands[] = {
     "  biomechreg rt-export --reference-ct DIR (the DICOM CT series the outputs belong to)\n"
     "                       [--labels FILE --scene FILE --rtstruct-out FILE.dcm (labels on that CT's grid)]\n"
     "                       [--dose FILE (RTDOSE or an image in Gy) --rtdose-out FILE.dcm [--plan-uid UID]]\n"
+    "                       [--field FILE (register's field.nrrd) --moving-ct DIR --registration-out FILE.dcm]\n"
     "    a label map as a DICOM RTSTRUCT (one ROI per scene label, named as in the scene; closed planar contours\n"
     "    per slice) and a dose as an RTDOSE [Gy], with the CT's patient, study and frame of reference, e.g. the\n"
-    "    warped labels and the warped dose of a registration back to a planning system\n" },
+    "    warped labels and the warped dose of a registration back to a planning system; the fixed -> moving field\n"
+    "    as a DICOM Deformable Spatial Registration from the reference (fixed) CT's frame to the moving CT's\n" },
 };
 
 const char * const footer =

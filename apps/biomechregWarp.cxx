@@ -17,8 +17,21 @@
  *=========================================================================*/
 // biomechreg warp: an image resampled through a fixed -> moving displacement field (itk::ImageWarper).
 #include "biomechregCommon.h"
+#include "itkDicomRT.h"
 
 namespace bmrcli {
+namespace {
+/** The field of an image file, or of a DICOM Deformable Spatial Registration object (modality REG). */
+FieldType::Pointer
+ReadField(const std::string & path)
+{
+  if (itk::ReadDicomModality(path) == "REG")
+  {
+    return itk::ReadDeformableSpatialRegistration(path).field;
+  }
+  return ReadImage<FieldType>(path, "displacement field");
+}
+} // namespace
 
 int
 WarpCommand(const Arguments & args)
@@ -33,7 +46,7 @@ WarpCommand(const Arguments & args)
   StageTimer timer;
   std::cout << "biomechreg warp -> " << out << "/warped.nrrd" << std::endl;
   timer.Begin("read inputs");
-  const auto field = ReadImage<FieldType>(fieldPath, "displacement field");
+  const auto field = ReadField(fieldPath);
   timer.End();
   MakeOutputDirectory(out);
   timer.Begin(labels ? "warp (nearest neighbour)" : "warp (linear)");

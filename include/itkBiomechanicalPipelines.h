@@ -394,6 +394,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationResult
   double                                 gaugeModulus{ 0.0 }; ///< kPa
   BiomechanicalLabelImageType::Pointer   warpedLabels;        ///< nearest neighbor
   BiomechanicalCTImageType::Pointer      warpedCT;            ///< linear; null without a moving CT
+  ImageBase<3>::Pointer                  movingGrid;          ///< the moving labels' grid (the field points into it)
   std::map<std::string, double>          dice;                ///< warped against fixed labels, by name
   /** Whether the organs were interpolated between thick slices (RegistrationSettings::interpolateSlices and
    * a moving or fixed label image with ThickSlices()). */

@@ -54,6 +54,7 @@ struct BiomechanicalRegistration_EXPORT RegistrationOutputs
   bool history{ false };      ///< history.csv: every fine-mesh inner solve, then the accepted outer iterates
   bool sweep{ false };        ///< sweep.csv: Phi*(E) of the sweep
   bool report{ true };        ///< report.json: moduli, intervals, distances, Dice, wall times
+  bool fieldNpz{ false };     ///< field.npz: the field in voxels, Learn2Reg's layout (WriteLearn2RegDisplacement())
   bool doubleFields{ false }; ///< the fields as double vectors; float (default) is exact to 1e-7 relative
   /** gzip level of the NRRD images: 0 none, 1 fastest ... 9 smallest; -1 (default): label maps at 1, fields and
    * CT uncompressed (DefaultCompressionLevel). */
@@ -63,21 +64,40 @@ struct BiomechanicalRegistration_EXPORT RegistrationOutputs
   static RegistrationOutputs
   All();
   /** From a comma-separated list of field, forward_field, warped_ct, warped_labels, mesh, history, sweep,
-   * report, "all" and "default" (the sets, alone or with more items: "default,history"); throws naming the unknown
-   * item. */
+   * report, field_npz, "all" and "default" (the sets, alone or with more items: "default,history"); throws naming the
+   * unknown item. */
   static RegistrationOutputs
   Parse(const std::string & list);
 };
 
 /** Writes a registration into \a directory: the files \a outputs asks for, report.json's wall times being
  * \a stages and the writing itself; every file through a temporary name. Returns the writing's stage ("write
- * outputs"). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+ * outputs").
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT PipelineStage
 WriteRegistrationOutputs(const std::string &                directory,
                          const RegistrationResult &         result,
                          const RegistrationSettings &       settings,
                          const std::vector<PipelineStage> & stages,
                          const RegistrationOutputs &        outputs = RegistrationOutputs());
+
+/** \brief Writes a fixed -> moving field as a NumPy .npz in Learn2Reg's layout: displacements in voxels.
+ *
+ * The archive holds \c disp, float32 of shape (3, nx, ny, nz) (component first, then the fixed grid's index
+ * i, j, k as NIfTI and nibabel order them; stored in Fortran order, i.e. ITK's own memory order), with
+ * \f[ \mathrm{disp}[:, i, j, k] = \mathcal{I}_m\big(x_{ijk} + u(x_{ijk})\big) - (i, j, k), \f]
+ * where \f$x_{ijk}\f$ is the fixed voxel's centre (LPS mm), \f$u\f$ the field [mm] and \f$\mathcal{I}_m\f$ the
+ * continuous index of a point in \a movingGrid: the moving image is warped onto the fixed grid by sampling it at
+ * (i, j, k) + disp (scipy.ndimage.map_coordinates). Learn2Reg's fixed and moving images share one grid; two
+ * scans seldom do, so the moving grid is the one that counts. Beside it, in float64: \c fixed_origin,
+ * \c fixed_spacing (x, y, z; mm), \c fixed_direction (3 x 3, row-major: column c is axis c's direction, LPS)
+ * and the same three for the moving grid. Uncompressed (np.load maps nothing, it reads), written through a
+ * temporary file; throws naming \a path when the field holds a non-finite vector or the archive would pass
+ * 4 GiB (a field of about 357 million voxels). \ingroup BiomechanicalRegistration BiomechanicalRegistrationIO */
+BiomechanicalRegistration_EXPORT void
+WriteLearn2RegDisplacement(const BiomechanicalFieldType * field,
+                           const ImageBase<3> *           movingGrid,
+                           const std::string &            path);
 
 /** Writes a phantom pair into \a directory: moving and fixed CT and labels, truth_field.nrrd, scene.json (what
  * the estimator sees), truth_scene.json, truth.json and the seed landmarks. \ingroup BiomechanicalRegistration

@@ -21,6 +21,7 @@
 #include "BiomechanicalRegistrationExport.h"
 #include "bmrScene.h"
 #include "itkImage.h"
+#include "itkVector.h"
 #include "itkPlanarContourFractions.h"
 
 #include <cstdint>
@@ -36,6 +37,34 @@ using DicomRTLabelImageType = Image<std::int32_t, 3>;
 /** Dose grid [Gy]. \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT BiomechanicalRegistrationDicomRT
  */
 using DicomRTDoseImageType = Image<float, 3>;
+/** Displacement field [mm, LPS] (the pipelines' BiomechanicalFieldType). \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationDicomRT */
+using DicomRTDisplacementFieldType = Image<Vector<double, 3>, 3>;
+
+/** A deformable registration read from DICOM (ReadDeformableSpatialRegistration()).
+ * \ingroup BiomechanicalRegistration BiomechanicalRegistrationDicomRT */
+struct BiomechanicalRegistration_EXPORT DicomDeformableRegistration
+{
+  /** At each grid point x of the registered frame (the fixed scan's), the displacement u [mm] to the point
+   * x + u of the source frame (the moving scan's): a pull-back field, as itk::ImageWarper takes. */
+  DicomRTDisplacementFieldType::Pointer field;
+  std::string                           registeredFrameOfReferenceUID; ///< the object's own (0020,0052)
+  std::string                           sourceFrameOfReferenceUID;     ///< (0064,0003)
+};
+
+/** \brief Reads a DICOM Deformable Spatial Registration object (SOP class 1.2.840.10008.5.1.4.1.1.66.3) with one
+ * registration and one deformation grid, as written by WriteDeformableSpatialRegistration(), SlicerRT or
+ * plastimatch.
+ *
+ * PS3.3 C.20.3.1.1: a registered point x maps to the source point M_post(M_pre x + D(x)); here both matrices
+ * must be absent or the identity, so the grid's vectors D are the field itself. The grid: Image Position and
+ * Orientation (Patient), the third axis the row x column normal, Grid Resolution as spacing, Vector Grid Data
+ * (32-bit floats, x fastest) as the vectors. Throws an itk::ExceptionObject naming \a path in one line when the
+ * file is not DICOM or not that SOP class, holds several registrations or grids, has a matrix other than the
+ * identity, or a grid attribute is missing or of the wrong length. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT DicomDeformableRegistration
+ReadDeformableSpatialRegistration(const std::string & path);
 
 /** \brief The DICOM Modality (0008,0060) of \a path, without its padding ("RTSTRUCT", "RTDOSE", "CT", ...).
  *

@@ -76,6 +76,31 @@ WriteRTDose(const DicomRTDoseImageType * dose,
             const std::string &          path,
             const std::string &          referencedPlanUID = std::string());
 
+/** \brief Writes a fixed -> moving displacement field as a DICOM Deformable Spatial Registration object (SOP
+ * class 1.2.840.10008.5.1.4.1.1.66.3, modality REG), what SlicerRT and planning systems exchange.
+ *
+ * The registered frame of reference is the fixed scan's (\a fixedSeries: Patient, Study and Frame of Reference
+ * are copied from it), the source frame the moving scan's (\a movingSeries: its Frame of Reference UID, and a
+ * reference to each of its images, in this study's Referenced Series Sequence or, for another study, the Studies
+ * Containing Other Referenced Instances Sequence). PS3.3 C.20.3.1.1 maps a registered point x to the source point
+ * M_post(M_pre x + D(x)); both matrices are written as the identity (RIGID), so D is \a field: at the centre of
+ * each voxel of its grid (LPS mm) the displacement to the moving scan [mm], as 32-bit floats (exact to a relative
+ * 6e-8), x fastest. The grid is the field's: Image Position and Orientation (Patient), Grid Dimensions, Grid
+ * Resolution; a third axis against the row x column normal is written slice-reversed, so that it runs along it.
+ * Content Date and Time: now (UTC), or the time SOURCE_DATE_EPOCH names when it is set; UIDs are derived from
+ * the contents (WriteRTStruct()), so with SOURCE_DATE_EPOCH the same inputs give the same bytes. Written to a
+ * temporary name and renamed when complete.
+ *
+ * Throws an itk::ExceptionObject naming the input at fault, in one line, when the field is missing, holds a
+ * non-finite vector, has an oblique third axis or more than 357 million voxels, either directory holds no image
+ * series or several, or the file cannot be written. \ingroup BiomechanicalRegistration
+ * BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT void
+WriteDeformableSpatialRegistration(const DicomRTDisplacementFieldType * field,
+                                   const std::string &                  fixedSeries,
+                                   const std::string &                  movingSeries,
+                                   const std::string &                  path);
+
 } // namespace itk
 
 #endif

@@ -48,6 +48,7 @@ using dicomrt::NameKey;
 using dicomrt::ParseNumbers;
 using dicomrt::Quote;
 using dicomrt::ReadParsedFile;
+using dicomrt::Sequence;
 using dicomrt::StringValue;
 using dicomrt::Upper;
 
@@ -82,28 +83,6 @@ JoinQuoted(const std::vector<std::string> & names)
 
 // ------------------------------------------------------------------------------------------ DICOM values
 
-/** The sequence at \a tag, or nullptr when it is absent, empty or cannot be decoded. */
-gdcm::SmartPointer<gdcm::SequenceOfItems>
-Sequence(const gdcm::DataSet & ds, const gdcm::Tag & tag)
-{
-  if (!ds.FindDataElement(tag))
-  {
-    return nullptr;
-  }
-  try
-  {
-    gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(tag).GetValueAsSQ();
-    if (sq && sq->GetNumberOfItems() > 0)
-    {
-      return sq;
-    }
-  }
-  catch (const std::exception &)
-  {
-    // An undecodable sequence is reported by the caller as missing.
-  }
-  return nullptr;
-}
 
 // ------------------------------------------------------------------------------------------ RTSTRUCT
 

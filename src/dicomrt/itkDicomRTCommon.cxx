@@ -70,7 +70,7 @@ ReadHeader(const std::string & file, const char * where)
   reader.SetFileName(file.c_str());
   if (!reader.ReadUpToTag(PixelDataTag, std::set<gdcm::Tag>()))
   {
-    bmr::Fail(where, "reference series file \"" + file + "\" is not a readable DICOM file");
+    bmr::FailInput(where, "reference series file \"" + file + "\" is not a readable DICOM file");
   }
   return reader.GetFile().GetDataSet();
 }
@@ -89,7 +89,7 @@ ImageSeriesFiles(const std::string & directory, const char * where)
   std::error_code error;
   if (!std::filesystem::is_directory(directory, error))
   {
-    bmr::Fail(where, "reference series \"" + directory + "\" is not a directory of a DICOM image series");
+    bmr::FailInput(where, "reference series \"" + directory + "\" is not a directory of a DICOM image series");
   }
   bool anyDicom = false; // GDCMSeriesFileNames warns on a directory without DICOM files: look first
   for (const auto & entry : std::filesystem::directory_iterator(directory, error))
@@ -98,7 +98,7 @@ ImageSeriesFiles(const std::string & directory, const char * where)
   }
   if (!anyDicom)
   {
-    bmr::Fail(where, "reference series \"" + directory + "\" holds 0 DICOM image series (no DICOM file)");
+    bmr::FailInput(where, "reference series \"" + directory + "\" holds 0 DICOM image series (no DICOM file)");
   }
   CheckDicomDirectoryStructure(directory, "reference series"); // GDCM's scanner parses every file
   auto names = GDCMSeriesFileNames::New();
@@ -115,9 +115,9 @@ ImageSeriesFiles(const std::string & directory, const char * where)
   }
   if (images.size() != 1)
   {
-    bmr::Fail(where,
-              "reference series \"" + directory + "\" holds " + std::to_string(images.size()) +
-                " DICOM image series; exactly one (the CT the RT object belongs to) is needed");
+    bmr::FailInput(where,
+                   "reference series \"" + directory + "\" holds " + std::to_string(images.size()) +
+                     " DICOM image series; exactly one (the CT the RT object belongs to) is needed");
   }
   return images.front();
 }
@@ -133,7 +133,7 @@ Required(const gdcm::DataSet & ds,
   const std::string value = StringValue(ds, tag);
   if (value.empty())
   {
-    bmr::Fail(where, "reference series file \"" + file + "\" has no " + name);
+    bmr::FailInput(where, "reference series file \"" + file + "\" has no " + name);
   }
   return value;
 }
@@ -149,7 +149,7 @@ RequiredNumbers(const gdcm::DataSet & ds,
   std::vector<double> values;
   if (!ParseNumbers(Required(ds, tag, name, file, where), values) || values.size() != N)
   {
-    bmr::Fail(where, "reference series file \"" + file + "\" has a malformed " + name);
+    bmr::FailInput(where, "reference series file \"" + file + "\" has a malformed " + name);
   }
   std::array<double, N> out;
   std::copy(values.begin(), values.end(), out.begin());
@@ -315,6 +315,49 @@ ReadReferencedSeries(const std::string & directory, const char * where)
   return series;
 }
 
+int
+SliceAxisSense(const Matrix<double, 3, 3> & D)
+{
+  const double normal[3] = { D(1, 0) * D(2, 1) - D(2, 0) * D(1, 1),
+                             D(2, 0) * D(0, 1) - D(0, 0) * D(2, 1),
+                             D(0, 0) * D(1, 1) - D(1, 0) * D(0, 1) };
+  for (const int sense : { 1, -1 })
+  {
+    bool matches = true;
+    for (unsigned int a = 0; a < 3; ++a)
+    {
+      matches = matches && std::abs(D(a, 2) - sense * normal[a]) <= 1e-4;
+    }
+    if (matches)
+    {
+      return sense;
+    }
+  }
+  return 0;
+}
+
+gdcm::SmartPointer<gdcm::SequenceOfItems>
+Sequence(const gdcm::DataSet & ds, const gdcm::Tag & tag)
+{
+  if (!ds.FindDataElement(tag))
+  {
+    return nullptr;
+  }
+  try
+  {
+    gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(tag).GetValueAsSQ();
+    if (sq && sq->GetNumberOfItems() > 0)
+    {
+      return sq;
+    }
+  }
+  catch (const std::exception &)
+  {
+    // An undecodable sequence is reported by the caller as missing.
+  }
+  return nullptr;
+}
+
 std::string
 DerivedUID(const std::string & seed)
 {
@@ -447,7 +490,7 @@ Quote(const std::string & text)
 [[noreturn]] void
 FailFile(const char * where, const std::string & kind, const std::string & path, const std::string & message)
 {
-  bmr::Fail(where, kind + " " + Quote(path) + ": " + message);
+  bmr::FailInput(where, kind + " " + Quote(path) + ": " + message);
 }
 
 /** Refuses, naming the file, what GDCM must not see: not a file, not DICOM Part 10, or an incomplete structure. */

@@ -24,6 +24,7 @@
 #include "gdcmSequenceOfItems.h"
 #include "gdcmTag.h"
 #include "gdcmVR.h"
+#include "itkMatrix.h"
 
 #include <array>
 #include <string>
@@ -88,6 +89,15 @@ struct ReferencedSeries
   std::vector<ReferencedImage> images;
   gdcm::DataSet                patientAndStudy; ///< the Patient and General Study attributes of the first image
 };
+
+/** +1 when the third column of the direction matrix \a D is the normal of its first two (row x column, to 1e-4),
+ * -1 when it is its opposite, 0 otherwise (an oblique or sheared stack, which DICOM's grids cannot hold). */
+int
+SliceAxisSense(const Matrix<double, 3, 3> & D);
+
+/** The sequence at \a tag, or nullptr when it is absent, empty or cannot be decoded. */
+gdcm::SmartPointer<gdcm::SequenceOfItems>
+Sequence(const gdcm::DataSet & ds, const gdcm::Tag & tag);
 
 /** Reads the one image series (not an RT object) of \a directory; \a where names the caller in errors. */
 ReferencedSeries

@@ -57,19 +57,15 @@ MaximumDose(const DicomRTDoseImageType * dose)
 std::vector<double>
 FrameOffsets(const DicomRTDoseImageType * dose)
 {
-  const auto & D = dose->GetDirection();
-  const double normal[3] = { D(1, 0) * D(2, 1) - D(2, 0) * D(1, 1),
-                             D(2, 0) * D(0, 1) - D(0, 0) * D(2, 1),
-                             D(0, 0) * D(1, 1) - D(1, 0) * D(0, 1) };
-  const double along = normal[0] * D(0, 2) + normal[1] * D(1, 2) + normal[2] * D(2, 2);
-  if (std::abs(std::abs(along) - 1.0) > 1e-4)
+  const int sense = dicomrt::SliceAxisSense(dose->GetDirection());
+  if (sense == 0)
   {
     bmr::Fail(Where, "the dose grid's slices are not perpendicular to its rows and columns (an oblique frame stack)");
   }
   std::vector<double> offsets;
   for (SizeValueType k = 0; k < dose->GetLargestPossibleRegion().GetSize(2); ++k)
   {
-    offsets.push_back(along * double(k) * dose->GetSpacing()[2]);
+    offsets.push_back(sense * double(k) * dose->GetSpacing()[2]);
   }
   return offsets;
 }

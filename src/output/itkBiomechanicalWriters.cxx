@@ -19,13 +19,17 @@
 
 #include "bmrAtomicFile.h"
 #include "bmrError.h"
+#include "bmrNpzWriter.h"
 #include "bmrStopwatch.h"
 #include "bmrVtuWriter.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkBiomechanicalReports.h"
 #include "itkCastImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
 
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 
@@ -100,7 +104,8 @@ RegistrationOutputs::Parse(const std::string & list)
     { "field", &RegistrationOutputs::field },        { "forward_field", &RegistrationOutputs::forwardField },
     { "warped_ct", &RegistrationOutputs::warpedCT }, { "warped_labels", &RegistrationOutputs::warpedLabels },
     { "mesh", &RegistrationOutputs::mesh },          { "history", &RegistrationOutputs::history },
-    { "sweep", &RegistrationOutputs::sweep },        { "report", &RegistrationOutputs::report }
+    { "sweep", &RegistrationOutputs::sweep },        { "report", &RegistrationOutputs::report },
+    { "field_npz", &RegistrationOutputs::fieldNpz }
   };
   RegistrationOutputs o;
   for (const auto & item : items)
@@ -125,8 +130,8 @@ RegistrationOutputs::Parse(const std::string & list)
     {
       bmr::Fail("RegistrationOutputs",
                 "unknown output \"" + name +
-                  "\" (outputs: field, forward_field, warped_ct, warped_labels, mesh, history, sweep, report, all, "
-                  "default)");
+                  "\" (outputs: field, forward_field, warped_ct, warped_labels, mesh, history, sweep, report, "
+                  "field_npz, all, default)");
     }
   }
   return o;
@@ -177,6 +182,11 @@ WriteRegistrationOutputs(const std::string &                directory,
   {
     WriteField(result.state.push.GetPointer(), directory + "/forward_field.nrrd", o);
   }
+  if (o.fieldNpz)
+  {
+    WriteLearn2RegDisplacement(
+      result.state.pullBack.GetPointer(), result.movingGrid.GetPointer(), directory + "/field.npz");
+  }
   if (o.warpedLabels)
   {
     WriteImageAtomically(result.warpedLabels.GetPointer(), directory + "/warped_labels.nrrd", o.compressionLevel);
@@ -208,6 +218,72 @@ WriteRegistrationOutputs(const std::string &                directory,
     bmr::WriteTextFileAtomically(directory + "/report.json", RegistrationReportJson(result, settings, wallTimes));
   }
   return writing;
+}
+
+namespace {
+/** origin, spacing and direction (row-major) of \a grid as float64 arrays "<prefix>_origin", ... */
+std::vector<bmr::NpyArray>
+GridArrays(const std::string & prefix, const ImageBase<3> * grid)
+{
+  std::vector<double> origin(3), spacing(3), direction(9);
+  for (unsigned int r = 0; r < 3; ++r)
+  {
+    origin[r] = grid->GetOrigin()[r];
+    spacing[r] = grid->GetSpacing()[r];
+    for (unsigned int c = 0; c < 3; ++c)
+    {
+      direction[3 * r + c] = grid->GetDirection()(r, c);
+    }
+  }
+  return { bmr::NpyArray::Float64(prefix + "_origin", origin, { 3 }),
+           bmr::NpyArray::Float64(prefix + "_spacing", spacing, { 3 }),
+           bmr::NpyArray::Float64(prefix + "_direction", direction, { 3, 3 }) };
+}
+} // namespace
+
+void
+WriteLearn2RegDisplacement(const BiomechanicalFieldType * field,
+                           const ImageBase<3> *           movingGrid,
+                           const std::string &            path)
+{
+  if (field == nullptr || movingGrid == nullptr)
+  {
+    bmr::FailInput("WriteLearn2RegDisplacement", "cannot write \"" + path + "\": no field or no moving grid");
+  }
+  const auto &  region = field->GetLargestPossibleRegion();
+  const auto    size = region.GetSize();
+  bmr::NpyArray disp{ "disp", "<f4", { 3, size[0], size[1], size[2] }, true, {} };
+  disp.bytes.resize(3 * sizeof(float) * region.GetNumberOfPixels());
+  char * out = disp.bytes.data();
+  for (ImageRegionConstIteratorWithIndex<BiomechanicalFieldType> it(field, region); !it.IsAtEnd(); ++it)
+  {
+    Point<double, 3> x;
+    field->TransformIndexToPhysicalPoint(it.GetIndex(), x);
+    const auto & u = it.Get();
+    if (!(std::isfinite(u[0]) && std::isfinite(u[1]) && std::isfinite(u[2])))
+    {
+      std::ostringstream os;
+      os << "cannot write \"" << path << "\": the field at voxel " << it.GetIndex() << " is not finite";
+      bmr::FailInput("WriteLearn2RegDisplacement", os.str());
+    }
+    const auto moving = movingGrid->TransformPhysicalPointToContinuousIndex<double, double>(x + u);
+    for (unsigned int c = 0; c < 3; ++c) // ITK's order: component, then x fastest: Fortran order of (3, nx, ny, nz)
+    {
+      const auto value = static_cast<float>(moving[c] - double(it.GetIndex()[c] - region.GetIndex()[c]));
+      std::memcpy(out, &value, sizeof(float));
+      out += sizeof(float);
+    }
+  }
+  std::vector<bmr::NpyArray> arrays{ std::move(disp) };
+  for (auto & a : GridArrays("fixed", field))
+  {
+    arrays.push_back(std::move(a));
+  }
+  for (auto & a : GridArrays("moving", movingGrid))
+  {
+    arrays.push_back(std::move(a));
+  }
+  bmr::WriteNpz(path, arrays);
 }
 
 void

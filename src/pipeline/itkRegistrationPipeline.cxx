@@ -500,6 +500,9 @@ WarpAndEvaluate(RegistrationResult &                r,
 {
   clock.Begin(movingCT ? "warp (CT linear; labels nearest)" : "warp (labels nearest)");
   r.warpedLabels = WarpImage(movingLabels, r.state.pullBack.GetPointer(), true, 0);
+  r.movingGrid = ImageBase<3>::New();
+  r.movingGrid->CopyInformation(movingLabels);
+  r.movingGrid->SetLargestPossibleRegion(movingLabels->GetLargestPossibleRegion());
   if (movingCT)
   {
     r.warpedCT = WarpImage(movingCT, r.state.pullBack.GetPointer(), false, -1000.0f);

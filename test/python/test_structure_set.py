@@ -6,9 +6,15 @@ label-map route's 68 % interval (the same phantom registered from its label maps
 the thick slices' calibration at 2 mm); the bone it took from the CT must overlap the phantom's with Dice >= 0.95
 (the phantom's bone is 700 HU, the threshold 250 HU: partial-volume voxels at the boundary and nothing else
 differ). Three malformed structure sets (no External; no prostate on the fixed scan; the moving scan's ROIs on
-the fixed CT, another frame of reference) are refused with one line naming the file, exit status 1."""
+the fixed CT, another frame of reference) are refused with one line naming the file, exit status 1.
+
+The field's interchange files are read back by readers that are not ours: the DICOM Deformable Spatial
+Registration (`rt-export --registration-out`) by pydicom and dicom3tools' IOD checker, the Learn2Reg .npz
+(`--outputs field_npz`) by numpy; both must hold the registration's field (float32 rounding only) on its grid and
+in its frames of reference, and `warp` through the DICOM object must give the warp through field.nrrd."""
 
 import json
+import os
 import pathlib
 import shutil
 import subprocess
@@ -100,12 +106,19 @@ def test_structure_sets_register_without_a_scene(cli, scans, tmp_path):
         assert from_python["part_of_roi"] == mapping[scan]["part_of_roi"]
 
 
-def test_the_package_registers_structure_sets_as_the_command_line(cli, scans, tmp_path):
+@pytest.fixture(scope="module")
+def cli_registration(cli, scans):
+    """register on the structure sets without a scene: the field in double precision and as Learn2Reg's .npz."""
+    out = scans / "cli_registration"
+    run = register(cli, out, dicom(scans, "moving"), dicom(scans, "fixed"), "--uncertainty", "none",
+                   "--field-precision", "double", "--outputs", "default,field_npz")
+    assert run.returncode == 0, run.stderr
+    return out
+
+
+def test_the_package_registers_structure_sets_as_the_command_line(cli_registration, scans):
     # What register does without a scene, in Python: the label maps from the structure sets, the fixed organs'
     # outlines as their surfaces, the built-in scene; the same modulus and field as the command line, bit for bit.
-    run = register(cli, tmp_path / "cli", dicom(scans, "moving"), dicom(scans, "fixed"), "--uncertainty", "none",
-                   "--field-precision", "double")
-    assert run.returncode == 0, run.stderr
     biomechreg.configure_numerics()
     (moving_ct, moving_rtss), (fixed_ct, fixed_rtss) = dicom(scans, "moving"), dicom(scans, "fixed")
     moving, _ = biomechreg.read_structure_set(moving_rtss, moving_ct)
@@ -115,10 +128,127 @@ def test_the_package_registers_structure_sets_as_the_command_line(cli, scans, tm
     result = biomechreg.register(moving, fixed, biomechreg.builtin_pelvis_scene(),
                                  fixed_probabilities={o: outlines[roi[o]] for o in ("prostate", "bladder", "rectum")},
                                  uncertainty="none")
-    report = json.loads((tmp_path / "cli" / "report.json").read_text())
+    report = json.loads((cli_registration / "report.json").read_text())
     assert result.youngs_modulus["prostate"] == report["youngs_modulus_kPa"]["prostate"]
     np.testing.assert_array_equal(result.field.array,
-                                  biomechreg.read_image(tmp_path / "cli" / "field.nrrd", "field").array)
+                                  biomechreg.read_image(cli_registration / "field.nrrd", "field").array)
+
+
+def frame_of_reference(series):
+    import pydicom
+    return pydicom.dcmread(next(pathlib.Path(series).glob("*.dcm")), stop_before_pixels=True).FrameOfReferenceUID
+
+
+def rt_export_registration(cli, field, fixed_ct, moving_ct, path, epoch="1700000000"):
+    env = dict(os.environ, SOURCE_DATE_EPOCH=epoch)
+    run = subprocess.run([cli, "rt-export", "--reference-ct", str(fixed_ct), "--field", str(field), "--moving-ct",
+                          str(moving_ct), "--registration-out", str(path)], capture_output=True, text=True, env=env)
+    assert run.returncode == 0, run.stderr
+
+
+def test_the_field_as_a_dicom_registration(cli, scans, cli_registration, tmp_path):
+    import pydicom
+    (moving_ct, _), (fixed_ct, _) = dicom(scans, "moving"), dicom(scans, "fixed")
+    field = biomechreg.read_image(cli_registration / "field.nrrd", "field")
+    rt_export_registration(cli, cli_registration / "field.nrrd", fixed_ct, moving_ct, tmp_path / "reg.dcm")
+
+    checker = subprocess.run(["dciodvfy", str(tmp_path / "reg.dcm")], capture_output=True, text=True)
+    report = checker.stdout + checker.stderr
+    assert "DeformableSpatialRegistration" in report and "Error" not in report, report
+
+    ds = pydicom.dcmread(tmp_path / "reg.dcm")
+    assert ds.SOPClassUID == "1.2.840.10008.5.1.4.1.1.66.3" and ds.Modality == "REG"
+    assert ds.FrameOfReferenceUID == frame_of_reference(fixed_ct)  # the registered frame: the fixed scan's
+    registration = ds.DeformableRegistrationSequence[0]
+    assert registration.SourceFrameOfReferenceUID == frame_of_reference(moving_ct)
+    for matrix in (registration.PreDeformationMatrixRegistrationSequence[0],
+                   registration.PostDeformationMatrixRegistrationSequence[0]):
+        np.testing.assert_array_equal(np.array(matrix.FrameOfReferenceTransformationMatrix, float), np.eye(4).ravel())
+    grid = registration.DeformableRegistrationGridSequence[0]
+    nz, ny, nx, _ = field.array.shape
+    assert list(grid.GridDimensions) == [nx, ny, nz]
+    np.testing.assert_array_equal(grid.GridResolution, field.spacing)
+    # Decimal strings of at most 16 characters: positions to 1e-9 mm here, direction cosines to 1e-12.
+    np.testing.assert_allclose(np.array(grid.ImagePositionPatient, float), field.origin, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.array(grid.ImageOrientationPatient, float),
+                               np.concatenate([field.direction[:, 0], field.direction[:, 1]]), rtol=0, atol=1e-12)
+    vectors = np.frombuffer(grid.VectorGridData, "<f4").reshape(nz, ny, nx, 3)
+    np.testing.assert_array_equal(vectors, field.array.astype(np.float32))
+
+    # Our reader gives the same field back, and warp takes the object in place of field.nrrd.
+    back, frames = biomechreg.read_dicom_registration(tmp_path / "reg.dcm")
+    np.testing.assert_array_equal(back.array, vectors.astype(np.float64))
+    assert frames == {"registered_frame_of_reference_uid": ds.FrameOfReferenceUID,
+                      "source_frame_of_reference_uid": registration.SourceFrameOfReferenceUID}
+    moving_labels = scans / "cli_registration" / "moving_labels_from_rois.nrrd"
+    for name, path in (("nrrd", cli_registration / "field.nrrd"), ("dicom", tmp_path / "reg.dcm")):
+        run = subprocess.run([cli, "warp", "--image", str(moving_labels), "--field", str(path), "--labels", "on",
+                              "--out", str(tmp_path / name)], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+    through_nrrd = biomechreg.read_image(tmp_path / "nrrd" / "warped.nrrd", "labels").array
+    through_dicom = biomechreg.read_image(tmp_path / "dicom" / "warped.nrrd", "labels").array
+    # float32 vectors move a sample point by at most ~1e-6 mm: a nearest-neighbour choice can flip only at a tie.
+    assert np.mean(through_nrrd != through_dicom) < 1e-4
+
+    # Deterministic: the same field and series at the same SOURCE_DATE_EPOCH give the same bytes.
+    rt_export_registration(cli, cli_registration / "field.nrrd", fixed_ct, moving_ct, tmp_path / "again.dcm")
+    assert (tmp_path / "reg.dcm").read_bytes() == (tmp_path / "again.dcm").read_bytes()
+
+
+def test_a_flipped_oblique_field_round_trips_through_dicom(scans, tmp_path):
+    # A left-handed grid (the third axis against the row x column normal) turned 20 degrees about z, anisotropic:
+    # written slice-reversed so that DICOM's k runs along the normal, read back as the same vectors at the same
+    # points (float32 rounding).
+    (moving_ct, _), (fixed_ct, _) = dicom(scans, "moving"), dicom(scans, "fixed")
+    a = np.radians(20.0)
+    direction = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, -1.0]])
+    values = np.random.default_rng(7).normal(0.0, 3.0, (5, 6, 7, 3))
+    field = biomechreg.Image(values, spacing=(0.9, 1.1, 2.5), origin=(-40.0, 12.5, 30.0), direction=direction)
+    biomechreg.write_dicom_registration(field, fixed_ct, moving_ct, tmp_path / "flipped.dcm")
+    back, _ = biomechreg.read_dicom_registration(tmp_path / "flipped.dcm")
+    np.testing.assert_array_equal(back.array, values[::-1].astype(np.float32).astype(np.float64))
+    np.testing.assert_allclose(back.direction, direction * [1, 1, -1], rtol=0, atol=1e-12)
+    last_slice = np.array(field.origin) + direction @ (np.array(field.spacing) * [0, 0, 4])
+    np.testing.assert_allclose(back.origin, last_slice, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(back.spacing, field.spacing, rtol=1e-15)
+
+    sheared = biomechreg.Image(values, spacing=(1, 1, 1), direction=[[1, 0, 0.3], [0, 1, 0], [0, 0, 1]])
+    with pytest.raises(ValueError, match="oblique stack"):
+        biomechreg.write_dicom_registration(sheared, fixed_ct, moving_ct, tmp_path / "sheared.dcm")
+    with pytest.raises(ValueError, match="series"):
+        biomechreg.write_dicom_registration(field, tmp_path, moving_ct, tmp_path / "nowhere.dcm")
+    assert not list(tmp_path.glob("*sheared*")) and not list(tmp_path.glob("*nowhere*"))
+    with pytest.raises(ValueError, match="not a Deformable Spatial Registration"):
+        biomechreg.read_dicom_registration(next(pathlib.Path(fixed_ct).glob("*.dcm")))
+
+
+def test_the_field_as_learn2reg_npz(scans, cli_registration):
+    # disp[:, i, j, k] is the moving continuous index of fixed voxel (i, j, k) less (i, j, k): recomputed here from
+    # the field [mm] and both grids, to float32 rounding of indices up to ~200 (2e-5 voxels); and the moving labels
+    # sampled there (nearest, ITK's rounding half up) give register's warped labels.
+    field = biomechreg.read_image(cli_registration / "field.nrrd", "field")
+    moving = biomechreg.read_image(scans / "cli_registration" / "moving_labels_from_rois.nrrd", "labels")
+    npz = np.load(cli_registration / "field.npz")
+    nz, ny, nx, _ = field.array.shape
+    assert npz["disp"].shape == (3, nx, ny, nz) and npz["disp"].dtype == np.float32
+    for prefix, image in (("fixed", field), ("moving", moving)):
+        np.testing.assert_array_equal(npz[prefix + "_origin"], image.origin)
+        np.testing.assert_array_equal(npz[prefix + "_spacing"], image.spacing)
+        np.testing.assert_array_equal(npz[prefix + "_direction"], image.direction)
+    k, j, i = np.meshgrid(np.arange(nz), np.arange(ny), np.arange(nx), indexing="ij")
+    fixed_index = np.stack([i, j, k], axis=-1).astype(float)  # [z, y, x, (i, j, k)]
+    to_point = field.direction * np.array(field.spacing)
+    points = field.origin + fixed_index @ to_point.T + field.array
+    moving_index = (points - moving.origin) @ np.linalg.inv(moving.direction * np.array(moving.spacing)).T
+    disp = np.transpose(npz["disp"], (3, 2, 1, 0))  # -> [z, y, x, component]
+    np.testing.assert_allclose(disp, moving_index - fixed_index, rtol=0, atol=1e-4)
+
+    nearest = np.floor(fixed_index + disp + 0.5).astype(int)
+    inside = np.all((nearest >= 0) & (nearest < np.array(moving.array.shape[::-1])), axis=-1)
+    sampled = np.zeros(inside.shape, np.int32)
+    sampled[inside] = moving.array[nearest[inside][:, 2], nearest[inside][:, 1], nearest[inside][:, 0]]
+    warped = biomechreg.read_image(cli_registration / "warped_labels.nrrd", "labels").array
+    assert np.mean(sampled == warped) > 0.9999
 
 
 def one_line_error(run, name):

@@ -23,7 +23,9 @@
 #include "bmrPyObserver.h"
 #include "itkBiomechanicalImageIO.h"
 #include "itkClinicalStructureSet.h"
+#include "itkBiomechanicalWriters.h"
 #include "itkDicomRT.h"
+#include "itkDicomRTWriters.h"
 #include "itkDoseEvaluation.h"
 #include "itkMarkerPipeline.h"
 
@@ -338,12 +340,43 @@ BindDose(py::module_ & m)
 }
 } // namespace
 
+/** The field's interchange files: a DICOM Deformable Spatial Registration and Learn2Reg's .npz. */
+void
+BindInterchange(py::module_ & m)
+{
+  m.def("write_dicom_registration",
+        [](const py::tuple & field, const std::string & fixed, const std::string & moving, const std::string & path) {
+          const auto             image = ImportImage<itk::BiomechanicalFieldType>(field, "field");
+          py::gil_scoped_release released;
+          itk::WriteDeformableSpatialRegistration(image, fixed, moving, path);
+        });
+  m.def("read_dicom_registration", [](const std::string & path) {
+    itk::DicomDeformableRegistration registration;
+    {
+      py::gil_scoped_release released;
+      registration = itk::ReadDeformableSpatialRegistration(path);
+    }
+    py::dict frames;
+    frames["registered_frame_of_reference_uid"] = registration.registeredFrameOfReferenceUID;
+    frames["source_frame_of_reference_uid"] = registration.sourceFrameOfReferenceUID;
+    return py::make_tuple(ToImage(ExportImage(registration.field.GetPointer())), frames);
+  });
+  m.def("write_field_npz", [](const py::tuple & field, const py::tuple & moving, const std::string & path) {
+    const auto image = ImportImage<itk::BiomechanicalFieldType>(field, "field");
+    auto       grid = itk::ImageBase<3>::New();
+    itk::ApplyGridGeometry(grid.GetPointer(), GeometryOf(moving, "moving"));
+    py::gil_scoped_release released;
+    itk::WriteLearn2RegDisplacement(image, grid, path);
+  });
+}
+
 void
 BindClinical(py::module_ & m)
 {
   BindMarkers(m);
   BindDose(m);
   BindStructureSets(m);
+  BindInterchange(m);
 }
 
 } // namespace bmrpy

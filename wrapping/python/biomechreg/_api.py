@@ -4,7 +4,7 @@ mN; images in LPS with ITK's geometry."""
 import numpy as np
 
 from . import _biomechreg as _engine
-from ._images import Image, engine_tuple, from_engine
+from ._images import Image, as_image, engine_tuple, from_engine
 
 __all__ = ["register", "simulate", "make_phantom", "markers", "dose", "conformal_plan", "warp", "read_image",
            "write_image", "read_scene", "parse_scene", "read_landmarks", "configure_numerics",
@@ -160,6 +160,31 @@ def read_outline_fractions(rtstruct, ct, rois):
     outlines); pass them as register(fixed_probabilities={organ: fractions}). ``ct``: the path of its DICOM series
     or an image. Returns {ROI name: Image in [0, 1]}."""
     return _engine.read_outline_fractions(str(rtstruct), _ct_grid(ct), [str(r) for r in rois])
+
+
+def write_dicom_registration(field, fixed_series, moving_series, path):
+    """The fixed -> moving ``field`` [mm] as a DICOM Deformable Spatial Registration object (what SlicerRT and
+    planning systems exchange; itk::WriteDeformableSpatialRegistration): from the frame of reference of the fixed
+    scan's DICOM series ``fixed_series`` (a directory; its patient and study are copied) to the moving scan's
+    ``moving_series``. The vectors are stored as float32. ValueError naming the input at fault."""
+    _engine.write_dicom_registration(engine_tuple(field, "field", np.float64, components=3), str(fixed_series),
+                                     str(moving_series), str(path))
+
+
+def read_dicom_registration(path):
+    """A DICOM Deformable Spatial Registration object (one grid, identity pre- and post-matrices) as (field Image,
+    {"registered_frame_of_reference_uid", "source_frame_of_reference_uid"}): at each grid point of the registered
+    (fixed) frame the displacement [mm] into the source (moving) frame, as warp() takes it."""
+    return _engine.read_dicom_registration(str(path))
+
+
+def write_field_npz(field, moving, path):
+    """The fixed -> moving ``field`` as a NumPy .npz in Learn2Reg's layout (itk::WriteLearn2RegDisplacement):
+    ``disp`` float32 (3, nx, ny, nz) in voxels, fixed voxel (i, j, k) + disp = its continuous index in ``moving``
+    (an image, only its grid is used), and both grids' origin, spacing and direction."""
+    grid = as_image(moving, "moving")
+    dummy = (np.zeros((1, 1, 1), np.float32), grid.spacing, grid.origin, [float(v) for v in grid.direction.ravel()])
+    _engine.write_field_npz(engine_tuple(field, "field", np.float64, components=3), dummy, str(path))
 
 
 def _ct_grid(ct):
