@@ -189,6 +189,7 @@ class Arguments;
 struct RegistrationPaths
 {
   std::string movingLabels, fixedLabels, scene, roiMap, out;
+  std::string movingLabelNames, fixedLabelNames; ///< names tables of label maps (built-in scene only)
 };
 
 /** The scene and label maps register works on; with structure sets, the fixed ROI of each objective organ. */

@@ -259,7 +259,13 @@ RegisterCommand(const Arguments & args)
   const std::string       fixedCT = args.Require("--fixed-ct");
   const std::string       fixedLabels = args.Require("--fixed-labels");
   const std::string       out = args.Require("--out");
-  const RegistrationPaths paths{ movingLabels, fixedLabels, args.Get("--scene"), args.Get("--roi-map"), out };
+  const RegistrationPaths paths{ movingLabels,
+                                 fixedLabels,
+                                 args.Get("--scene"),
+                                 args.Get("--roi-map"),
+                                 out,
+                                 args.Get("--moving-label-names"),
+                                 args.Get("--fixed-label-names") };
   const auto              outputs = ParseRegistrationOutputs(args);
   auto                    settings = ParseRegistrationSettings(args);
   settings.pushField = outputs.forwardField; // computed only when written

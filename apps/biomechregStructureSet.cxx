@@ -74,42 +74,63 @@ MappingText(const itk::ClinicalAnatomy & anatomy, const itk::ClinicalAnatomySett
 }
 
 nlohmann::json
-MappingJson(const itk::ClinicalAnatomy & anatomy, const std::string & rtstruct)
+MappingJson(const itk::ClinicalAnatomy & anatomy, const std::string & source, bool rtstruct)
 {
-  return { { "rtstruct", rtstruct },
-           { "part_of_roi", anatomy.mapping.partOfROI },
-           { "left_out", anatomy.mapping.leftOut },
-           { "bone_from_ct", anatomy.boneFromCT },
-           { "bone_voxels", anatomy.boneVoxels },
-           { "bone_pieces_dropped", anatomy.bonePiecesDropped } };
+  return { { rtstruct ? "rtstruct" : "label_map", source }, { "part_of_roi", anatomy.mapping.partOfROI },
+           { "left_out", anatomy.mapping.leftOut },         { "bone_from_ct", anatomy.boneFromCT },
+           { "bone_voxels", anatomy.boneVoxels },           { "bone_pieces_dropped", anatomy.bonePiecesDropped } };
 }
 
-/** Both scans' anatomy from their structure sets, with the built-in scene; the mapping printed and written. */
+bool
+IsRTStruct(const std::string & path)
+{
+  return itk::ReadDicomModality(path) == "RTSTRUCT";
+}
+
+/** One scan's anatomy with the built-in scene: from its RTSTRUCT, or from its label map and the label names (a
+ * names table, or the segment names of a Slicer segmentation). */
+itk::ClinicalAnatomy
+ScanAnatomy(const std::string &                        labelsPath,
+            const std::string &                        namesPath,
+            const CTImageType *                        ct,
+            const std::map<std::string, std::string> & overrides,
+            const itk::ClinicalAnatomySettings &       settings,
+            const char *                               what)
+{
+  if (IsRTStruct(labelsPath))
+  {
+    return itk::ReadClinicalPelvisAnatomy(labelsPath, ct, overrides, settings);
+  }
+  const auto names = itk::ReadLabelNames(namesPath.empty() ? labelsPath : namesPath);
+  if (names.empty())
+  {
+    throw UsageError(std::string("--scene is required unless both label inputs are RTSTRUCTs or named label maps (a "
+                                 "Slicer .seg.nrrd, or --moving-label-names/--fixed-label-names FILE); ") +
+                     what + " \"" + labelsPath + "\" is neither");
+  }
+  const auto labels = ReadImage<LabelImageType>(labelsPath, "label image");
+  return itk::ClinicalPelvisAnatomyFromLabelMap(labels, names, ct, overrides, settings, labelsPath);
+}
+
+/** Both scans' anatomy from their structure sets or named label maps, with the built-in scene; the mapping printed
+ * and written. */
 RegistrationAnatomy
 ReadStructureSets(const RegistrationPaths & paths, const CTImageType * movingCT, const CTImageType * fixedCT)
 {
-  for (const auto & [path, what] :
-       { std::pair(paths.movingLabels, "--moving-labels"), std::pair(paths.fixedLabels, "--fixed-labels") })
-  {
-    if (itk::ReadDicomModality(path) != "RTSTRUCT")
-    {
-      throw UsageError(std::string("--scene is required unless both label inputs are RTSTRUCTs (the built-in pelvis "
-                                   "scene); ") +
-                       what + " \"" + path + "\" is not one");
-    }
-  }
   const auto                         overrides = ParseROIMap(paths.roiMap);
   const itk::ClinicalAnatomySettings settings;
-  const auto moving = itk::ReadClinicalPelvisAnatomy(paths.movingLabels, movingCT, overrides, settings);
-  const auto fixed = itk::ReadClinicalPelvisAnatomy(paths.fixedLabels, fixedCT, overrides, settings);
+  const auto                         moving =
+    ScanAnatomy(paths.movingLabels, paths.movingLabelNames, movingCT, overrides, settings, "--moving-labels");
+  const auto fixed =
+    ScanAnatomy(paths.fixedLabels, paths.fixedLabelNames, fixedCT, overrides, settings, "--fixed-labels");
   PrintLine("  built-in pelvis scene; moving structure set: " + MappingText(moving, settings));
   PrintLine("  fixed structure set: " + MappingText(fixed, settings));
   MakeOutputDirectory(paths.out);
   const nlohmann::json report = { { "scene", "pelvis (built-in)" },
                                   { "bone_threshold_HU", settings.boneThresholdHU },
                                   { "minimum_bone_volume_cc", settings.minimumBoneVolumeCC },
-                                  { "moving", MappingJson(moving, paths.movingLabels) },
-                                  { "fixed", MappingJson(fixed, paths.fixedLabels) } };
+                                  { "moving", MappingJson(moving, paths.movingLabels, IsRTStruct(paths.movingLabels)) },
+                                  { "fixed", MappingJson(fixed, paths.fixedLabels, IsRTStruct(paths.fixedLabels)) } };
   bmr::WriteTextFileAtomically(paths.out + "/structure_set.json", report.dump(2) + "\n");
   itk::WriteImageAtomically(moving.labels.GetPointer(), paths.out + "/moving_labels_from_rois.nrrd", 1);
   itk::WriteImageAtomically(fixed.labels.GetPointer(), paths.out + "/fixed_labels_from_rois.nrrd", 1);
@@ -132,9 +153,10 @@ ReadRegistrationAnatomy(const RegistrationPaths & paths,
   {
     return ReadStructureSets(paths, movingCT, fixedCT);
   }
-  if (!paths.roiMap.empty())
+  if (!paths.roiMap.empty() || !paths.movingLabelNames.empty() || !paths.fixedLabelNames.empty())
   {
-    throw UsageError("--roi-map applies to the built-in pelvis scene only (without --scene)");
+    throw UsageError("--roi-map and --moving/fixed-label-names apply to the built-in pelvis scene only (without "
+                     "--scene)");
   }
   RegistrationAnatomy anatomy;
   anatomy.scene = bmr::ReadScene(paths.scene);

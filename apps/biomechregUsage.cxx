@@ -51,7 +51,9 @@ const std::pair<const char *, const char *> commands[] = {
     "    forward simulation of a scene on a moving label map: fields [mm], warped images\n" },
   { "register",
     "  biomechreg register --moving-ct FILE --moving-labels FILE --fixed-ct FILE --fixed-labels FILE\n"
-    "                      [--scene FILE (without: both label inputs RTSTRUCTs, the built-in pelvis scene)]\n"
+    "                      [--scene FILE (without: RTSTRUCTs or named label maps, the built-in pelvis scene)]\n"
+    "                      [--moving-label-names FILE --fixed-label-names FILE (value,name tables; a Slicer\n"
+    "                      .seg.nrrd names its own)]\n"
     "                      [--roi-map ROI=PART,... (PART prostate|bladder|rectum|body|bone|ignore; TG-263 names\n"
     "                      are mapped by themselves)] --out DIR [--sweep-samples N] [--coarse-factor F]\n"
     "                      [--mesh-scale F] [--wall-spacing-mm D] [--wall-regularization A]\n"

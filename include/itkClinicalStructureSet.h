@@ -22,6 +22,7 @@
 #include "bmrScene.h"
 #include "itkImage.h"
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -102,6 +103,33 @@ ReadClinicalPelvisAnatomy(const std::string &                        rtstructPat
                           const Image<float, 3> *                    ct,
                           const std::map<std::string, std::string> & overrides = {},
                           const ClinicalAnatomySettings &            settings = ClinicalAnatomySettings());
+
+/** \brief A label map's names by label value: a 3D Slicer segmentation's (.seg.nrrd: Segment<i>_Name and
+ * Segment<i>_LabelValue in its header; an empty map when the image has none), or a names table: one "value,name"
+ * per line (a CSV, an optional header line) or "value name r g b a" (a 3D Slicer color table), '#' comments.
+ * Throws itk::InvalidArgumentError naming the file and line for a malformed line or a value named twice, and for a
+ * segmentation whose segments lie in several layers (overlapping segments). \ingroup BiomechanicalRegistrationDicomRT
+ */
+BiomechanicalRegistration_EXPORT std::map<std::int32_t, std::string>
+                                 ReadLabelNames(const std::string & path);
+
+/** \brief The built-in pelvis scene's label map of a scan from a label map whose values are named (\a names:
+ * ReadLabelNames()), drawn on \a ct (same grid).
+ *
+ * The names are mapped as an RTSTRUCT's ROIs (MapPelvisROIs(), \a overrides as there); each voxel takes its name's
+ * part, the body as soft tissue. A label map holds one value per voxel, so its labelled voxels all lie inside the
+ * patient: those of names the scene does not use (PTVs, bowel, seminal vesicles, "ignore" overrides) become soft
+ * tissue, and value 0 is air whatever its name. Bone comes from the CT as for ReadClinicalPelvisAnatomy(). Fails
+ * (itk::InvalidArgumentError, one line naming \a source) as MapPelvisROIs() does, on a value of the map without a
+ * name, a required part (prostate, bladder, rectum, body) without voxels, or a CT on another grid.
+ * \ingroup BiomechanicalRegistrationDicomRT */
+BiomechanicalRegistration_EXPORT ClinicalAnatomy
+ClinicalPelvisAnatomyFromLabelMap(const Image<std::int32_t, 3> *              labels,
+                                  const std::map<std::int32_t, std::string> & names,
+                                  const Image<float, 3> *                     ct,
+                                  const std::map<std::string, std::string> &  overrides = {},
+                                  const ClinicalAnatomySettings &             settings = ClinicalAnatomySettings(),
+                                  const std::string &                         source = "label map");
 
 } // namespace itk
 

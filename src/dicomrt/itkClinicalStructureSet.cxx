@@ -22,18 +22,25 @@
 #include "itkConnectedComponentImageFilter.h"
 #include "itkDicomRT.h"
 #include "itkImageRegionConstIterator.h"
+#include "itkImageIOFactory.h"
 #include "itkImageRegionIterator.h"
 #include "itkMetaDataObject.h"
 #include "itkRelabelComponentImageFilter.h"
 
+#include "itkDicomRTCommon.h"
+
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
+#include <fstream>
 #include <set>
+#include <sstream>
 
 namespace itk {
 
 namespace {
 constexpr const char * Where = "ReadClinicalPelvisAnatomy";
+constexpr const char * NamesWhere = "ReadLabelNames";
 const char * const     RequiredParts[] = { "prostate", "bladder", "rectum", "body" };
 
 /** A name as the table compares it: lower case, without spaces, underscores and hyphens. */
@@ -190,7 +197,174 @@ AddBoneFromCT(ClinicalAnatomy &               anatomy,
   }
   anatomy.boneFromCT = true;
 }
+/** Bone from the CT unless a bone ROI other than a femoral head exists; then the bone voxels counted. */
+void
+FinishBone(ClinicalAnatomy &               anatomy,
+           const Image<float, 3> *         ct,
+           const bmr::Scene &              scene,
+           const ClinicalAnatomySettings & settings)
+{
+  const auto bones = anatomy.mapping.ROIsOf("bone");
+  if (std::all_of(bones.begin(), bones.end(), IsFemoralHead))
+  {
+    AddBoneFromCT(anatomy, ct, scene, settings);
+  }
+  const std::int32_t bone = scene.FindLabel("bone")->value;
+  const auto *       buffer = anatomy.labels->GetBufferPointer();
+  anatomy.boneVoxels =
+    std::count(buffer, buffer + anatomy.labels->GetLargestPossibleRegion().GetNumberOfPixels(), bone);
+}
+
+/** Fails unless the label map and the CT share one grid (the bone is thresholded voxel by voxel). */
+void
+CheckSameGrid(const ImageBase<3> * labels, const ImageBase<3> * ct, const std::string & source)
+{
+  const bool same =
+    labels->GetLargestPossibleRegion() == ct->GetLargestPossibleRegion() &&
+    labels->GetOrigin().EuclideanDistanceTo(ct->GetOrigin()) <= 1e-3 &&
+    (labels->GetSpacing() - ct->GetSpacing()).GetNorm() <= 1e-4 &&
+    (labels->GetDirection().GetVnlMatrix() - ct->GetDirection().GetVnlMatrix()).absolute_value_max() <= 1e-4;
+  if (!same)
+  {
+    bmr::FailInput(Where, source + ": the label map is not on the grid of its CT (size, origin, spacing, direction)");
+  }
+}
+
+/** The scene's labels from a named label map: each named value as its part (the body as soft tissue), the values
+ * of left-out names as soft tissue (a label map's labelled voxels lie inside the patient), 0 as air; fails on a
+ * value without a name and on a required part without voxels. */
+Image<std::int32_t, 3>::Pointer
+SceneLabelsOf(const Image<std::int32_t, 3> *              labels,
+              const std::map<std::int32_t, std::string> & names,
+              const PelvisROIMapping &                    mapping,
+              const bmr::Scene &                          scene,
+              const std::string &                         source)
+{
+  const std::int32_t                   tissue = scene.FindLabel("soft_tissue")->value;
+  std::map<std::int32_t, std::int32_t> sceneValue{ { 0, scene.FindLabel("air")->value } };
+  for (const auto & [value, name] : names)
+  {
+    const auto part = mapping.partOfROI.find(name);
+    if (value != 0)
+    {
+      sceneValue[value] =
+        part == mapping.partOfROI.end() || part->second == "body" ? tissue : scene.FindLabel(part->second)->value;
+    }
+  }
+  auto out = Image<std::int32_t, 3>::New();
+  out->CopyInformation(labels);
+  out->SetRegions(labels->GetLargestPossibleRegion());
+  out->Allocate();
+  std::map<std::int32_t, std::size_t>              voxels;
+  ImageRegionConstIterator<Image<std::int32_t, 3>> in(labels, labels->GetLargestPossibleRegion());
+  ImageRegionIterator<Image<std::int32_t, 3>>      o(out, out->GetLargestPossibleRegion());
+  for (; !in.IsAtEnd(); ++in, ++o)
+  {
+    const auto found = sceneValue.find(in.Get());
+    if (found == sceneValue.end())
+    {
+      bmr::FailInput(Where, source + ": label value " + std::to_string(in.Get()) + " has no name in the names table");
+    }
+    o.Set(found->second);
+    ++voxels[in.Get()];
+  }
+  for (const char * part : RequiredParts)
+  {
+    const std::string roi = mapping.ROIsOf(part).front();
+    const auto        named = std::find_if(names.begin(), names.end(), [&](const auto & n) { return n.second == roi; });
+    if (voxels[named->first] == 0)
+    {
+      bmr::FailInput(Where,
+                     source + ": \"" + roi + "\" (label value " + std::to_string(named->first) + ", the " + part +
+                       ") holds no voxel");
+    }
+  }
+  return out;
+}
+/** A names table: "value,name" (CSV, an optional header line) or "value name ..." (a 3D Slicer color table)
+ * per line, '#' comments. */
+std::map<std::int32_t, std::string>
+NamesTable(const std::string & path)
+{
+  std::ifstream in(path);
+  if (!in)
+  {
+    bmr::FailInput(NamesWhere, "cannot read the label names table \"" + path + "\"");
+  }
+  std::map<std::int32_t, std::string> names;
+  std::size_t                         number = 0;
+  for (std::string line; std::getline(in, line);)
+  {
+    ++number;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#')
+    {
+      continue;
+    }
+    const bool         csv = line.find(',') != std::string::npos;
+    std::istringstream fields(line);
+    std::string        value, name;
+    std::getline(fields >> std::ws, value, csv ? ',' : ' ');
+    csv ? (void)std::getline(fields, name, ',') : (void)(fields >> name);
+    name = dicomrt::Trim(name);
+    char *     end = nullptr;
+    const long v = std::strtol(value.c_str(), &end, 10);
+    if (end == value.c_str() || *end != '\0' || name.empty())
+    {
+      if (names.empty() && end == value.c_str())
+      {
+        continue; // a header line ("value,name")
+      }
+      bmr::FailInput(NamesWhere,
+                     path + ", line " + std::to_string(number) + ": expected \"VALUE,NAME\" or \"VALUE NAME ...\"");
+    }
+    if (!names.emplace(static_cast<std::int32_t>(v), name).second)
+    {
+      bmr::FailInput(NamesWhere, path + ", line " + std::to_string(number) + ": value " + value + " named twice");
+    }
+  }
+  return names;
+}
+
+/** The segment names of a 3D Slicer segmentation's header (Segment<i>_Name, _LabelValue, _Layer); empty when the
+ * file has none. */
+std::map<std::int32_t, std::string>
+SegmentationNames(ImageIOBase * io, const std::string & path)
+{
+  const MetaDataDictionary &          header = io->GetMetaDataDictionary();
+  std::map<std::int32_t, std::string> names;
+  for (unsigned int i = 0;; ++i)
+  {
+    const std::string key = "Segment" + std::to_string(i) + "_";
+    std::string       name, value, layer = "0";
+    if (!ExposeMetaData<std::string>(header, key + "Name", name))
+    {
+      return names;
+    }
+    ExposeMetaData<std::string>(header, key + "Layer", layer);
+    if (!ExposeMetaData<std::string>(header, key + "LabelValue", value) || dicomrt::Trim(layer) != "0")
+    {
+      bmr::FailInput(NamesWhere,
+                     path + ": segment \"" + name + "\" has no label value or lies in another layer " +
+                       "(overlapping segments: export them from Slicer as one label map)");
+    }
+    names[static_cast<std::int32_t>(std::stol(value))] = dicomrt::Trim(name);
+  }
+}
 } // namespace
+
+std::map<std::int32_t, std::string>
+ReadLabelNames(const std::string & path)
+{
+  const ImageIOBase::Pointer io = ImageIOFactory::CreateImageIO(path.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode);
+  if (io)
+  {
+    io->SetFileName(path);
+    io->ReadImageInformation();
+    return SegmentationNames(io, path);
+  }
+  return NamesTable(path);
+}
 
 std::vector<std::string>
 PelvisROIMapping::ROIsOf(const std::string & part) const
@@ -266,15 +440,36 @@ ReadClinicalPelvisAnatomy(const std::string &                        rtstructPat
   options.ignoreUnmappedROIs = true;
   options.backgroundLabel = scene.FindLabel("air")->value;
   anatomy.labels = ReadRTStructAsLabelImage(rtstructPath, ct, labelOfROI, options);
-  const auto bones = anatomy.mapping.ROIsOf("bone");
-  if (std::all_of(bones.begin(), bones.end(), IsFemoralHead))
+  FinishBone(anatomy, ct, scene, settings);
+  return anatomy;
+}
+
+ClinicalAnatomy
+ClinicalPelvisAnatomyFromLabelMap(const Image<std::int32_t, 3> *              labels,
+                                  const std::map<std::int32_t, std::string> & names,
+                                  const Image<float, 3> *                     ct,
+                                  const std::map<std::string, std::string> &  overrides,
+                                  const ClinicalAnatomySettings &             settings,
+                                  const std::string &                         source)
+{
+  if (labels == nullptr || ct == nullptr)
   {
-    AddBoneFromCT(anatomy, ct, scene, settings);
+    bmr::FailInput(Where, source + ": no label map or no CT");
   }
-  const std::int32_t bone = scene.FindLabel("bone")->value;
-  const auto *       buffer = anatomy.labels->GetBufferPointer();
-  anatomy.boneVoxels =
-    std::count(buffer, buffer + anatomy.labels->GetLargestPossibleRegion().GetNumberOfPixels(), bone);
+  CheckSameGrid(labels, ct, source);
+  std::vector<std::string> named;
+  for (const auto & [value, name] : names)
+  {
+    if (value != 0)
+    {
+      named.push_back(name);
+    }
+  }
+  ClinicalAnatomy  anatomy;
+  const bmr::Scene scene = BuiltInPelvisScene();
+  anatomy.mapping = MapPelvisROIs(named, overrides, source);
+  anatomy.labels = SceneLabelsOf(labels, names, anatomy.mapping, scene, source);
+  FinishBone(anatomy, ct, scene, settings);
   return anatomy;
 }
 

@@ -6,7 +6,9 @@ label-map route's 68 % interval (the same phantom registered from its label maps
 the thick slices' calibration at 2 mm); the bone it took from the CT must overlap the phantom's with Dice >= 0.95
 (the phantom's bone is 700 HU, the threshold 250 HU: partial-volume voxels at the boundary and nothing else
 differ). Three malformed structure sets (no External; no prostate on the fixed scan; the moving scan's ROIs on
-the fixed CT, another frame of reference) are refused with one line naming the file, exit status 1.
+the fixed CT, another frame of reference) are refused with one line naming the file, exit status 1. The same scans
+as label maps named by a names table and by a Slicer segmentation's header (no bone label) give the structure
+sets' label maps and a modulus in the same interval; a value without a name is refused in one line.
 
 The field's interchange files are read back by readers that are not ours: the DICOM Deformable Spatial
 Registration (`rt-export --registration-out`) by pydicom and dicom3tools' IOD checker, the Learn2Reg .npz
@@ -71,17 +73,24 @@ def dicom(root, scan):
     return root / f"dicom_{scan}" / "ct", next((root / f"dicom_{scan}").glob("rtss*.dcm"))
 
 
-def test_structure_sets_register_without_a_scene(cli, scans, tmp_path):
+@pytest.fixture(scope="module")
+def label_reference(cli, scans):
+    """The phantom registered from its own label maps and scene.json: the label-map route's stated interval."""
+    p, out = scans / "phantom", scans / "label_reference"
+    run = subprocess.run([cli, "register", "--moving-ct", str(p / "moving_ct.nrrd"),
+                          "--moving-labels", str(p / "moving_labels.nrrd"), "--fixed-ct", str(p / "fixed_ct.nrrd"),
+                          "--fixed-labels", str(p / "fixed_labels.nrrd"), "--scene", str(p / "scene.json"),
+                          "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    return json.loads((out / "report.json").read_text())["youngs_modulus_interval"]["prostate"]
+
+
+def test_structure_sets_register_without_a_scene(cli, scans, label_reference, tmp_path):
     p = scans / "phantom"
-    reference = subprocess.run([cli, "register", "--moving-ct", str(p / "moving_ct.nrrd"),
-                                "--moving-labels", str(p / "moving_labels.nrrd"), "--fixed-ct", str(p / "fixed_ct.nrrd"),
-                                "--fixed-labels", str(p / "fixed_labels.nrrd"), "--scene", str(p / "scene.json"),
-                                "--out", str(tmp_path / "labels")], capture_output=True, text=True)
-    assert reference.returncode == 0, reference.stderr
     run = register(cli, tmp_path / "rois", dicom(scans, "moving"), dicom(scans, "fixed"))
     assert run.returncode == 0, run.stderr
     print(run.stdout)
-    interval = json.loads((tmp_path / "labels" / "report.json").read_text())["youngs_modulus_interval"]["prostate"]
+    interval = label_reference
     stated = json.loads((tmp_path / "rois" / "report.json").read_text())["youngs_modulus_interval"]["prostate"]
     low, high = interval["interval_68_kPa"]
     print("label maps: %s\nstructure sets: %s" % (interval["statement"], stated["statement"]))
@@ -132,6 +141,73 @@ def test_the_package_registers_structure_sets_as_the_command_line(cli_registrati
     assert result.youngs_modulus["prostate"] == report["youngs_modulus_kPa"]["prostate"]
     np.testing.assert_array_equal(result.field.array,
                                   biomechreg.read_image(cli_registration / "field.nrrd", "field").array)
+
+
+NAMES = "value,name\n1,External\n2,Prostate\n3,Bladder\n4,Rectum\n"
+
+
+def named_label_map(scans, scan, out):
+    """The phantom's label map as a clinic's: no bone label (bone voxels given to the body), values named by TG-263."""
+    labels = biomechreg.read_image(scans / "phantom" / f"{scan}_labels.nrrd", "labels")
+    array = labels.array.copy()
+    array[array == 5] = 1
+    path = out / f"{scan}_labels.nrrd"
+    biomechreg.write_image(biomechreg.Image(array, labels.spacing, labels.origin, labels.direction), path)
+    return path
+
+
+def as_slicer_segmentation(path):
+    """The label map with the names in its header as 3D Slicer writes a .seg.nrrd (Segment<i>_Name, _LabelValue,
+    _Layer key-value lines); the header is text up to its first blank line."""
+    data = path.read_bytes()
+    end = data.index(b"\n\n")
+    keys = "".join("Segment%d_Name:=%s\nSegment%d_LabelValue:=%d\nSegment%d_Layer:=0\n" % (i, name, i, value, i)
+                   for i, (value, name) in enumerate([(1, "External"), (2, "Prostate"), (3, "Bladder"), (4, "Rectum")]))
+    segmentation = path.with_name(path.name.replace(".nrrd", ".seg.nrrd"))
+    segmentation.write_bytes(data[:end + 1] + keys.encode() + data[end + 1:])
+    return segmentation
+
+
+def test_named_label_maps_register_without_a_scene(cli, scans, label_reference, cli_registration, tmp_path):
+    # A label map with a names table (moving) and a Slicer segmentation that names its segments (fixed), no bone
+    # label: the built-in scene's label maps equal those from the structure sets of the same scans (the organs'
+    # voxels and the body from the names, the bone from the CT), and the modulus lies in the label-map route's
+    # 68 % interval, as the structure sets' does.
+    p = scans / "phantom"
+    (tmp_path / "names.csv").write_text(NAMES)
+    moving = named_label_map(scans, "moving", tmp_path)
+    fixed = as_slicer_segmentation(named_label_map(scans, "fixed", tmp_path))
+    command = [cli, "register", "--moving-ct", str(p / "moving_ct.nrrd"), "--moving-labels", str(moving),
+               "--moving-label-names", str(tmp_path / "names.csv"), "--fixed-ct", str(p / "fixed_ct.nrrd"),
+               "--fixed-labels", str(fixed), "--out", str(tmp_path / "named")]
+    run = subprocess.run(command, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    mapping = json.loads((tmp_path / "named" / "structure_set.json").read_text())
+    for scan in ("moving", "fixed"):
+        assert mapping[scan]["part_of_roi"] == {"Prostate": "prostate", "Bladder": "bladder", "Rectum": "rectum",
+                                                "External": "body"} and mapping[scan]["bone_from_ct"]
+        from_names = biomechreg.read_image(tmp_path / "named" / f"{scan}_labels_from_rois.nrrd", "labels").array
+        from_rois = biomechreg.read_image(cli_registration / f"{scan}_labels_from_rois.nrrd", "labels").array
+        print("%s: %.6f of the voxels as from the structure set" % (scan, np.mean(from_names == from_rois)))
+        assert np.mean(from_names == from_rois) > 0.999
+        # The package reads the segmentation's names and makes the same label map.
+        source = fixed if scan == "fixed" else moving
+        names = biomechreg.read_label_names(fixed if scan == "fixed" else tmp_path / "names.csv")
+        assert names == {1: "External", 2: "Prostate", 3: "Bladder", 4: "Rectum"}
+        labels, _ = biomechreg.read_named_label_map(biomechreg.read_image(source, "labels"), names,
+                                                    biomechreg.read_image(p / f"{scan}_ct.nrrd"))
+        np.testing.assert_array_equal(labels.array, from_names)
+    assert biomechreg.read_label_names(moving) == {}  # a plain label map names nothing
+    stated = json.loads((tmp_path / "named" / "report.json").read_text())["youngs_modulus_interval"]["prostate"]
+    print("named label maps: %s" % stated["statement"])
+    low, high = label_reference["interval_68_kPa"]
+    assert low <= stated["estimate_kPa"] <= high
+
+    (tmp_path / "short.csv").write_text(NAMES.replace("4,Rectum", "9,Rectum"))
+    unnamed = command[:]
+    unnamed[unnamed.index("--moving-label-names") + 1] = str(tmp_path / "short.csv")
+    unnamed[unnamed.index("--out") + 1] = str(tmp_path / "unnamed")
+    print(one_line_error(subprocess.run(unnamed, capture_output=True, text=True), "label value 4 has no name"))
 
 
 def frame_of_reference(series):

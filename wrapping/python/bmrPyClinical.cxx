@@ -220,6 +220,19 @@ ReadOutlineFractions(const std::string & rtstruct, const py::object & ct, const 
   return result;
 }
 
+/** Which ROI became which part, and the bone's origin, as a dict. */
+py::dict
+MappingDict(const itk::ClinicalAnatomy & anatomy)
+{
+  py::dict mapping;
+  mapping["part_of_roi"] = anatomy.mapping.partOfROI;
+  mapping["left_out"] = anatomy.mapping.leftOut;
+  mapping["bone_from_ct"] = anatomy.boneFromCT;
+  mapping["bone_voxels"] = anatomy.boneVoxels;
+  mapping["bone_pieces_dropped"] = anatomy.bonePiecesDropped;
+  return mapping;
+}
+
 /** The built-in pelvis scene's label map from a structure set (itk::ReadClinicalPelvisAnatomy) and its mapping; the
  * CT given as an image (no DICOM attributes) or as the path of its series (its frame of reference checked). */
 py::tuple
@@ -244,13 +257,26 @@ ReadStructureSet(const std::string &                        rtstruct,
     py::gil_scoped_release released;
     anatomy = itk::ReadClinicalPelvisAnatomy(rtstruct, image, overrides, settings);
   }
-  py::dict mapping;
-  mapping["part_of_roi"] = anatomy.mapping.partOfROI;
-  mapping["left_out"] = anatomy.mapping.leftOut;
-  mapping["bone_from_ct"] = anatomy.boneFromCT;
-  mapping["bone_voxels"] = anatomy.boneVoxels;
-  mapping["bone_pieces_dropped"] = anatomy.bonePiecesDropped;
-  return py::make_tuple(ToImage(ExportImage(anatomy.labels.GetPointer())), mapping);
+  return py::make_tuple(ToImage(ExportImage(anatomy.labels.GetPointer())), MappingDict(anatomy));
+}
+
+/** The built-in scene's label map from a named label map (itk::ClinicalPelvisAnatomyFromLabelMap) and its
+ * mapping. */
+py::tuple
+ReadNamedLabelMap(const py::tuple &                           labels,
+                  const std::map<std::int32_t, std::string> & names,
+                  const py::object &                          ct,
+                  const std::map<std::string, std::string> &  overrides,
+                  const itk::ClinicalAnatomySettings &        settings)
+{
+  const auto           labelImage = ImportImage<itk::BiomechanicalLabelImageType>(labels, "labels");
+  const auto           image = StructureSetCT(ct);
+  itk::ClinicalAnatomy anatomy;
+  {
+    py::gil_scoped_release released;
+    anatomy = itk::ClinicalPelvisAnatomyFromLabelMap(labelImage, names, image, overrides, settings, "labels");
+  }
+  return py::make_tuple(ToImage(ExportImage(anatomy.labels.GetPointer())), MappingDict(anatomy));
 }
 
 void
@@ -262,6 +288,8 @@ BindStructureSets(py::module_ & m)
     .def_readwrite("bone_threshold_HU", &C::boneThresholdHU)
     .def_readwrite("minimum_bone_volume_cc", &C::minimumBoneVolumeCC);
   m.def("read_structure_set", &ReadStructureSet);
+  m.def("read_named_label_map", &ReadNamedLabelMap);
+  m.def("read_label_names", &itk::ReadLabelNames);
   m.def("read_outline_fractions", &ReadOutlineFractions);
   m.def("builtin_pelvis_scene", &itk::BuiltInPelvisScene);
 }

@@ -154,6 +154,26 @@ def read_structure_set(rtstruct, ct, *, roi_map=None, bone_threshold_HU=250.0, m
     return labels, mapping
 
 
+def read_label_names(path):
+    """A label map's names {value: name}: a 3D Slicer segmentation's (.seg.nrrd header; {} when it has none) or a
+    names table ("value,name" CSV lines or a Slicer color table "value name r g b a")."""
+    return _engine.read_label_names(str(path))
+
+
+def read_named_label_map(labels, names, ct, *, roi_map=None, bone_threshold_HU=250.0, minimum_bone_volume_cc=1.0):
+    """A label map whose values are named (``names``: {value: name} or the path read_label_names() reads) as the
+    built-in pelvis scene's label map (itk::ClinicalPelvisAnatomyFromLabelMap, what ``biomechreg register`` does
+    without --scene for a label map with --*-label-names or a .seg.nrrd): names mapped as read_structure_set() maps
+    ROIs, voxels of unused names as soft tissue, 0 as air, bone from ``ct`` (an image on the same grid, or the path
+    of its series) unless a non-femoral bone is named. Returns (labels Image, mapping dict)."""
+    if not isinstance(names, dict):
+        names = read_label_names(names)
+    settings = _engine.ClinicalAnatomySettings()
+    settings.bone_threshold_HU, settings.minimum_bone_volume_cc = bone_threshold_HU, minimum_bone_volume_cc
+    return _engine.read_named_label_map(engine_tuple(labels, "labels", np.int32), {int(k): str(v) for k, v in
+                                        names.items()}, _ct_grid(ct), dict(roi_map or {}), settings)
+
+
 def read_outline_fractions(rtstruct, ct, rois):
     """Each ROI's exact outlines as area fractions per voxel of ``ct``'s grid (itk::ReadRTStructAreaFractions): the
     fixed organs' sub-voxel surfaces ``biomechreg register`` uses for a fixed RTSTRUCT (--rtstruct-surfaces
