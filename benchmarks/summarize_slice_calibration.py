@@ -4,6 +4,11 @@ fit RUNS.csv [RUNS.csv ...]: per slice thickness (the largest side of the rows' 
     line log(fit / 100 kPa) = a + beta log(true E / 100 kPa) with residual SD s, by the censored (Tobit) likelihood
     (a fit on the upper search bound, 600 kPa, says only that the fit would have gone at least there); prints the
     constants for include/itkBiomechanicalPipelines.h and a markdown table. Needs scipy.
+tails OUT_DIR FIT.csv [FIT.csv ...] -- CHECK.csv [CHECK.csv ...]: whether the calibration's residuals need a model
+    other than the normal line: the normal Tobit line, Student-t residuals (one degrees-of-freedom shared by the
+    thicknesses) and the normal line with the bladder's filling as a second covariate, each fitted on FIT and judged
+    by its likelihood and by the coverage of its statements on the CHECK pairs (interval, or a bound for a fit on
+    the upper search bound; the search range's own limits not applied); writes OUT_DIR/slice_calibration_tails.csv.
 check RUNS.csv OUT_DIR: per slice thickness, what register stated on pairs the constants never saw: coverage of the
     68 % and 95 % statements (an interval, or a one-sided bound where an end is not determined), how many bounds
     were stated and were true, how many were not determined, the median |error| of the stated moduli (all and at
@@ -92,6 +97,87 @@ def fit_constants(rows):
     print("constexpr SliceCalibration SliceCalibrations[] = { " + ", ".join(lines) + " };")
 
 
+def student_line(groups, nu_shared, covariate=None):
+    """Maximum-likelihood lines per thickness (with \a covariate(row) as a second regressor when given) and
+    residuals N(0, sigma^2) (nu_shared None) or Student-t with one fitted degrees-of-freedom for all thicknesses;
+    censored at the upper search bound. Returns ({thickness: (a, beta, gamma, sigma, m)}, nu, negative
+    log-likelihood)."""
+    import numpy as np
+    from scipy.optimize import minimize
+    from scipy.stats import norm, t as student
+    upper = math.log(BOUNDS_KPA[1] / E0_KPA)
+    data = []
+    for rows in groups.values():
+        x = np.array([math.log(float(r["true_E_kPa"]) / E0_KPA) for r in rows])
+        y = np.array([math.log(float(r["fit_kPa"]) / E0_KPA) for r in rows])
+        z = np.array([covariate(r) if covariate else 0.0 for r in rows])
+        data.append((x, y, z, y >= upper - 1e-6))
+
+    def nll(p):
+        nu = math.exp(p[-1]) + 1 if nu_shared is None else None
+        total = 0.0
+        for i, (x, y, z, c) in enumerate(data):
+            a, beta, gamma, log_sigma = p[4 * i:4 * i + 4]
+            mu, sigma = a + beta * x + gamma * z, math.exp(log_sigma)
+            dist = norm(mu, sigma) if nu is None else student(nu, mu, sigma)
+            total -= dist.logpdf(y)[~c].sum() + dist.logsf(upper)[c].sum()
+        return total
+
+    start = [v for _ in data for v in (0.3, 1.2, 0.0, math.log(0.25))] + ([math.log(4.0)] if nu_shared is None else [])
+    best = minimize(nll, start, method="Nelder-Mead", options={"maxiter": 100000, "maxfev": 100000, "xatol": 1e-7,
+                                                               "fatol": 1e-10})
+    best = minimize(nll, best.x, method="Nelder-Mead", options={"maxiter": 100000, "maxfev": 100000, "xatol": 1e-7,
+                                                                "fatol": 1e-10})
+    nu = math.exp(best.x[-1]) + 1 if nu_shared is None else math.inf
+    lines = {t: (*best.x[4 * i:4 * i + 3], math.exp(best.x[4 * i + 3]), len(rows))
+             for i, (t, rows) in enumerate(groups.items())}
+    return lines, nu, best.fun
+
+
+def statement_covers(r, line, nu, covariate, level):
+    """Whether the inverted line's statement at \a level covers the truth of row \a r (a bound from a fit on the
+    upper search bound); Student's predictive factor sqrt(1 + 1/m), t_(m-2) for normal residuals."""
+    from scipy.stats import t as student
+    a, beta, gamma, sigma, m = line
+    k = student.ppf((1 + level) / 2, nu if math.isfinite(nu) else m - 2) * math.sqrt(1 + 1 / m)
+    shift = a + gamma * (covariate(r) if covariate else 0.0)
+    fit = float(r["fit_kPa"])
+    low = E0_KPA * math.exp((math.log(fit / E0_KPA) - shift - k * sigma) / beta)
+    high = math.inf if fit >= 0.999 * BOUNDS_KPA[1] else E0_KPA * math.exp((math.log(fit / E0_KPA) - shift + k * sigma) / beta)
+    return low <= float(r["true_E_kPa"]) <= high
+
+
+def tails(fit_rows, check_rows, out):
+    fit_groups = OrderedDict((t, g) for t, g in by_slice(fit_rows).items() if t in (2.0, 3.0))
+    bladder = lambda r: float(r["bladder_mm"]) - 6.5  # noqa: E731 (the drawn fillings' middle, 3-10 mm)
+    models = [("normal", True, None), ("Student-t, shared nu", None, None), ("normal + bladder filling", True, bladder)]
+    table = []
+    for name, nu_shared, covariate in models:
+        lines, nu, nll = student_line(fit_groups, nu_shared, covariate)
+        for t, rows in by_slice(check_rows).items():
+            if t not in lines:
+                continue
+            row = OrderedDict(model=name, slice_mm=t, nu=nu, negative_log_likelihood=nll, sigma=lines[t][3],
+                              bladder_per_mm=lines[t][2], check_pairs=len(rows))
+            for level in (0.68, 0.95):
+                row[f"cover{int(level * 100)}"] = statistics.mean(
+                    statement_covers(r, lines[t], nu, covariate, level) for r in rows)
+            table.append(row)
+    with open(f"{out}/slice_calibration_tails.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
+        w.writeheader()
+        for row in table:
+            w.writerow({k: f"{v:.4f}" if isinstance(v, float) else v for k, v in row.items()})
+    print("| residual model | slices [mm] | nu | -log L (fit pairs) | s | per mm of filling | check pairs | 68 % covers "
+          "| 95 % covers |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in table:
+        print(f"| {r['model']} | {r['slice_mm']:g} | {r['nu']:.1f} | {r['negative_log_likelihood']:.2f} | "
+              f"{r['sigma']:.3f} | {'-' if r['model'] != models[2][0] else format(r['bladder_per_mm'], '+.3f')} | "
+              f"{r['check_pairs']} | {r['cover68']:.2f} | "
+              f"{r['cover95']:.2f} |")
+
+
 def label(geometry):
     """ "3 oblique" -> "3 mm, oblique"."""
     return geometry.replace(" oblique", " mm, oblique") if geometry.endswith("oblique") else f"{geometry} mm"
@@ -153,9 +239,23 @@ def check(rows, out):
     fig.savefig(f"{out}/slice_calibration_check.png", dpi=120)
 
 
+def read_rows(paths):
+    rows = []
+    for path in paths:
+        with open(path) as f:
+            rows += [r for r in csv.DictReader(f) if float(r.get("rotate_z_deg") or 0) == 0]
+    return rows
+
+
 def main(argv):
-    if len(argv) < 3 or argv[1] not in ("fit", "check") or (argv[1] == "check" and len(argv) < 4):
+    if len(argv) < 3 or argv[1] not in ("fit", "check", "tails") or (argv[1] == "check" and len(argv) < 4):
         sys.exit(__doc__)
+    if argv[1] == "tails":
+        if "--" not in argv:
+            sys.exit(__doc__)
+        split = argv.index("--")
+        tails(read_rows(argv[3:split]), read_rows(argv[split + 1:]), argv[2])
+        return
     if argv[1] == "check" and os.path.abspath(argv[2]) == os.path.abspath(f"{argv[3]}/slice_calibration_check.csv"):
         sys.exit("RUNS.csv would be overwritten by the summary: name the runs *_runs.csv")
     if argv[1] == "fit":
