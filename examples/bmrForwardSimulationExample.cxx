@@ -18,7 +18,8 @@
 // Example: a forward simulation with the library. The concentric-spheres phantom (a 30 mm core of 50 kPa in
 // a 7.5 mm shell of 10 kPa) is compressed by moving its outer surface 1.5 mm inwards; the result is the
 // mesh with its displacement and the fixed -> moving displacement field on the phantom's grid.
-#include "itkBiomechanicalPipelines.h"
+#include "bmrPhantom.h"
+#include "itkSimulationPipeline.h"
 #include "itkGridGeometryConversion.h"
 
 #include <cmath>

@@ -43,7 +43,7 @@ OWNERS = {
     "itkBiomechanicalReports": "output", "itkBiomechanicalWriters": "output",
     "bmrCohort": "cohort", "bmrCohortStudy": "cohort", "itkPhantomCohort": "cohort",
     "bmrPhantom": "synthetic",
-    "itkBiomechanicalPipelines": "pipeline", "itkMarkerPipeline": "pipeline",
+    "itkBiomechanicalPipelines": "pipeline", "itkMarkerPipeline": "pipeline", "itkPipelineTypes": "pipeline",
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 

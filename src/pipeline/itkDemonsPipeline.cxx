@@ -17,7 +17,7 @@
  *=========================================================================*/
 // The intensity-based baseline: ITK's multi-resolution Demons with organ flattening
 // (itk::DemonsBaselineRegistrationFilter).
-#include "itkBiomechanicalPipelines.h"
+#include "itkDemonsPipeline.h"
 #include "itkDemonsBaselineRegistrationFilter.h"
 
 namespace itk {

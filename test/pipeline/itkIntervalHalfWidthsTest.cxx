@@ -41,7 +41,7 @@
 //   and one k95 s below as its upper end (to 1e-12);
 // - a fit on the upper search bound states "E >=" the line's inverse of the bound less k s, the upper end not
 //   determined; on the lower one "E <=", the lower end not determined.
-#include "itkBiomechanicalPipelines.h"
+#include "itkModulusInterval.h"
 #include "itkIntervalTestSupport.h"
 #include "bmrTestUtilities.h"
 

@@ -18,7 +18,7 @@
 #ifndef itkIntervalTestSupport_h
 #define itkIntervalTestSupport_h
 
-#include "itkBiomechanicalPipelines.h"
+#include "itkModulusInterval.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
 #include "itkResampleImageFilter.h"
 

@@ -17,7 +17,7 @@
  *=========================================================================*/
 #include "bmrPhantom.h"
 #include "bmrTestUtilities.h"
-#include "itkBiomechanicalPipelines.h"
+#include "itkPhantomPipeline.h"
 
 #include <algorithm>
 #include <cmath>
