@@ -264,6 +264,8 @@ def test_the_field_as_a_dicom_registration(cli, scans, cli_registration, tmp_pat
     through_nrrd = biomechreg.read_image(tmp_path / "nrrd" / "warped.nrrd", "labels").array
     through_dicom = biomechreg.read_image(tmp_path / "dicom" / "warped.nrrd", "labels").array
     # float32 vectors move a sample point by at most ~1e-6 mm: a nearest-neighbour choice can flip only at a tie.
+    print("warp through the DICOM object: %.2e of the voxels differ from through field.nrrd" %
+          np.mean(through_nrrd != through_dicom))
     assert np.mean(through_nrrd != through_dicom) < 1e-4
 
     # Deterministic: the same field and series at the same SOURCE_DATE_EPOCH give the same bytes.
@@ -324,6 +326,7 @@ def test_the_field_as_learn2reg_npz(scans, cli_registration):
     sampled = np.zeros(inside.shape, np.int32)
     sampled[inside] = moving.array[nearest[inside][:, 2], nearest[inside][:, 1], nearest[inside][:, 0]]
     warped = biomechreg.read_image(cli_registration / "warped_labels.nrrd", "labels").array
+    print("the .npz's nearest samples give the warped labels in %.6f of the voxels" % np.mean(sampled == warped))
     assert np.mean(sampled == warped) > 0.9999
 
 
