@@ -103,3 +103,26 @@ def test_result_arrays_keep_their_image_alive():
 def test_read_image_of_a_missing_file_is_a_value_error(tmp_path, kind):
     with pytest.raises(ValueError, match="missing.nrrd"):
         biomechreg.read_image(tmp_path / "missing.nrrd", kind=kind)
+
+
+def test_learn2reg_npz_of_a_known_shift_on_oblique_grids(tmp_path):
+    # A field of one constant vector on an oblique, anisotropic fixed grid, the moving grid another oblique one:
+    # disp is the moving continuous index of x + u less the fixed index, computed here in numpy (to float32
+    # rounding of indices below 100: 1e-5 voxels).
+    fixed = oblique_labels()
+    u = np.array([1.5, -2.0, 3.25])
+    field = biomechreg.Image(np.broadcast_to(u, fixed.array.shape + (3,)).copy(), fixed.spacing, fixed.origin,
+                             fixed.direction)
+    moving = biomechreg.Image(np.zeros((5, 8, 8), np.int32), spacing=(1.2, 1.0, 3.0), origin=(-12.0, 0.0, 95.0),
+                              direction=rotation(0.1, 0.2, -0.4))
+    biomechreg.write_field_npz(field, moving, tmp_path / "field.npz")
+    npz = np.load(tmp_path / "field.npz")
+    nz, ny, nx = fixed.array.shape
+    assert npz["disp"].shape == (3, nx, ny, nz) and npz["disp"].dtype == np.float32
+    np.testing.assert_array_equal(npz["moving_direction"], moving.direction)
+    index = np.stack(np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"), axis=0).astype(float)
+    points = np.einsum("ab,bijk->aijk", fixed.direction * np.array(fixed.spacing), index) + \
+        np.array(fixed.origin)[:, None, None, None] + u[:, None, None, None]
+    to_index = np.linalg.inv(moving.direction * np.array(moving.spacing))
+    expected = np.einsum("ab,bijk->aijk", to_index, points - np.array(moving.origin)[:, None, None, None]) - index
+    np.testing.assert_allclose(npz["disp"], expected, rtol=0, atol=1e-5)
