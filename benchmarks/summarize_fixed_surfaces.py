@@ -17,7 +17,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from interval_rows import covers  # noqa: E402
+from interval_rows import covers, write_table  # noqa: E402
 
 UPPER_KPA = 600.0
 
@@ -64,11 +64,7 @@ def main(argv):
     with open(argv[1]) as f:
         rows = list(csv.DictReader(f))
     kinds, table = summarize(rows)
-    with open(f"{argv[2]}/fixed_surfaces.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
-        w.writeheader()
-        for row in table:
-            w.writerow({k: f"{v:.4f}" if isinstance(v, float) else v for k, v in row.items()})
+    write_table(f"{argv[2]}/fixed_surfaces.csv", table)
     print("| fixed surfaces | pairs | fit log error: median (SD) | paired vs voxels | stated: median abs. error | "
           "95 % covers (stated) | not determined | median hi95/lo95 | prostate RMS [mm] | inverted |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")

@@ -26,7 +26,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from interval_rows import covers, determined  # noqa: E402
+from interval_rows import covers, determined, write_table  # noqa: E402
 
 BOUNDS_KPA = (20.0, 600.0)
 
@@ -163,11 +163,7 @@ def tails(fit_rows, check_rows, out):
                 row[f"cover{int(level * 100)}"] = statistics.mean(
                     statement_covers(r, lines[t], nu, covariate, level) for r in rows)
             table.append(row)
-    with open(f"{out}/slice_calibration_tails.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
-        w.writeheader()
-        for row in table:
-            w.writerow({k: f"{v:.4f}" if isinstance(v, float) else v for k, v in row.items()})
+    write_table(f"{out}/slice_calibration_tails.csv", table)
     print("| residual model | slices [mm] | nu | -log L (fit pairs) | s | per mm of filling | check pairs | 68 % covers "
           "| 95 % covers |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
@@ -203,11 +199,7 @@ def check(rows, out):
             median_inverted=statistics.median(int(r["inverted_elements"]) for r in group if r["inverted_elements"]),
             median_register_s=statistics.median(float(r["register_s"]) for r in group))
         table.append(row)
-    with open(f"{out}/slice_calibration_check.csv", "w", newline="") as f:  # the runs: *_runs.csv
-        w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
-        w.writeheader()
-        for row in table:
-            w.writerow({k: f"{v:.4f}" if isinstance(v, float) else v for k, v in row.items()})
+    write_table(f"{out}/slice_calibration_check.csv", table)  # the runs: *_runs.csv
     print("| slices [mm] | pairs | 95 % covers | 68 % covers | bounds (true) | not determined | median abs. error "
           "(30-150 kPa) | median inverted | register [s] |")
     print("|---:|---:|---:|---:|---:|---:|---|---:|---:|")
