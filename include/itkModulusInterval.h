@@ -75,7 +75,8 @@ constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
  * Its calibration is the fit's own error, measured on pelvis phantom pairs whose two scans both have slices of sliceMM,
  * an in-plane spacing drawn from U(0.8, 1.2) mm, the fixed grid shifted by a random sub-voxel offset and moduli
  * log-uniform in 30-500 kPa (benchmarks/results/clinical_geometry/slice_calibration_fit.csv and the two earlier
- * checks' runs, slice_calibration_check_first_runs.csv and slice_calibration_check_runs.csv: 59, 20 and 83 pairs;
+ * checks' runs, slice_calibration_check_first_runs.csv and slice_calibration_check_runs.csv, and at 2.5 mm 40 more
+ * pairs, slice_calibration_fit25_runs.csv: 59, 60 and 83 pairs at 2, 2.5 and 3 mm;
  * benchmarks/summarize_slice_calibration.py fit). The error grows with the modulus (stiff organs read too stiff by
  * more than soft ones), so the calibration is a line in log space, with \f$ E_0 = 100 \f$ kPa:
  * \f[ \log(\hat E / E_0) = a + \beta \log(E / E_0) + \varepsilon, \quad \varepsilon \sim N(0, s^2), \f]
@@ -101,7 +102,7 @@ struct SliceCalibration
 /** kPa: E_0 of the calibration line. */
 constexpr double           SliceCalibrationReferenceKPa = 100.0;
 constexpr SliceCalibration SliceCalibrations[] = { { 2.0, 0.3704, 1.3316, 0.2156, 59 },
-                                                   { 2.5, 0.3179, 1.1708, 0.3310, 20 },
+                                                   { 2.5, 0.2161, 1.1240, 0.3969, 60 },
                                                    { 3.0, 0.2882, 1.1767, 0.3073, 83 } };
 /** A scan's slices [mm] within this of a calibration's thickness use it. */
 constexpr double SliceCalibrationToleranceMM = 0.25;

@@ -26,6 +26,7 @@
 
 #include "gdcmReader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -335,6 +336,12 @@ FieldOfGrid(const gdcm::DataSet & grid, const std::string & path)
   const double *                              r = orientation.data();
   const double *                              c = orientation.data() + 3;
   const double normal[3] = { r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0] };
+  const double rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2], cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+  if (std::abs(rr - 1.0) > 1e-4 || std::abs(cc - 1.0) > 1e-4 ||
+      std::abs(r[0] * c[0] + r[1] * c[1] + r[2] * c[2]) > 1e-4)
+  {
+    dicomrt::FailFile(ReadWhere, ReadKind, path, "Image Orientation (Patient) is not two orthogonal unit vectors");
+  }
   for (unsigned int a = 0; a < 3; ++a)
   {
     if (!(resolution[a] > 0.0) || dimensions[a] == 0)
@@ -352,6 +359,10 @@ FieldOfGrid(const gdcm::DataSet & grid, const std::string & path)
   field->SetOrigin(origin);
   field->SetDirection(direction);
   field->Allocate();
+  if (!std::all_of(vectors.begin(), vectors.end(), [](float x) { return std::isfinite(x); }))
+  {
+    dicomrt::FailFile(ReadWhere, ReadKind, path, "Vector Grid Data holds a value that is not finite");
+  }
   const float * v = vectors.data();
   for (ImageRegionIteratorWithIndex<DicomRTDisplacementFieldType> it(field, field->GetLargestPossibleRegion());
        !it.IsAtEnd();
