@@ -298,6 +298,23 @@ def test_a_flipped_oblique_field_round_trips_through_dicom(scans, tmp_path):
     assert not list(tmp_path.glob("*sheared*")) and not list(tmp_path.glob("*nowhere*"))
     with pytest.raises(ValueError, match="not a Deformable Spatial Registration"):
         biomechreg.read_dicom_registration(next(pathlib.Path(fixed_ct).glob("*.dcm")))
+    # Objects another tool could have written wrong, edited with pydicom: a NaN vector, a skewed orientation, a
+    # pre-deformation matrix that is not the identity.
+    import pydicom
+    for name, edit, message in (
+            ("nan", lambda grid, item: setattr(grid, "VectorGridData",
+                                               np.full(5 * 6 * 7 * 3, np.nan, "<f4").tobytes()), "not finite"),
+            ("skewed", lambda grid, item: setattr(grid, "ImageOrientationPatient", [1, 0, 0, 0.5, 1, 0]),
+             "orthogonal unit"),
+            ("matrix", lambda grid, item: setattr(item.PreDeformationMatrixRegistrationSequence[0],
+                                                  "FrameOfReferenceTransformationMatrix",
+                                                  [1, 0, 0, 5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]), "identity")):
+        ds = pydicom.dcmread(tmp_path / "flipped.dcm")
+        item = ds.DeformableRegistrationSequence[0]
+        edit(item.DeformableRegistrationGridSequence[0], item)
+        ds.save_as(tmp_path / f"{name}.dcm")
+        with pytest.raises(ValueError, match=message):
+            biomechreg.read_dicom_registration(tmp_path / f"{name}.dcm")
 
 
 def test_the_field_as_learn2reg_npz(scans, cli_registration):
