@@ -304,8 +304,15 @@ NamesTable(const std::string & path)
     const bool         csv = line.find(',') != std::string::npos;
     std::istringstream fields(line);
     std::string        value, name;
-    std::getline(fields >> std::ws, value, csv ? ',' : ' ');
-    csv ? (void)std::getline(fields, name, ',') : (void)(fields >> name);
+    if (csv)
+    {
+      std::getline(fields >> std::ws, value, ',');
+      std::getline(fields, name, ',');
+    }
+    else
+    {
+      fields >> value >> name;
+    }
     name = dicomrt::Trim(name);
     char *     end = nullptr;
     const long v = std::strtol(value.c_str(), &end, 10);
@@ -348,7 +355,13 @@ SegmentationNames(ImageIOBase * io, const std::string & path)
                      path + ": segment \"" + name + "\" has no label value or lies in another layer " +
                        "(overlapping segments: export them from Slicer as one label map)");
     }
-    names[static_cast<std::int32_t>(std::stol(value))] = dicomrt::Trim(name);
+    char *     end = nullptr;
+    const long v = std::strtol(value.c_str(), &end, 10);
+    if (end == value.c_str())
+    {
+      bmr::FailInput(NamesWhere, path + ": segment \"" + name + "\" has the label value \"" + value + "\"");
+    }
+    names[static_cast<std::int32_t>(v)] = dicomrt::Trim(name);
   }
 }
 } // namespace
