@@ -126,3 +126,16 @@ def test_learn2reg_npz_of_a_known_shift_on_oblique_grids(tmp_path):
     to_index = np.linalg.inv(moving.direction * np.array(moving.spacing))
     expected = np.einsum("ab,bijk->aijk", to_index, points - np.array(moving.origin)[:, None, None, None]) - index
     np.testing.assert_allclose(npz["disp"], expected, rtol=0, atol=1e-5)
+
+
+def test_label_names_tables(tmp_path):
+    (tmp_path / "names.csv").write_text("value,name\n1,External\n2, Prostate \n")
+    assert biomechreg.read_label_names(tmp_path / "names.csv") == {1: "External", 2: "Prostate"}
+    (tmp_path / "colors.txt").write_text("# a 3D Slicer color table\n0 Background 0 0 0 0\n1\tExternal 200 180 160 255\n")
+    assert biomechreg.read_label_names(tmp_path / "colors.txt") == {0: "Background", 1: "External"}
+    (tmp_path / "twice.csv").write_text("1,External\n1,Body\n")
+    with pytest.raises(ValueError, match="line 2: value 1 named twice"):
+        biomechreg.read_label_names(tmp_path / "twice.csv")
+    (tmp_path / "bad.csv").write_text("1,External\nx,Prostate\n")
+    with pytest.raises(ValueError, match="line 2: expected"):
+        biomechreg.read_label_names(tmp_path / "bad.csv")
