@@ -22,7 +22,9 @@
 #        SLICE_MM=T: clinical geometry instead of 1 mm voxels: slices of T mm, in-plane spacing drawn per pair from
 #        U(0.8, 1.2) mm, the same field of view (200 x 160 x 160 mm); OBLIQUE_DEG=A also rotates each pair's grids
 #        about z by an angle drawn from U(-A, A) degrees. Both draws come after the old ones, so SLICE_MM unset keeps
-#        the old draws of a seed. The rows record the spacing, the angle and the estimated state's inverted elements.
+#        the old draws of a seed. The rows record the spacing, the angle and the estimated state's inverted elements;
+#        every row also the bladder's volume change between the scans [mL] (report.json label_volume_ml): what the
+#        images show of the filling, the observable a calibration covariate needs.
 #        FIXED_SURFACES=outlines: each phantom also writes the area fractions of its fixed organs' exact outlines
 #        per slice (`phantom --outline-fractions on`) and register takes them as the fixed organs
 #        (--fixed-probabilities): what an RTSTRUCT drawn on the fixed scan gives `register` by default.
@@ -45,7 +47,7 @@ default_runs=calibration_runs
 [ "$design" = table31 ] && default_runs=table31_runs
 [ "$design" = pressure ] && default_runs=calibration_runs_pressure
 csv="$out/${RUNS_NAME:-$default_runs}.csv"
-header="tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles,spacing_mm,rotate_z_deg,inverted_elements,not_determined"
+header="tag,pair,true_E_kPa,bladder_mm,rectum_mm,seed,fit_kPa,estimate_kPa,lo68_kPa,hi68_kPa,lo95_kPa,hi95_kPa,lower_determined,upper_determined,sigma_log_E,log_bias,resamples,curvature_sigma_log_E,prostate_rms_mm,truth_tetrahedra,phantom_s,register_s,bias_corrected,resamples_kPa,quantiles,spacing_mm,rotate_z_deg,inverted_elements,not_determined,bladder_volume_change_ml"
 if [ "${APPEND:-0}" = 1 ] && [ -s "$csv" ] && [ "$(head -1 "$csv")" != "$header" ]; then
   echo "$csv has other columns than this script writes: APPEND=1 needs a file it wrote" >&2
   exit 2
@@ -126,6 +128,8 @@ if "wall_motion_mm" in truth:  # the fillings the truth reached (pressure loads)
 i = rep["youngs_modulus_interval"]["prostate"]
 curv = rep.get("youngs_modulus_uncertainty", {}).get("prostate", {}).get("sigma_log_E", "")
 tets = truth.get("truth_mesh", {}).get("tetrahedra", "")
+volume = rep.get("label_volume_ml", {}).get("bladder")  # what the scans show of the filling (fixed - moving)
+bladder_change = f'{volume["fixed"] - volume["moving"]:.2f}' if volume else ""
 print(f'{tag},{k},{truth["youngs_modulus_kPa"]["prostate"]:g},{bladder},{rectum},{s},{i["fit_kPa"]:.3f},'
       f'{i["estimate_kPa"]:.3f},{i["interval_68_kPa"][0]:.3f},{i["interval_68_kPa"][1]:.3f},'
       f'{i["interval_95_kPa"][0]:.3f},{i["interval_95_kPa"][1]:.3f},{int(i["lower_end_determined"])},'
@@ -133,7 +137,7 @@ print(f'{tag},{k},{truth["youngs_modulus_kPa"]["prostate"]:g},{bladder},{rectum}
       f'{rep["surface_distance_mm"]["prostate"]["rms"]:.4f},{tets},{float(tph):.1f},{float(treg):.1f},'
       f'{int(i.get("bias_corrected", True))},{";".join(f"{x:.3f}" for x in i["resamples_kPa"])},'
       f'{i.get("quantiles", "student")},{spacing.replace(",", "x")},{angle},{rep.get("inverted_elements", "")},'
-      f'{int(bool(i.get("not_determined_reason")))}')
+      f'{int(bool(i.get("not_determined_reason")))},{bladder_change}')
 PY
   tail -1 "$csv"
 done < "$work/draws.txt"

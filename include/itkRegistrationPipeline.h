@@ -22,6 +22,7 @@
 #include "itkModulusInterval.h"
 #include "itkSimulationPipeline.h"
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -99,6 +100,8 @@ struct BiomechanicalRegistration_EXPORT RegistrationResult
   BiomechanicalCTImageType::Pointer      warpedCT;            ///< linear; null without a moving CT
   ImageBase<3>::Pointer                  movingGrid;          ///< the moving labels' grid (the field points into it)
   std::map<std::string, double>          dice;                ///< warped against fixed labels, by name
+  /** By label name, its volume [mL] in the moving and in the fixed labels (a filling the scans show). */
+  std::map<std::string, std::array<double, 2>> labelVolumeML;
   /** Whether the organs were interpolated between thick slices (RegistrationSettings::interpolateSlices and
    * a moving or fixed label image with ThickSlices()). */
   bool   slicesInterpolated{ false };

@@ -134,6 +134,12 @@ RegistrationReportJson(const RegistrationResult &         r,
   }
   j["surface_distance_mm"] = surfaces;
   j["dice"] = r.dice;
+  Json volumes = Json::object();
+  for (const auto & [name, v] : r.labelVolumeML)
+  {
+    volumes[name] = { { "moving", v[0] }, { "fixed", v[1] } };
+  }
+  j["label_volume_ml"] = volumes;
   j["jacobian_determinant"] = { { "minimum", r.jacobianMinimum },
                                 { "fraction_nonpositive", r.jacobianNonPositiveFraction } };
   j["inverted_elements"] = r.state.invertedElements;

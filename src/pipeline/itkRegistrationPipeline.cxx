@@ -439,6 +439,44 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene, bool elements)
   }
 }
 
+/** The volume [mL] of each label value of \a labels. */
+std::map<std::int32_t, double>
+LabelVolumesML(const BiomechanicalLabelImageType * labels)
+{
+  std::map<std::int32_t, std::size_t> voxels;
+  const auto *                        values = labels->GetBufferPointer();
+  for (std::size_t i = 0, n = labels->GetBufferedRegion().GetNumberOfPixels(); i < n; ++i)
+  {
+    ++voxels[values[i]];
+  }
+  const auto &                   spacing = labels->GetSpacing();
+  std::map<std::int32_t, double> volumes;
+  for (const auto & [value, count] : voxels)
+  {
+    volumes[value] = double(count) * spacing[0] * spacing[1] * spacing[2] / 1000.0;
+  }
+  return volumes;
+}
+
+/** Each scene label's volume in the moving and the fixed labels [mL]: what the scans show of the organs' filling. */
+void
+MeasureLabelVolumes(RegistrationResult &                r,
+                    const bmr::Scene &                  scene,
+                    const BiomechanicalLabelImageType * movingLabels,
+                    const BiomechanicalLabelImageType * fixedLabels)
+{
+  const auto moving = LabelVolumesML(movingLabels);
+  const auto fixed = LabelVolumesML(fixedLabels);
+  for (const auto & l : scene.labels)
+  {
+    if (l.role != bmr::LabelRoleEnum::Outside)
+    {
+      const auto m = moving.find(l.value), f = fixed.find(l.value);
+      r.labelVolumeML[l.name] = { { m == moving.end() ? 0.0 : m->second, f == fixed.end() ? 0.0 : f->second } };
+    }
+  }
+}
+
 /** Dice per organ of the warped labels and the Jacobian of the pull-back field. */
 void
 Evaluate(RegistrationResult & r, const bmr::Scene & scene, const BiomechanicalLabelImageType * fixedLabels)
@@ -511,6 +549,7 @@ WarpAndEvaluate(RegistrationResult &                r,
   clock.Begin("report (Dice, Jacobian)");
   clock.Warn(r.state.warnings, UncertaintyWarnings(r));
   Evaluate(r, scene, fixedLabels);
+  MeasureLabelVolumes(r, scene, movingLabels, fixedLabels);
   clock.End();
 }
 } // namespace
