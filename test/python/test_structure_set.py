@@ -198,7 +198,13 @@ def test_named_label_maps_register_without_a_scene(cli, scans, label_reference, 
                                                     biomechreg.read_image(p / f"{scan}_ct.nrrd"))
         np.testing.assert_array_equal(labels.array, from_names)
     assert biomechreg.read_label_names(moving) == {}  # a plain label map names nothing
-    stated = json.loads((tmp_path / "named" / "report.json").read_text())["youngs_modulus_interval"]["prostate"]
+    report = json.loads((tmp_path / "named" / "report.json").read_text())
+    for scan in ("moving", "fixed"):  # label_volume_ml: the voxels of each label times the voxel's volume
+        image = biomechreg.read_image(tmp_path / "named" / f"{scan}_labels_from_rois.nrrd", "labels")
+        for organ, value in (("prostate", 2), ("bladder", 3), ("rectum", 4)):
+            expected = np.sum(image.array == value) * np.prod(image.spacing) / 1000.0
+            assert report["label_volume_ml"][organ][scan] == pytest.approx(expected, rel=1e-12)
+    stated = report["youngs_modulus_interval"]["prostate"]
     print("named label maps: %s" % stated["statement"])
     low, high = label_reference["interval_68_kPa"]
     assert low <= stated["estimate_kPa"] <= high
