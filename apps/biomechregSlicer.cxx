@@ -148,6 +148,36 @@ Threads()
                  "256");
 }
 
+/** The register module's inputs: the two scans' CT and labels, and the scene or the labels' names. */
+std::vector<SlicerParameter>
+RegistrationInputs()
+{
+  return { Input("image", "scalar", "movingCT", "Moving CT", "--moving-ct", "The planning CT [HU]"),
+           Input("image",
+                 "label",
+                 "movingLabels",
+                 "Moving labels",
+                 "--moving-labels",
+                 "The planning scan's organs, labelled as the scene says"),
+           Input("image", "scalar", "fixedCT", "Fixed CT", "--fixed-ct", "The daily CT [HU]"),
+           Input(
+             "image", "label", "fixedLabels", "Fixed labels", "--fixed-labels", "The daily scan's organs, on its grid"),
+           SceneFile(),
+           Input("file",
+                 "",
+                 "movingLabelNames",
+                 "Moving label names",
+                 "--moving-label-names",
+                 "Instead of a scene (register only): the moving labels' names, a color table or value,name CSV with "
+                 "TG-263 names (Prostate, Bladder, Rectum, External), for the built-in pelvis scene"),
+           Input("file",
+                 "",
+                 "fixedLabelNames",
+                 "Fixed label names",
+                 "--fixed-label-names",
+                 "Without a scene: the fixed labels' names, as for the moving labels") };
+}
+
 SlicerModule
 RegistrationModule()
 {
@@ -158,32 +188,7 @@ RegistrationModule()
     "Physics-based registration of segmented CT with joint estimation of an organ's Young's modulus "
     "(biomechreg register): the moving labels meshed, the scene's wall loads and the unknown modulus fitted "
     "so that the simulated organs match the fixed labels.",
-    { { "Inputs",
-        false,
-        { Input("image", "scalar", "movingCT", "Moving CT", "--moving-ct", "The planning CT [HU]"),
-          Input("image",
-                "label",
-                "movingLabels",
-                "Moving labels",
-                "--moving-labels",
-                "The planning scan's organs, labelled as the scene says"),
-          Input("image", "scalar", "fixedCT", "Fixed CT", "--fixed-ct", "The daily CT [HU]"),
-          Input(
-            "image", "label", "fixedLabels", "Fixed labels", "--fixed-labels", "The daily scan's organs, on its grid"),
-          SceneFile(),
-          Input("file",
-                "",
-                "movingLabelNames",
-                "Moving label names",
-                "--moving-label-names",
-                "Instead of a scene (register only): the moving labels' names, a color table or value,name CSV with "
-                "TG-263 names (Prostate, Bladder, Rectum, External), for the built-in pelvis scene"),
-          Input("file",
-                "",
-                "fixedLabelNames",
-                "Fixed label names",
-                "--fixed-label-names",
-                "Without a scene: the fixed labels' names, as for the moving labels") } },
+    { { "Inputs", false, RegistrationInputs() },
       { "Estimation",
         false,
         { Enumeration("uncertainty",

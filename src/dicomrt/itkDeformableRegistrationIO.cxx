@@ -27,6 +27,7 @@
 #include "gdcmReader.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -281,7 +282,7 @@ BinaryValues(const gdcm::DataSet & ds,
   return values;
 }
 
-/** \a count decimal numbers at \a tag; fails naming the file otherwise. */
+/** \a count decimal numbers at \a tag (dicomrt::FileNumbers()). */
 std::vector<double>
 Numbers(const gdcm::DataSet & ds,
         const gdcm::Tag &     tag,
@@ -289,12 +290,7 @@ Numbers(const gdcm::DataSet & ds,
         const std::string &   name,
         const std::string &   path)
 {
-  std::vector<double> values;
-  if (!dicomrt::ParseNumbers(dicomrt::StringValue(ds, tag), values) || values.size() != count)
-  {
-    dicomrt::FailFile(ReadWhere, ReadKind, path, name + " missing or not " + std::to_string(count) + " numbers");
-  }
-  return values;
+  return dicomrt::FileNumbers(ds, tag, name, count, ReadWhere, ReadKind, path);
 }
 
 /** Refuses a pre- or post-deformation matrix other than the identity (the field is read as the whole mapping). */
@@ -333,12 +329,8 @@ FieldOfGrid(const gdcm::DataSet & grid, const std::string & path)
   DicomRTDisplacementFieldType::SpacingType   spacing;
   DicomRTDisplacementFieldType::PointType     origin;
   DicomRTDisplacementFieldType::DirectionType direction;
-  const double *                              r = orientation.data();
-  const double *                              c = orientation.data() + 3;
-  const double normal[3] = { r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0] };
-  const double rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2], cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
-  if (std::abs(rr - 1.0) > 1e-4 || std::abs(cc - 1.0) > 1e-4 ||
-      std::abs(r[0] * c[0] + r[1] * c[1] + r[2] * c[2]) > 1e-4)
+  std::array<double, 3>                       r, c, normal;
+  if (!dicomrt::OrientationAxes(orientation, r, c, normal))
   {
     dicomrt::FailFile(ReadWhere, ReadKind, path, "Image Orientation (Patient) is not two orthogonal unit vectors");
   }

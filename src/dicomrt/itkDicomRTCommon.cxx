@@ -33,6 +33,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <sstream>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -512,6 +513,43 @@ CheckDicomFile(const char * where, const std::string & kind, const std::string &
   {
     FailFile(where, kind, path, "is corrupt: " + problem);
   }
+}
+
+std::vector<double>
+FileNumbers(const gdcm::DataSet & ds,
+            const gdcm::Tag &     tag,
+            const std::string &   name,
+            std::size_t           count,
+            const char *          where,
+            const std::string &   kind,
+            const std::string &   path)
+{
+  std::vector<double> values;
+  if (!ds.FindDataElement(tag) || !ParseNumbers(StringValue(ds, tag), values) || values.empty() ||
+      (count > 0 && values.size() != count))
+  {
+    std::ostringstream os;
+    os << "has no valid " << name << " " << tag << (count > 0 ? " (" + std::to_string(count) + " numbers)" : "");
+    FailFile(where, kind, path, os.str());
+  }
+  return values;
+}
+
+bool
+OrientationAxes(const std::vector<double> & orientation,
+                std::array<double, 3> &     row,
+                std::array<double, 3> &     column,
+                std::array<double, 3> &     normal)
+{
+  row = { { orientation[0], orientation[1], orientation[2] } };
+  column = { { orientation[3], orientation[4], orientation[5] } };
+  normal = { { row[1] * column[2] - row[2] * column[1],
+               row[2] * column[0] - row[0] * column[2],
+               row[0] * column[1] - row[1] * column[0] } };
+  const double rowLength = std::sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2]);
+  const double columnLength = std::sqrt(column[0] * column[0] + column[1] * column[1] + column[2] * column[2]);
+  const double dot = row[0] * column[0] + row[1] * column[1] + row[2] * column[2];
+  return std::abs(rowLength - 1) <= 1e-3 && std::abs(columnLength - 1) <= 1e-3 && std::abs(dot) <= 1e-3;
 }
 
 /** Parses \a path with \a reader (a gdcm::Reader or gdcm::ImageReader) after CheckDicomFile(); throws naming the

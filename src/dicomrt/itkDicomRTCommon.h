@@ -157,6 +157,25 @@ CheckDicomFile(const char * where, const std::string & kind, const std::string &
 void
 ReadParsedFile(gdcm::Reader & reader, const char * where, const std::string & kind, const std::string & path);
 
+/** The numbers of the DS/IS attribute \a tag (\a count of them; when 0, at least one); throws naming the file
+ * (FailFile(\a where, \a kind, \a path, ...)) when it is missing or malformed. */
+std::vector<double>
+FileNumbers(const gdcm::DataSet & ds,
+            const gdcm::Tag &     tag,
+            const std::string &   name,
+            std::size_t           count,
+            const char *          where,
+            const std::string &   kind,
+            const std::string &   path);
+
+/** The row and column direction cosines of an Image Orientation (Patient) and their normal (row x column); false
+ * unless they are two orthogonal unit vectors (to 1e-3). */
+bool
+OrientationAxes(const std::vector<double> & orientation,
+                std::array<double, 3> &     row,
+                std::array<double, 3> &     column,
+                std::array<double, 3> &     normal);
+
 /** Refuses, naming the file, a data set whose Modality (0008,0060) is not \a expected. */
 void
 CheckModality(const gdcm::DataSet & ds, const std::string & expected, const char * where, const std::string & path);

@@ -58,40 +58,11 @@ const gdcm::Tag DoseGridScalingTag(0x3004, 0x000e);
 
 constexpr const char * RTDoseWhere = "ReadRTDose";
 
+/** The numbers of an attribute of the RTDOSE (dicomrt::FileNumbers()). */
 std::vector<double>
 RequireNumbers(const gdcm::DataSet & ds, const gdcm::Tag & tag, const std::string & name, const std::string & path)
 {
-  std::vector<double> values;
-  if (!ds.FindDataElement(tag) || !ParseNumbers(StringValue(ds, tag), values) || values.empty())
-  {
-    std::ostringstream os;
-    os << "has no valid " << name << " " << tag;
-    FailFile(RTDoseWhere, "RTDOSE", path, os.str());
-  }
-  return values;
-}
-
-/** The row and column direction cosines of Image Orientation (Patient) and their normal (row x column); fails unless
- * they are two orthogonal unit vectors. */
-void
-OrientationAxes(const std::vector<double> & orientation,
-                const std::string &         path,
-                std::array<double, 3> &     row,
-                std::array<double, 3> &     column,
-                std::array<double, 3> &     normal)
-{
-  row = { { orientation[0], orientation[1], orientation[2] } };
-  column = { { orientation[3], orientation[4], orientation[5] } };
-  normal = { { row[1] * column[2] - row[2] * column[1],
-               row[2] * column[0] - row[0] * column[2],
-               row[0] * column[1] - row[1] * column[0] } };
-  const double rowLength = std::sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2]);
-  const double columnLength = std::sqrt(column[0] * column[0] + column[1] * column[1] + column[2] * column[2]);
-  const double dot = row[0] * column[0] + row[1] * column[1] + row[2] * column[2];
-  if (std::abs(rowLength - 1) > 1e-3 || std::abs(columnLength - 1) > 1e-3 || std::abs(dot) > 1e-3)
-  {
-    FailFile(RTDoseWhere, "RTDOSE", path, "its Image Orientation (Patient) is not two orthogonal unit vectors");
-  }
+  return dicomrt::FileNumbers(ds, tag, name, 0, RTDoseWhere, "RTDOSE", path);
 }
 
 /** The positions of the \a frames frames along the normal, relative to the Image Position \a position (the Grid
@@ -182,7 +153,10 @@ SetDoseGeometry(const gdcm::DataSet & ds, unsigned int frames, DicomRTDoseImageT
              "its Image Position (3 values), Image Orientation (6) or Pixel Spacing (2 positive) is malformed");
   }
   std::array<double, 3> row, column, normal;
-  OrientationAxes(orientation, path, row, column, normal);
+  if (!dicomrt::OrientationAxes(orientation, row, column, normal))
+  {
+    FailFile(RTDoseWhere, "RTDOSE", path, "its Image Orientation (Patient) is not two orthogonal unit vectors");
+  }
   const std::vector<double>           offsets = FrameOffsets(ds, frames, position, row, column, path);
   const double                        step = FrameStep(offsets, frames, path);
   DicomRTDoseImageType::PointType     origin;
