@@ -1,9 +1,12 @@
 """The thick slices' calibration (itk::SliceCalibrations) from run_calibration_benchmark.sh rows, and its check.
 
-fit RUNS.csv [RUNS.csv ...]: per slice thickness (the largest side of the rows' spacing_mm), from all m pairs: the
+fit [--filling] RUNS.csv [RUNS.csv ...]: per slice thickness (the largest side of the rows' spacing_mm), from all m pairs: the
     line log(fit / 100 kPa) = a + beta log(true E / 100 kPa) with residual SD s, by the censored (Tobit) likelihood
     (a fit on the upper search bound, 600 kPa, says only that the fit would have gone at least there); prints the
-    constants for include/itkBiomechanicalPipelines.h and a markdown table. Needs scipy.
+    constants for include/itkModulusInterval.h and a markdown table. Needs scipy. --filling: with the bladder's
+    volume change between the scans as a second regressor (the rows' bladder_volume_change_ml, or where a row
+    predates that column imputed from its drawn wall motion by the relation fitted on the rows that have it).
+    Rows on grids rotated about the slice axis are left out (their own check).
 tails OUT_DIR FIT.csv [FIT.csv ...] -- CHECK.csv [CHECK.csv ...]: whether the calibration's residuals need a model
     other than the normal line: the normal Tobit line, Student-t residuals (one degrees-of-freedom shared by the
     thicknesses) and the normal line with the bladder's filling as a second covariate, each fitted on FIT and judged
@@ -97,6 +100,78 @@ def fit_constants(rows):
     print("constexpr SliceCalibration SliceCalibrations[] = { " + ", ".join(lines) + " };")
 
 
+def filling_relation(rows):
+    """The bladder's volume change between the scans [mL] of each row: measured (bladder_volume_change_ml, what
+    register reports of the labels) where the row has it, else imputed from the drawn wall motion b [mm] by
+    dV = c1 b + c2 b^2 (no motion, no change), least squares over the rows that measured it (the phantom's anatomy
+    is the same in every pair, so the drawn motion fixes the change up to voxelization). Prints the relation and
+    its residual SD per thickness; returns the function row -> mL."""
+    import numpy as np
+    measured = [r for r in rows if r.get("bladder_volume_change_ml")]
+    if len(measured) < 5:
+        sys.exit("the filling term needs rows that measured bladder_volume_change_ml (at least 5)")
+    b = np.array([float(r["bladder_mm"]) for r in measured])
+    v = np.array([float(r["bladder_volume_change_ml"]) for r in measured])
+    (c1, c2), *_ = np.linalg.lstsq(np.c_[b, b * b], v, rcond=None)
+    imputed = lambda r: c1 * float(r["bladder_mm"]) + c2 * float(r["bladder_mm"]) ** 2  # noqa: E731
+    print(f"bladder volume change = {c1:.3f} mL/mm b + {c2:.4f} mL/mm^2 b^2 ({len(measured)} measured pairs)")
+    for t, group in by_slice(measured).items():
+        residuals = [float(r["bladder_volume_change_ml"]) - imputed(r) for r in group]
+        print(f"  {t:g} mm: {len(group)} pairs, residual SD {statistics.pstdev(residuals):.2f} mL, "
+              f"largest {max(map(abs, residuals)):.2f} mL")
+    return lambda r: float(r["bladder_volume_change_ml"]) if r.get("bladder_volume_change_ml") else imputed(r)
+
+
+def scale_line(rows, filling, reference):
+    """Maximum-likelihood line with the filling term and a residual SD that varies with the modulus and the filling:
+    log(fit / E0) ~ N(a + beta x + gamma z, s^2 exp(2 (c x + d z))), x = log(E / E0), z = dV - V0, censored at the
+    upper search bound; Nelder-Mead from the homoscedastic line, restarted once, to 1e-8 in the parameters. Returns
+    (a, beta, gamma, s, c, d, m)."""
+    import numpy as np
+    from scipy.optimize import minimize
+    from scipy.stats import norm
+    upper = math.log(BOUNDS_KPA[1] / E0_KPA)
+    x = np.array([math.log(float(r["true_E_kPa"]) / E0_KPA) for r in rows])
+    y = np.array([math.log(float(r["fit_kPa"]) / E0_KPA) for r in rows])
+    z = np.array([filling(r) - reference for r in rows])
+    cens = y >= upper - 1e-6
+
+    def nll(p):
+        a, beta, gamma, log_s, c, d = p
+        mu, sd = a + beta * x + gamma * z, np.exp(log_s + c * x + d * z)
+        return -(norm.logpdf(y[~cens], mu[~cens], sd[~cens]).sum() + norm.logsf(upper, mu[cens], sd[cens]).sum())
+
+    (a0, beta0, gamma0, s0, _), = student_line({0: rows}, True, lambda r: filling(r) - reference)[0].values()
+    best = [a0, beta0, gamma0, math.log(s0), 0.0, 0.0]
+    for _ in range(2):
+        best = minimize(nll, best, method="Nelder-Mead", options={"maxiter": 60000, "maxfev": 60000, "xatol": 1e-8,
+                                                                  "fatol": 1e-11}).x
+    a, beta, gamma, log_s, c, d = best
+    return a, beta, gamma, math.exp(log_s), c, d, len(rows)
+
+
+def fit_filling_constants(rows):
+    """Per thickness, the line with the bladder's volume change dV as a second regressor and a residual SD that
+    varies with the modulus and dV (scale_line(); the residuals' spread grows with E and shrinks with the filling:
+    docs/history/benchmarks.md); V0 the pairs' mean change, rounded; the calibrated range the pairs' own (outward
+    to 1 mL). Prints the constants for include/itkModulusInterval.h and a markdown table."""
+    filling = filling_relation(rows)
+    reference = round(statistics.mean(filling(r) for r in rows))
+    print("| slices [mm] | pairs | on the upper bound | a | beta | gamma [1/mL] | s at E0, V0 | c (per log E) | "
+          "d [1/mL] | filling range [mL] |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    lines = []
+    for t, group in by_slice(rows).items():
+        a, beta, gamma, s, c, d, m = scale_line(group, filling, reference)
+        low, high = math.floor(min(map(filling, group))), math.ceil(max(map(filling, group)))
+        censored = sum(float(r["fit_kPa"]) >= BOUNDS_KPA[1] - 1e-3 for r in group)
+        print(f"| {t:g} | {m} | {censored} | {a:+.4f} | {beta:.4f} | {gamma:+.5f} | {s:.4f} | {c:+.4f} | {d:+.5f} | "
+              f"{low}-{high} |")
+        lines.append(f"{{ {t:g}, {a:.4f}, {beta:.4f}, {gamma:.6f}, {s:.4f}, {c:.4f}, {d:.6f}, {reference:g}, "
+                     f"{{ {low:g}, {high:g} }}, {m} }}")
+    print("constexpr SliceCalibration SliceCalibrations[] = { " + ", ".join(lines) + " };")
+
+
 def student_line(groups, nu_shared, covariate=None):
     """Maximum-likelihood lines per thickness (with \a covariate(row) as a second regressor when given) and
     residuals N(0, sigma^2) (nu_shared None) or Student-t with one fitted degrees-of-freedom for all thicknesses;
@@ -147,8 +222,30 @@ def statement_covers(r, line, nu, covariate, level):
     return low <= float(r["true_E_kPa"]) <= high
 
 
+def scale_statement_covers(r, params, filling, reference, level):
+    """As SliceCalibratedInterval with a spread that varies (scale_line()): whether the set of truths x with
+    |y - mu(x)| <= k sigma(x) over the search range, k = t_(m-6) sqrt(1 + 1/m), covers the truth of row \a r; its lower
+    end is the crossing of mu + k sigma, its upper end the last crossing of mu - k sigma below the upper bound (none:
+    not determined), a fit on the upper bound a lower bound."""
+    from scipy.optimize import brentq
+    from scipy.stats import t as student
+    a, beta, gamma, s, c, d, m = params
+    z = filling(r) - reference
+    k = student.ppf((1 + level) / 2, m - 6) * math.sqrt(1 + 1 / m)
+    y = math.log(float(r["fit_kPa"]) / E0_KPA)
+    lo_x, hi_x = (math.log(b / E0_KPA) for b in BOUNDS_KPA)
+    edge = lambda x, sign: a + beta * x + gamma * z + sign * k * s * math.exp(c * x + d * z) - y  # noqa: E731
+    lower = lo_x if edge(lo_x, 1) >= 0 else hi_x if edge(hi_x, 1) < 0 else brentq(edge, lo_x, hi_x, args=(1,))
+    grid = [hi_x - 0.01 * i for i in range(int((hi_x - lo_x) / 0.01) + 2)]
+    upper = hi_x
+    if y < math.log(BOUNDS_KPA[1] / E0_KPA) - 1e-6 and edge(hi_x, -1) > 0:
+        upper = next((brentq(edge, max(x, lo_x), min(x + 0.01, hi_x), args=(-1,)) for x in grid[1:]
+                      if edge(max(x, lo_x), -1) <= 0), lo_x)
+    return lower <= math.log(float(r["true_E_kPa"]) / E0_KPA) <= upper
+
+
 def tails(fit_rows, check_rows, out):
-    fit_groups = OrderedDict((t, g) for t, g in by_slice(fit_rows).items() if t in (2.0, 3.0))
+    fit_groups = OrderedDict((t, g) for t, g in by_slice(fit_rows).items() if t in (2.0, 3.0))  # the first models
     bladder = lambda r: float(r["bladder_mm"]) - 6.5  # noqa: E731 (the drawn fillings' middle, 3-10 mm)
     models = [("normal", True, None), ("Student-t, shared nu", None, None), ("normal + bladder filling", True, bladder)]
     table = []
@@ -163,12 +260,26 @@ def tails(fit_rows, check_rows, out):
                 row[f"cover{int(level * 100)}"] = statistics.mean(
                     statement_covers(r, lines[t], nu, covariate, level) for r in rows)
             table.append(row)
+    filling = filling_relation(fit_rows + check_rows)
+    for t, rows in by_slice(check_rows).items():
+        group = by_slice(fit_rows).get(t)
+        if not group:
+            continue
+        params = scale_line(group, filling, 76.0)
+        row = OrderedDict(model="normal + bladder volume change, spread by E and filling", slice_mm=t, nu=math.inf,
+                          negative_log_likelihood=float("nan"), sigma=params[3], bladder_per_mm=params[2],
+                          check_pairs=len(rows))
+        for level in (0.68, 0.95):
+            row[f"cover{int(level * 100)}"] = statistics.mean(
+                scale_statement_covers(r, params, filling, 76.0, level) for r in rows)
+        table.append(row)
     write_table(f"{out}/slice_calibration_tails.csv", table)
-    print("| residual model | slices [mm] | nu | -log L (fit pairs) | s | per mm of filling | check pairs | 68 % covers "
+    print("| residual model | slices [mm] | nu | -log L (fit pairs) | s (at E0) | per mm of filling | check pairs | 68 % covers "
           "| 95 % covers |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in table:
-        print(f"| {r['model']} | {r['slice_mm']:g} | {r['nu']:.1f} | {r['negative_log_likelihood']:.2f} | "
+        nll = r["negative_log_likelihood"]  # the last model is fitted per thickness: not comparable, not shown
+        print(f"| {r['model']} | {r['slice_mm']:g} | {r['nu']:.1f} | {'-' if math.isnan(nll) else f'{nll:.2f}'} | "
               f"{r['sigma']:.3f} | {'-' if r['model'] != models[2][0] else format(r['bladder_per_mm'], '+.3f')} | "
               f"{r['check_pairs']} | {r['cover68']:.2f} | "
               f"{r['cover95']:.2f} |")
@@ -251,11 +362,9 @@ def main(argv):
     if argv[1] == "check" and os.path.abspath(argv[2]) == os.path.abspath(f"{argv[3]}/slice_calibration_check.csv"):
         sys.exit("RUNS.csv would be overwritten by the summary: name the runs *_runs.csv")
     if argv[1] == "fit":
-        rows = []
-        for path in argv[2:]:
-            with open(path) as f:
-                rows += list(csv.DictReader(f))
-        fit_constants(rows)
+        filling = "--filling" in argv
+        rows = read_rows([path for path in argv[2:] if path != "--filling"])
+        fit_filling_constants(rows) if filling else fit_constants(rows)
     else:
         with open(argv[2]) as f:
             check(list(csv.DictReader(f)), argv[3])

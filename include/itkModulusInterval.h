@@ -73,37 +73,52 @@ constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
 /** The interval at thick slices, where the rescans miss the truth (they resample the voxels' phase and the mesh; at
  * 2-3 mm slices the fit's error comes from the moving scan's slices: docs/history/benchmarks.md, "Clinical geometry").
  * Its calibration is the fit's own error, measured on pelvis phantom pairs whose two scans both have slices of sliceMM,
- * an in-plane spacing drawn from U(0.8, 1.2) mm, the fixed grid shifted by a random sub-voxel offset and moduli
- * log-uniform in 30-500 kPa (benchmarks/results/clinical_geometry/slice_calibration_fit.csv and the two earlier
- * checks' runs, slice_calibration_check_first_runs.csv and slice_calibration_check_runs.csv, and at 2.5 mm 40 more
- * pairs, slice_calibration_fit25_runs.csv: 59, 60 and 83 pairs at 2, 2.5 and 3 mm;
- * benchmarks/summarize_slice_calibration.py fit). The error grows with the modulus (stiff organs read too stiff by
- * more than soft ones), so the calibration is a line in log space, with \f$ E_0 = 100 \f$ kPa:
- * \f[ \log(\hat E / E_0) = a + \beta \log(E / E_0) + \varepsilon, \quad \varepsilon \sim N(0, s^2), \f]
+ * an in-plane spacing drawn from U(0.8, 1.2) mm, the fixed grid shifted by a random sub-voxel offset, moduli
+ * log-uniform in 30-500 kPa and bladder wall motions in 3-10 mm (benchmarks/results/clinical_geometry/, the
+ * slice_calibration_*_runs.csv listed in docs/method.md; benchmarks/summarize_slice_calibration.py fit --filling).
+ * The fit's error grows with the modulus (stiff organs read too stiff by more than soft ones) and depends on how much
+ * the bladder filled between the scans, its volume change dV (fixed minus moving labels, mL: what the scans show of
+ * the load); its spread grows with the modulus and shrinks with the filling (a stiff organ that barely deforms says
+ * little about its stiffness). So the calibration is a line in log space with a residual SD of its own, with
+ * \f$ E_0 = 100 \f$ kPa, \f$ x = \log(E / E_0) \f$ and \f$ z = \Delta V - V_0 \f$:
+ * \f[ \log(\hat E / E_0) \sim N\big(\mu(x), \sigma(x)^2\big), \quad \mu(x) = a + \beta x + \gamma z, \quad
+ *     \sigma(x) = s \exp(c x + d z), \f]
  * fitted by the censored (Tobit) likelihood over all m pairs: a fit that stopped on the upper search bound says only
- * that it would have gone at least there. The statement inverts the line (classical calibration, so that it covers
- * every truth in the calibrated range at the stated rate, not only on average over the drawn moduli):
- * \f[ \tilde E = E_0 \exp\big((\log(\hat E / E_0) - a) / \beta\big), \quad
- *     I = E_0 \exp\big((\log(\hat E / E_0) - a \mp k s) / \beta\big), \quad k = t_{m-2} \sqrt{1 + 1/m} \f]
- * at 68 % and 95 % (Student's predictive factor for one more pair, with the line's two parameters). A fit on the
- * upper search bound U states the bound \f$ E \ge E_0 \exp((\log(U / E_0) - a - k s) / \beta) \f$: a smaller
- * truth would have stopped short of U but for an error beyond k s. The first calibration (a constant offset) over-
- * covered at 68 % and missed its error target at 3 mm; both are in docs/history/benchmarks.md ("Clinical geometry: an
- * interval calibrated per slice thickness"), with this line's check on pairs drawn after it was committed.
+ * that it would have gone at least there. The statement inverts the calibration (classical calibration, so that it
+ * covers every truth in the calibrated range at the stated rate, not only on average over the drawn moduli): the
+ * estimate is the truth whose line passes through the fit, \f$ \tilde x = (\log(\hat E / E_0) - a - \gamma z) /
+ * \beta \f$, and the interval every truth the fit is consistent with,
+ * \f[ I = \{ E : |\log(\hat E / E_0) - \mu(x)| \le k \sigma(x) \}, \quad k = t_{m-p} \sqrt{1 + 1/m} \f]
+ * at 68 % and 95 % (Student's predictive factor for one more pair, with the calibration's p parameters). Where the
+ * spread grows faster than the line (stiff organs at little filling) no truth above some modulus is excluded: the
+ * upper end is then not determined. A fit on the upper search bound states a lower bound. A volume change outside
+ * the calibrated range states no modulus (not determined, with the reason). The earlier calibrations (a constant
+ * offset; a line with one spread) over-covered at 68 % at 3 mm; both are in docs/history/benchmarks.md ("Clinical
+ * geometry"), with this one's check on pairs drawn after it was committed.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct SliceCalibration
 {
-  double       sliceMM;  ///< both scans' slice thickness
-  double       offset;   ///< a: log(fit / E_0) of a truth of E_0 = SliceCalibrationReferenceKPa
-  double       slope;    ///< beta
-  double       logSigma; ///< s: the residual SD of log(fit) about the line
-  unsigned int pairs;    ///< m, censored ones included
+  double sliceMM;           ///< both scans' slice thickness
+  double offset;            ///< a: log(fit / E_0) of a truth of E_0 = SliceCalibrationReferenceKPa at V_0
+  double slope;             ///< beta
+  double fillingSlope;      ///< gamma [1/mL]: log(fit) per mL of the filling organ's volume change about V_0
+  double logSigma;          ///< s: the residual SD of log(fit) at E_0 and V_0
+  double sigmaSlope;        ///< c: log of the residual SD per unit log(E / E_0)
+  double sigmaFillingSlope; ///< d [1/mL]: log of the residual SD per mL of volume change
+  double fillingReferenceML; ///< V_0 [mL]
+  /** The volume changes [mL] the calibration pairs spanned, the only ones it holds for (when gamma or d is not 0). */
+  double       fillingRangeML[2];
+  unsigned int pairs; ///< m, censored ones included
 };
 /** kPa: E_0 of the calibration line. */
-constexpr double           SliceCalibrationReferenceKPa = 100.0;
-constexpr SliceCalibration SliceCalibrations[] = { { 2.0, 0.3704, 1.3316, 0.2156, 59 },
-                                                   { 2.5, 0.2161, 1.1240, 0.3969, 60 },
-                                                   { 3.0, 0.2882, 1.1767, 0.3073, 83 } };
+constexpr double SliceCalibrationReferenceKPa = 100.0;
+/** The scene label whose volume change between the scans is the calibration's filling term. */
+constexpr const char * SliceCalibrationFillingOrgan = "bladder";
+constexpr SliceCalibration SliceCalibrations[] = {
+  { 2.0, 0.3575, 1.2796, 0.002616, 0.1812, 0.7332, -0.003984, 76.0, { 33.0, 118.0 }, 139 },
+  { 2.5, 0.1758, 1.1578, 0.003280, 0.2721, 0.7327, -0.009878, 76.0, { 33.0, 119.0 }, 120 },
+  { 3.0, 0.3285, 1.1877, 0.001671, 0.2384, 0.5187, -0.005208, 76.0, { 33.0, 119.0 }, 155 }
+};
 /** A scan's slices [mm] within this of a calibration's thickness use it. */
 constexpr double SliceCalibrationToleranceMM = 0.25;
 /** The in-plane voxel sides [mm] the calibrations drew, the only ones they hold for. */
@@ -240,14 +255,19 @@ struct BiomechanicalRegistration_EXPORT ModulusInterval
 BiomechanicalRegistration_EXPORT std::string
                                  ModulusIntervalText(const std::string & name, const ModulusInterval & interval);
 
-/** The interval of \a fit [kPa] at thick slices from \a calibration (SliceCalibration: the calibration line
- * inverted, Student's predictive half-widths t_(m-2) sqrt(1 + 1/m) s); an end beyond \a unknown's search range is not
- * determined, as for every interval. A fit on the upper search bound states a lower bound (E >= the line's inverse of
- * the bound less k s), a fit on the lower one an upper bound; logBias is log(fit / estimate) at this fit and logSigma
- * s / beta, the interval's half-width per unit of k in log E.
+/** The interval of \a fit [kPa] at thick slices from \a calibration (SliceCalibration: the calibration inverted,
+ * Student's predictive half-widths t_(m-p) sqrt(1 + 1/m) sigma(x)) at the filling organ's volume change
+ * \a fillingChangeML between the scans (fixed minus moving labels, mL; NaN: not measured). An end beyond
+ * \a unknown's search range is not determined, as for every interval. A fit on the upper search bound states a lower
+ * bound, a fit on the lower one an upper bound. A calibration with a filling term states no modulus (not determined,
+ * with the reason) when \a fillingChangeML is NaN or outside its fillingRangeML. logBias is log(fit / estimate) and
+ * logSigma sigma / beta at the estimate, the interval's half-width per unit of k in log E there.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 BiomechanicalRegistration_EXPORT ModulusInterval
-SliceCalibratedInterval(double fit, const SliceCalibration & calibration, const bmr::UnknownModulus & unknown);
+SliceCalibratedInterval(double                      fit,
+                        const SliceCalibration &    calibration,
+                        const bmr::UnknownModulus & unknown,
+                        double                      fillingChangeML);
 
 } // namespace itk
 

@@ -347,26 +347,140 @@ DeclareNotDetermined(ModulusInterval & interval, const bmr::UnknownModulus & unk
 }
 
 } // namespace pipeline
+namespace {
+/** Whether \a calibration has a filling term (in its line or its spread). */
+bool
+HasFillingTerm(const SliceCalibration & calibration)
+{
+  return calibration.fillingSlope != 0.0 || calibration.sigmaFillingSlope != 0.0;
+}
+
+/** Why \a calibration states nothing at the filling organ's volume change \a fillingChangeML (NaN: not measured):
+ * outside the volume changes it was calibrated on; empty when it holds (or has no filling term). */
+std::string
+FillingOutsideCalibration(const SliceCalibration & calibration, double fillingChangeML)
+{
+  if (!HasFillingTerm(calibration))
+  {
+    return {};
+  }
+  std::ostringstream os;
+  os << std::setprecision(3) << "the thick slices' calibration (" << calibration.sliceMM << " mm) corrects for the "
+     << SliceCalibrationFillingOrgan << "'s volume change between the scans, ";
+  if (std::isnan(fillingChangeML))
+  {
+    os << "which these labels do not show (no " << SliceCalibrationFillingOrgan << " label)";
+    return os.str();
+  }
+  if (fillingChangeML < calibration.fillingRangeML[0] || fillingChangeML > calibration.fillingRangeML[1])
+  {
+    os << "and this pair's, " << fillingChangeML << " mL, lies outside the " << calibration.fillingRangeML[0]
+       << " to " << calibration.fillingRangeML[1] << " mL it was calibrated on";
+    return os.str();
+  }
+  return {};
+}
+
+/** The calibration at one volume change: log(fit / E_0) ~ N(mu(x), sigma(x)^2) of a truth x = log(E / E_0). */
+struct CalibrationAtFilling
+{
+  double shift;      ///< a + gamma (dV - V_0)
+  double slope;      ///< beta
+  double logSigma;   ///< log s + d (dV - V_0)
+  double sigmaSlope; ///< c
+
+  double
+  Mean(double x) const
+  {
+    return shift + slope * x;
+  }
+  double
+  Sigma(double x) const
+  {
+    return std::exp(logSigma + sigmaSlope * x);
+  }
+};
+
+/** Bisection of a sign change of \a f in [lo, hi] (f(lo) and f(hi) of opposite signs) to 1e-13 in x. */
+template <typename F>
+double
+Bisect(const F & f, double lo, double hi)
+{
+  const bool risingAtLo = f(lo) < 0.0;
+  for (int k = 0; k < 200 && hi - lo > 1e-13; ++k)
+  {
+    const double mid = 0.5 * (lo + hi);
+    ((f(mid) < 0.0) == risingAtLo ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+/** The ends in x = log(E / E_0) over [xLow, xHigh] of the truths a fit y is consistent with at k: {x : |y - mu(x)|
+ * <= k sigma(x)}. mu + k sigma rises with x (beta, c > 0), so the lower end is its one crossing of y; mu - k sigma
+ * may turn down where the spread grows faster than the line (stiff truths), so the upper end is its last crossing,
+ * found by stepping down from xHigh. An end at xLow or xHigh is not bounded by the calibration. */
+std::array<double, 2>
+ConsistentTruths(const CalibrationAtFilling & line, double y, double k, double xLow, double xHigh)
+{
+  const auto above = [&](double x) { return line.Mean(x) + k * line.Sigma(x) - y; };
+  const auto below = [&](double x) { return line.Mean(x) - k * line.Sigma(x) - y; };
+  const double lower = above(xLow) >= 0.0 ? xLow : above(xHigh) < 0.0 ? xHigh : Bisect(above, xLow, xHigh);
+  if (below(xHigh) <= 0.0)
+  {
+    return { { lower, xHigh } };
+  }
+  constexpr double step = 0.01; // far finer than sigma's scale 1 / c in x
+  for (double x = xHigh - step; x > xLow - step; x -= step)
+  {
+    const double from = std::max(x, xLow);
+    if (below(from) <= 0.0)
+    {
+      return { { lower, Bisect(below, from, std::min(from + step, xHigh)) } };
+    }
+  }
+  return { { lower, xLow } };
+}
+} // namespace
+
 ModulusInterval
-SliceCalibratedInterval(double fit, const SliceCalibration & calibration, const bmr::UnknownModulus & unknown)
+SliceCalibratedInterval(double                      fit,
+                        const SliceCalibration &    calibration,
+                        const bmr::UnknownModulus & unknown,
+                        double                      fillingChangeML)
 {
   ModulusInterval i;
   i.method = "slice-calibration";
   i.quantiles = "student";
   i.fit = fit;
   i.calibratedSliceMM = calibration.sliceMM;
-  i.biasCorrected = true;
-  i.logSigma = calibration.logSigma / calibration.slope;
-  // The truth whose line passes through log(fit) + shift: the estimate at shift 0, the interval's ends at -+k s.
-  const double logFit = std::log(fit / SliceCalibrationReferenceKPa);
-  const auto   truthAt = [&](double shift) {
-    return SliceCalibrationReferenceKPa * std::exp((logFit + shift - calibration.offset) / calibration.slope);
-  };
-  const std::array<double, 2> k = pipeline::StudentHalfWidths(calibration.pairs, 2);
-  i.estimate = truthAt(0.0);
+  const std::string outside = FillingOutsideCalibration(calibration, fillingChangeML);
+  if (!outside.empty())
+  {
+    pipeline::DeclareNotDetermined(i, unknown, outside);
+    return i;
+  }
+  const double z = HasFillingTerm(calibration) ? fillingChangeML - calibration.fillingReferenceML : 0.0;
+  const CalibrationAtFilling line{ calibration.offset + calibration.fillingSlope * z,
+                                   calibration.slope,
+                                   std::log(calibration.logSigma) + calibration.sigmaFillingSlope * z,
+                                   calibration.sigmaSlope };
+  const double E0 = SliceCalibrationReferenceKPa;
+  const double y = std::log(fit / E0);
+  // The classical calibration's estimate: the truth whose line passes through the fit.
+  const double estimate = (y - line.shift) / line.slope;
+  i.estimate = E0 * std::exp(estimate);
   i.logBias = std::log(fit / i.estimate);
-  i.interval68 = { { truthAt(-k[0] * calibration.logSigma), truthAt(k[0] * calibration.logSigma) } };
-  i.interval95 = { { truthAt(-k[1] * calibration.logSigma), truthAt(k[1] * calibration.logSigma) } };
+  i.logSigma = line.Sigma(estimate) / line.slope;
+  i.biasCorrected = true;
+  const unsigned int parameters = 2 + (calibration.fillingSlope != 0.0) + (calibration.sigmaSlope != 0.0) +
+                                  (calibration.sigmaFillingSlope != 0.0);
+  const std::array<double, 2> k = pipeline::StudentHalfWidths(calibration.pairs, parameters);
+  const double                xLow = std::log(unknown.lowerBound / E0), xHigh = std::log(unknown.upperBound / E0);
+  for (std::size_t level = 0; level < 2; ++level)
+  {
+    const std::array<double, 2> ends = ConsistentTruths(line, y, k[level], xLow, xHigh);
+    (level == 0 ? i.interval68 : i.interval95) = { { E0 * std::exp(ends[0]), E0 * std::exp(ends[1]) } };
+  }
   // A fit on a search bound would have gone at least (at most) there: the bound's own interval end stands, the
   // other is not determined.
   pipeline::JudgeBounds(i, unknown, pipeline::ReachesLower(fit, unknown), pipeline::ReachesUpper(fit, unknown));

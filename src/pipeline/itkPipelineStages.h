@@ -335,6 +335,20 @@ CurvatureInterval(double fit, double logSigma, const bmr::UnknownModulus & unkno
 void
 DeclareNotDetermined(ModulusInterval & interval, const bmr::UnknownModulus & unknown, const std::string & reason);
 
+/** Each scene label's volume in the moving and the fixed labels [mL] into r.labelVolumeML: what the scans show of
+ * the organs' filling. */
+void
+MeasureLabelVolumes(RegistrationResult &                r,
+                    const bmr::Scene &                  scene,
+                    const BiomechanicalLabelImageType * movingLabels,
+                    const BiomechanicalLabelImageType * fixedLabels);
+
+/** The filling organ's volume change between the scans [mL] from r.labelVolumeML (fixed minus moving labels; the
+ * thick slices' calibration's filling term, SliceCalibrationFillingOrgan), NaN when the scene has no such label or
+ * neither scan shows it. */
+double
+FillingChangeML(const RegistrationResult & r);
+
 } // namespace pipeline
 } // namespace itk
 

@@ -31,6 +31,7 @@
 #include <iomanip>
 #include <iterator>
 #include <limits>
+#include <set>
 #include <sstream>
 
 namespace itk {
@@ -203,9 +204,9 @@ UncertaintyWarnings(const RegistrationResult & r)
   {
     const ModulusInterval & i = kv.second;
     const double            halfWidth = 0.5 * std::log(i.interval68[1] / i.interval68[0]);
-    if (!i.notDeterminedReason.empty() && i.method != "slice-calibration")
+    if (!i.notDeterminedReason.empty())
     {
-      continue; // not the images' doing: the voxel warning (VoxelLimitWarnings) says why, in the same words
+      continue; // not the images' doing: the voxel or the filling warning says why, in the same words
     }
     if (!i.lowerDetermined || !i.upperDetermined)
     {
@@ -360,12 +361,21 @@ StateIntervals(RegistrationResult &                r,
   if (!setup.statesModulus && setup.sliceCalibration)
   {
     // Thick slices: the calibration's interval; none when none is asked for, as at any voxels.
+    std::set<std::string> reasons;
     for (const bmr::UnknownModulus & u : r.unknowns)
     {
       if (method != UncertaintyMethodEnum::None)
       {
-        r.modulusInterval[u.name] = SliceCalibratedInterval(r.youngsModulus.at(u.name), *setup.sliceCalibration, u);
+        const ModulusInterval & i = r.modulusInterval[u.name] =
+          SliceCalibratedInterval(r.youngsModulus.at(u.name), *setup.sliceCalibration, u, pipeline::FillingChangeML(r));
+        reasons.insert(i.notDeterminedReason);
       }
+    }
+    reasons.erase(std::string());
+    // A filling outside the calibration: the warning says what the statement says.
+    for (const std::string & reason : reasons)
+    {
+      clock.Warn(r.state.warnings, { "the modulus is not determined: " + reason + " (the registration itself is not affected)" });
     }
   }
   else if (!setup.statesModulus)
@@ -436,44 +446,6 @@ DescribeState(RegistrationResult & r, const bmr::Scene & scene, bool elements)
   for (std::int32_t n : bmr::SceneBoundaryConditions(scene, mesh).dirichletNodes)
   {
     s.dirichlet[n] = 1;
-  }
-}
-
-/** The volume [mL] of each label value of \a labels. */
-std::map<std::int32_t, double>
-LabelVolumesML(const BiomechanicalLabelImageType * labels)
-{
-  std::map<std::int32_t, std::size_t> voxels;
-  const auto *                        values = labels->GetBufferPointer();
-  for (std::size_t i = 0, n = labels->GetBufferedRegion().GetNumberOfPixels(); i < n; ++i)
-  {
-    ++voxels[values[i]];
-  }
-  const auto &                   spacing = labels->GetSpacing();
-  std::map<std::int32_t, double> volumes;
-  for (const auto & [value, count] : voxels)
-  {
-    volumes[value] = double(count) * spacing[0] * spacing[1] * spacing[2] / 1000.0;
-  }
-  return volumes;
-}
-
-/** Each scene label's volume in the moving and the fixed labels [mL]: what the scans show of the organs' filling. */
-void
-MeasureLabelVolumes(RegistrationResult &                r,
-                    const bmr::Scene &                  scene,
-                    const BiomechanicalLabelImageType * movingLabels,
-                    const BiomechanicalLabelImageType * fixedLabels)
-{
-  const auto moving = LabelVolumesML(movingLabels);
-  const auto fixed = LabelVolumesML(fixedLabels);
-  for (const auto & l : scene.labels)
-  {
-    if (l.role != bmr::LabelRoleEnum::Outside)
-    {
-      const auto m = moving.find(l.value), f = fixed.find(l.value);
-      r.labelVolumeML[l.name] = { { m == moving.end() ? 0.0 : m->second, f == fixed.end() ? 0.0 : f->second } };
-    }
   }
 }
 
@@ -549,7 +521,6 @@ WarpAndEvaluate(RegistrationResult &                r,
   clock.Begin("report (Dice, Jacobian)");
   clock.Warn(r.state.warnings, UncertaintyWarnings(r));
   Evaluate(r, scene, fixedLabels);
-  MeasureLabelVolumes(r, scene, movingLabels, fixedLabels);
   clock.End();
 }
 } // namespace
@@ -724,6 +695,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   pipeline::StageClock clock(observer, r.state.stages);
   clock.Warn(r.state.warnings, scene.Warnings());
   const double coarsestVoxel = ReadVoxels(r, clock, scene, settings, movingLabels, fixedLabels);
+  pipeline::MeasureLabelVolumes(r, scene, movingLabels, fixedLabels); // before the interval: its filling term needs them
 
   const MovingAnatomyMeshes * premeshed = settings.meshes;
   // What is meshed (here, or by MeshMovingAnatomy() for premeshed, and by the interval's resamples): the moving

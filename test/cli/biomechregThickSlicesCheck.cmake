@@ -9,7 +9,9 @@
 #   same thing (the warning and the statement must never disagree);
 # - raised by --uncertainty-options voxel-limit-mm=3.5 (the advanced settings' group, read as
 #   --uncertainty-voxel-limit-mm), the interval is stated and the warning then says that it is stated
-#   beyond the geometry where coverage was shown.
+#   beyond the geometry where coverage was shown;
+# - a bladder that barely filled between the scans lies outside the calibration's volume changes: no modulus, the
+#   reason names the bladder's volume change, and the run's warning says the same.
 # Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregThickSlicesCheck.cmake
 file(REMOVE_RECURSE ${OUT})
 set(P ${OUT}/phantom)
@@ -79,4 +81,29 @@ endif()
 if(NOT "${output}" MATCHES "warning: label voxels of up to 3 mm: the modulus's interval is stated although")
   message(SEND_ERROR "with the limit raised the run does not warn that coverage was not shown at 3 mm")
 endif()
-message(STATUS "ok: at 3 mm the calibrated interval, uncalibrated none unless asked, and the warnings agree")
+# A bladder that barely filled (1 mm of wall motion, about 11 mL) lies outside the 3 mm calibration's volume changes:
+# no modulus, the reason names the bladder's volume change, and the run's warning says the same.
+set(P ${OUT}/phantom_empty)
+execute_process(COMMAND ${CLI} phantom --scene pelvis --size 200,160,54 --spacing 1,1,3 --bladder-mm 1 --rectum-mm 4
+  --true-E-kPa 80 --fixed-grid-shift-voxels 0.5 --truth-mesh-scale 1.5 --out ${P}
+  RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "phantom (1 mm filling) failed: ${err}")
+endif()
+set(inputs --moving-ct ${P}/moving_ct.nrrd --moving-labels ${P}/moving_labels.nrrd --fixed-ct ${P}/fixed_ct.nrrd
+  --fixed-labels ${P}/fixed_labels.nrrd --scene ${P}/scene.json --outputs report)
+register_into(empty)
+string(JSON statement GET "${report}" youngs_modulus_interval prostate statement)
+string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
+string(JSON lowerOk GET "${report}" youngs_modulus_interval prostate lower_end_determined)
+string(JSON upperOk GET "${report}" youngs_modulus_interval prostate upper_end_determined)
+if(NOT reason MATCHES "bladder's volume change between the scans, and this pair's, [0-9.]+ mL, lies outside" OR
+   lowerOk OR upperOk OR NOT statement MATCHES "not determined")
+  message(SEND_ERROR "a 1 mm filling at 3 mm: a modulus was stated or the reason is not the filling: '${statement}'")
+endif()
+string(FIND "${output}" "warning: the modulus is not determined: ${reason}" at)
+if(at EQUAL -1)
+  message(SEND_ERROR "the run's warning does not say what the statement says ('${reason}')")
+endif()
+message(STATUS "ok: at 3 mm the calibrated interval, uncalibrated none unless asked, outside the calibrated "
+  "fillings none, and the warnings agree")

@@ -35,12 +35,16 @@
 // - it holds where both scans have one calibration's slices (+-0.25 mm, along any axis) and in-plane voxels of
 //   0.8-1.2 mm, and nowhere else: not at 1 mm, not at 4 mm, not for a 3 mm scan with a 1 mm one (they lean opposite
 //   ways), not at in-plane 1.4 mm;
-// - its interval inverts the calibration line log(fit / E0) = a + beta log(E / E0): the estimate and the ends are
-//   E0 exp((log(fit / E0) - a -+ k s) / beta), k = t_(m-2) sqrt(1 + 1/m) (closed form, to 1e-12), with the thickness
-//   in the statement; the inversion is exact: a fit k95 s above a truth's line has that truth as its 95 % lower end,
-//   and one k95 s below as its upper end (to 1e-12);
-// - a fit on the upper search bound states "E >=" the line's inverse of the bound less k s, the upper end not
-//   determined; on the lower one "E <=", the lower end not determined.
+// - with one spread (c = d = 0) its interval is the closed-form inverse of the line log(fit / E0) = a + beta
+//   log(E / E0) + gamma (dV - V0): E0 exp((log(fit / E0) - a - gamma (dV - V0) -+ k s) / beta), k = t_(m-p)
+//   sqrt(1 + 1/m) (to 1e-12; t from Student's half-widths, so the degrees of freedom count the parameters);
+// - with a spread s exp(c x + d z) (the shipped calibrations) the ends are where |log(fit / E0) - mu(x)| = k sigma(x)
+//   (to 1e-10 in log E: the bisection's tolerance is 1e-13), and the inversion is exact: a fit k95 sigma above a
+//   truth's line has that truth as its 95 % lower end, one k95 sigma below as its upper end (to 1e-10);
+// - where the spread outgrows the line (c large, a fit near stiff truths) every stiffer truth is consistent: the
+//   upper end is not determined, and the truth at the search bound is indeed within k95 sigma of the fit;
+// - a fit on the upper search bound states "E >=", the upper end not determined; on the lower one "E <=";
+// - a filling outside the calibrated volume changes, or no bladder label, states no modulus and says why.
 #include "itkModulusInterval.h"
 #include "itkIntervalTestSupport.h"
 #include "bmrTestUtilities.h"
@@ -129,6 +133,113 @@ CheckCensoredFit()
   return ok;
 }
 
+/** k = t_(m-p) sqrt(1 + 1/m) at 68 and 95 % of a calibration with p parameters: Student's half-widths of m - p + 1
+ * draws, t_(m-p) sqrt(1 + 1/(m-p+1)), with the factor for m. */
+std::array<double, 2>
+CalibrationHalfWidths(const itk::SliceCalibration & c)
+{
+  const unsigned int parameters =
+    2 + (c.fillingSlope != 0.0) + (c.sigmaSlope != 0.0) + (c.sigmaFillingSlope != 0.0);
+  const unsigned int n = c.pairs - parameters + 1;
+  const auto   student = itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, n);
+  const double predictive = std::sqrt(1.0 + 1.0 / c.pairs) / std::sqrt(1.0 + 1.0 / n);
+  return { { student[0] * predictive, student[1] * predictive } };
+}
+
+bmr::UnknownModulus
+ProstateUnknown()
+{
+  bmr::UnknownModulus unknown;
+  unknown.name = "prostate";
+  unknown.lowerBound = 20.0;
+  unknown.upperBound = 600.0;
+  return unknown;
+}
+
+bool
+Near(double x, double y, double relative)
+{
+  return std::abs(x - y) <= relative * std::abs(y);
+}
+
+/** One spread: the closed-form inverse of the line with its filling term; the text names the slices. */
+bool
+CheckOneSpread()
+{
+  bool                        ok = true;
+  const itk::SliceCalibration c{ 3.0, 0.3, 1.2, -0.004, 0.3, 0.0, 0.0, 80.0, { 40.0, 120.0 }, 60 };
+  const bmr::UnknownModulus   unknown = ProstateUnknown();
+  const double                E0 = itk::SliceCalibrationReferenceKPa, shift = 0.3 - 0.004 * (100.0 - 80.0);
+  const std::array<double, 2> k = CalibrationHalfWidths(c);
+  const auto inverse = [&](double deviation) { return E0 * std::exp((std::log(1.5) - shift + deviation) / 1.2); };
+  const itk::ModulusInterval i = itk::SliceCalibratedInterval(150.0, c, unknown, 100.0);
+  ok &= bmr::test::Expect(Near(i.estimate, inverse(0.0), 1e-12) && Near(i.interval68[0], inverse(-k[0] * 0.3), 1e-12) &&
+                            Near(i.interval68[1], inverse(k[0] * 0.3), 1e-12) &&
+                            Near(i.interval95[0], inverse(-k[1] * 0.3), 1e-12) &&
+                            Near(i.interval95[1], inverse(k[1] * 0.3), 1e-12) && i.lowerDetermined &&
+                            i.upperDetermined && Near(i.logSigma, 0.3 / 1.2, 1e-12),
+                          "one spread, 100 mL (V0 80, gamma -0.004): E0 exp((log(fit / E0) - a - gamma 20 -+ k s) / "
+                          "beta), k = t_(m-3) sqrt(1 + 1/m)");
+  ok &= bmr::test::Expect(itk::ModulusIntervalText("prostate", i).find("3 mm slices") != std::string::npos,
+                          "the statement names the calibration's slices: " + itk::ModulusIntervalText("prostate", i));
+  for (double outside : { 30.0, 130.0, std::numeric_limits<double>::quiet_NaN() })
+  {
+    const itk::ModulusInterval o = itk::SliceCalibratedInterval(150.0, c, unknown, outside);
+    const std::string          text = itk::ModulusIntervalText("prostate", o);
+    ok &= bmr::test::Expect(!o.notDeterminedReason.empty() && !o.lowerDetermined && !o.upperDetermined &&
+                              o.estimate == 150.0 && text.find("not determined") != std::string::npos &&
+                              text.find(std::isnan(outside) ? "no bladder label" : "40 to 120 mL") != std::string::npos,
+                            "a filling outside 40-120 mL (or none): not determined, and why: " + text);
+  }
+  return ok;
+}
+
+/** The shipped 3 mm calibration (a spread that varies with E and the filling) at its reference filling. */
+bool
+CheckVaryingSpread(const itk::SliceCalibration & c)
+{
+  bool                        ok = true;
+  const bmr::UnknownModulus   unknown = ProstateUnknown();
+  const double                E0 = itk::SliceCalibrationReferenceKPa, V0 = c.fillingReferenceML;
+  const std::array<double, 2> k = CalibrationHalfWidths(c);
+  const auto mu = [&](double E) { return c.offset + c.slope * std::log(E / E0); };
+  const auto sigma = [&](double E) { return c.logSigma * std::exp(c.sigmaSlope * std::log(E / E0)); };
+  const itk::ModulusInterval i = itk::SliceCalibratedInterval(100.0, c, unknown, V0);
+  // |y - mu(x)| - k sigma(x) at an end, in units of log E.
+  const auto miss = [&](double E, double kk) { return std::abs(std::abs(0.0 - mu(E)) - kk * sigma(E)) / c.slope; };
+  ok &= bmr::test::Expect(Near(i.estimate, E0 * std::exp(-c.offset / c.slope), 1e-12) &&
+                            miss(i.interval68[0], k[0]) < 1e-10 && miss(i.interval68[1], k[0]) < 1e-10 &&
+                            miss(i.interval95[0], k[1]) < 1e-10 && miss(i.interval95[1], k[1]) < 1e-10 &&
+                            i.interval95[0] < i.interval68[0] && i.interval68[1] < i.interval95[1],
+                          "a fit of 100 kPa at 3 mm: its ends where |y - mu(x)| = k sigma(x)");
+  const double truth = 150.0;
+  const double highFit = E0 * std::exp(mu(truth) + k[1] * sigma(truth));
+  const double lowFit = E0 * std::exp(mu(truth) - k[1] * sigma(truth));
+  ok &= bmr::test::Expect(Near(itk::SliceCalibratedInterval(highFit, c, unknown, V0).interval95[0], truth, 1e-10) &&
+                            Near(itk::SliceCalibratedInterval(lowFit, c, unknown, V0).interval95[1], truth, 1e-10),
+                          "a fit k95 sigma above (below) the line of 150 kPa has 150 kPa as its 95 % lower (upper) end");
+  itk::SliceCalibration steep = c;
+  steep.sigmaSlope = 2.0; // the spread outgrows the line (beta < k c sigma) below the upper search bound
+  const double               stiffFit = 300.0;
+  const itk::ModulusInterval open = itk::SliceCalibratedInterval(stiffFit, steep, unknown, V0);
+  const double               yStiff = std::log(stiffFit / E0);
+  const double muTop = steep.offset + steep.slope * std::log(6.0), sigmaTop = steep.logSigma * std::pow(6.0, 2.0);
+  ok &= bmr::test::Expect(open.lowerDetermined && !open.upperDetermined && open.interval95[1] == 600.0 &&
+                            std::abs(yStiff - muTop) <= k[1] * sigmaTop,
+                          "a spread that outgrows the line: the upper end not determined, and 600 kPa is indeed "
+                          "within k95 sigma of the fit: " + itk::ModulusIntervalText("prostate", open));
+  const itk::ModulusInterval onBound = itk::SliceCalibratedInterval(600.0, c, unknown, V0);
+  const itk::ModulusInterval onLower = itk::SliceCalibratedInterval(20.0, c, unknown, V0);
+  ok &= bmr::test::Expect(onBound.lowerDetermined && !onBound.upperDetermined && onBound.notDeterminedReason.empty() &&
+                            itk::ModulusIntervalText("prostate", onBound).find(">=") != std::string::npos &&
+                            !onLower.lowerDetermined && onLower.upperDetermined &&
+                            itk::ModulusIntervalText("prostate", onLower).find("<=") != std::string::npos,
+                          "a fit on the upper (lower) search bound: E >= (E <=): " +
+                            itk::ModulusIntervalText("prostate", onBound) + "; " +
+                            itk::ModulusIntervalText("prostate", onLower));
+  return ok;
+}
+
 bool
 CheckSliceCalibration()
 {
@@ -147,52 +258,8 @@ CheckSliceCalibration()
                             itk::FindSliceCalibration(Spacing{ 1.4, 1.4, 3 }, Spacing{ 1.4, 1.4, 3 }) == nullptr &&
                             itk::FindSliceCalibration(Spacing{ 1, 1, 2 }, Spacing{ 1, 1, 3 }) == nullptr,
                           "no calibration at 1 or 4 mm, for one thick scan, at in-plane 1.4 mm, for 2 with 3 mm");
-  if (!three)
-  {
-    return false;
-  }
-  bmr::UnknownModulus unknown;
-  unknown.name = "prostate";
-  unknown.lowerBound = 20.0;
-  unknown.upperBound = 600.0;
-  const double E0 = itk::SliceCalibrationReferenceKPa, a = three->offset, beta = three->slope, s = three->logSigma;
-  const double m = three->pairs;
-  // t_(m-2) from Student's half-widths of m - 1 draws, t_(m-2) sqrt(1 + 1/(m-1)), with the factor for m.
-  const auto student =
-    itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, three->pairs - 1);
-  const double predictive = std::sqrt(1.0 + 1.0 / m) / std::sqrt(1.0 + 1.0 / (m - 1));
-  const double k = student[0] * predictive, k95 = student[1] * predictive;
-  const auto inverse = [&](double fit, double shift) { return E0 * std::exp((std::log(fit / E0) - a + shift) / beta); };
-  const auto near = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
-  const itk::ModulusInterval i = itk::SliceCalibratedInterval(100.0, *three, unknown);
-  ok &= bmr::test::Expect(near(i.estimate, inverse(100.0, 0.0)) && near(i.interval68[0], inverse(100.0, -k * s)) &&
-                            near(i.interval68[1], inverse(100.0, k * s)) &&
-                            near(i.interval95[0], inverse(100.0, -k95 * s)) &&
-                            near(i.interval95[1], inverse(100.0, k95 * s)) && i.lowerDetermined && i.upperDetermined &&
-                            near(i.logBias, std::log(100.0 / i.estimate)) && near(i.logSigma, s / beta),
-                          "100 kPa at 3 mm: E0 exp((log(fit / E0) - a -+ t_(m-2) sqrt(1 + 1/m) s) / beta)");
-  ok &= bmr::test::Expect(itk::ModulusIntervalText("prostate", i).find("3 mm slices") != std::string::npos,
-                          "the statement names the calibration's slices: " + itk::ModulusIntervalText("prostate", i));
-  const double truth = 150.0;
-  const double highFit = E0 * std::exp(a + beta * std::log(truth / E0) + k95 * s);
-  const double lowFit = E0 * std::exp(a + beta * std::log(truth / E0) - k95 * s);
-  ok &= bmr::test::Expect(near(itk::SliceCalibratedInterval(highFit, *three, unknown).interval95[0], truth) &&
-                            near(itk::SliceCalibratedInterval(lowFit, *three, unknown).interval95[1], truth),
-                          "a fit k95 s above (below) the line of 150 kPa has 150 kPa as its 95 % lower (upper) end");
-  const itk::ModulusInterval onBound = itk::SliceCalibratedInterval(600.0, *three, unknown);
-  ok &= bmr::test::Expect(onBound.lowerDetermined && !onBound.upperDetermined &&
-                            near(onBound.interval95[0], inverse(600.0, -k95 * s)) && onBound.interval95[1] == 600.0 &&
-                            onBound.notDeterminedReason.empty() &&
-                            itk::ModulusIntervalText("prostate", onBound).find(">=") != std::string::npos,
-                          "a fit on the upper bound: E >= the line's inverse of the bound less k95 s: " +
-                            itk::ModulusIntervalText("prostate", onBound));
-  const itk::ModulusInterval onLower = itk::SliceCalibratedInterval(20.0, *three, unknown);
-  ok &= bmr::test::Expect(!onLower.lowerDetermined && onLower.upperDetermined &&
-                            near(onLower.interval95[1], inverse(20.0, k95 * s)) &&
-                            itk::ModulusIntervalText("prostate", onLower).find("<=") != std::string::npos,
-                          "a fit on the lower bound: E <= the line's inverse of the bound plus k95 s: " +
-                            itk::ModulusIntervalText("prostate", onLower));
-  return ok;
+  ok &= CheckOneSpread();
+  return three ? ok && CheckVaryingSpread(*three) : false;
 }
 } // namespace
 
