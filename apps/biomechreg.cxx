@@ -314,7 +314,7 @@ WritePhantom(const std::string &          out,
 
 namespace bmrcli {
 
-/** The version line, and under --verbose whether malloc uses huge pages. */
+/** The version line, and under --verbose which malloc the program runs on. */
 void
 PrintVersion()
 {
@@ -322,10 +322,7 @@ PrintVersion()
             << ")" << std::endl;
   if (GetVerbosity() == Verbosity::Verbose)
   {
-    const char * tunables = std::getenv("GLIBC_TUNABLES");
-    std::cout << "malloc: GLIBC_TUNABLES=" << (tunables ? tunables : "") << " (transparent huge pages "
-              << (tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos ? "on" : "off")
-              << ")" << std::endl;
+    std::cout << "malloc: " << MallocDescription() << std::endl;
   }
 }
 
@@ -397,10 +394,6 @@ main(int argc, char * argv[])
 {
   // Run as a 3D Slicer module (a link named after it), biomechreg speaks Slicer's protocol instead.
   const bmrcli::SlicerModule * slicer = bmrcli::FindSlicerModule(argv[0]);
-  if (slicer == nullptr)
-  {
-    bmrcli::RestartWithHugePageMalloc(argv);
-  }
   try
   {
     std::vector<std::string> args(argv + 1, argv + argc);

@@ -65,14 +65,9 @@ struct GlobalOptions
   std::string  taskTrace;    ///< where to write the parallel work's trace (bmr::TaskTrace); empty: none
 };
 
-/** On Linux with glibc: when GLIBC_TUNABLES does not set glibc.malloc.hugetlb, restarts the program (the same
- * arguments) with glibc.malloc.hugetlb=1 added, so that malloc backs its large blocks with transparent huge pages.
- * Why: on virtual machines every 4 KiB page fault can cost microseconds, and meshing, assembly and the rescans
- * fault in gigabytes (measured: docs/history/benchmarks.md, "The library as a guest"); the results are the same bit for
- * bit. A user's own setting (e.g. glibc.malloc.hugetlb=0) is
- * kept; elsewhere, or when the restart fails, nothing happens. Call first in main(). */
-void
-RestartWithHugePageMalloc(char * argv[]);
+/** Which malloc the program runs on, and whether it asked for transparent huge pages (biomechregMalloc.cxx). */
+std::string
+MallocDescription();
 
 /** From now on the stages are also reported in 3D Slicer's progress tags (<filter-start>, <filter-progress>,
  * <filter-end>) on stdout, each on a line of its own: biomechreg runs as a Slicer module (biomechregSlicer.h). */

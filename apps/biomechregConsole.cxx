@@ -242,29 +242,6 @@ PeakMemoryMB()
   return usage.ru_maxrss / 1024.0; // kB on Linux
 }
 
-void
-RestartWithHugePageMalloc(char * argv[])
-{
-#if defined(__linux__) && defined(__GLIBC__)
-  const char *      current = std::getenv("GLIBC_TUNABLES");
-  const std::string tunables = current ? current : "";
-  // Restarted once at most: the marker stops a loop should the tunable not show in the environment.
-  if (tunables.find("glibc.malloc.hugetlb") != std::string::npos || std::getenv("BMR_RESTARTED") != nullptr)
-  {
-    return;
-  }
-  const std::string with = tunables.empty() ? "glibc.malloc.hugetlb=1" : tunables + ":glibc.malloc.hugetlb=1";
-  if (setenv("GLIBC_TUNABLES", with.c_str(), 1) != 0 || setenv("BMR_RESTARTED", "1", 1) != 0)
-  {
-    return;
-  }
-  execv("/proc/self/exe", argv); // returns only on failure: go on as we are
-  unsetenv("BMR_RESTARTED");
-#else
-  (void)argv;
-#endif
-}
-
 GlobalOptions
 TakeGlobalOptions(std::vector<std::string> & args)
 {

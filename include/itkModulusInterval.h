@@ -98,13 +98,13 @@ constexpr RescanCalibration RescanCalibrations[] = { { 4, 0.7826, 1.4996 } };
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines */
 struct SliceCalibration
 {
-  double sliceMM;           ///< both scans' slice thickness
-  double offset;            ///< a: log(fit / E_0) of a truth of E_0 = SliceCalibrationReferenceKPa at V_0
-  double slope;             ///< beta
-  double fillingSlope;      ///< gamma [1/mL]: log(fit) per mL of the filling organ's volume change about V_0
-  double logSigma;          ///< s: the residual SD of log(fit) at E_0 and V_0
-  double sigmaSlope;        ///< c: log of the residual SD per unit log(E / E_0)
-  double sigmaFillingSlope; ///< d [1/mL]: log of the residual SD per mL of volume change
+  double sliceMM;            ///< both scans' slice thickness
+  double offset;             ///< a: log(fit / E_0) of a truth of E_0 = SliceCalibrationReferenceKPa at V_0
+  double slope;              ///< beta
+  double fillingSlope;       ///< gamma [1/mL]: log(fit) per mL of the filling organ's volume change about V_0
+  double logSigma;           ///< s: the residual SD of log(fit) at E_0 and V_0
+  double sigmaSlope;         ///< c: log of the residual SD per unit log(E / E_0)
+  double sigmaFillingSlope;  ///< d [1/mL]: log of the residual SD per mL of volume change
   double fillingReferenceML; ///< V_0 [mL]
   /** The volume changes [mL] the calibration pairs spanned, the only ones it holds for (when gamma or d is not 0). */
   double       fillingRangeML[2];
@@ -114,6 +114,8 @@ struct SliceCalibration
 constexpr double SliceCalibrationReferenceKPa = 100.0;
 /** The scene label whose volume change between the scans is the calibration's filling term. */
 constexpr const char * SliceCalibrationFillingOrgan = "bladder";
+/** The shipped calibrations, one per slice thickness (benchmarks/summarize_slice_calibration.py fit --filling on the
+ * runs docs/method.md lists). */
 constexpr SliceCalibration SliceCalibrations[] = {
   { 2.0, 0.3575, 1.2796, 0.002616, 0.1812, 0.7332, -0.003984, 76.0, { 33.0, 118.0 }, 139 },
   { 2.5, 0.1758, 1.1578, 0.003280, 0.2721, 0.7327, -0.009878, 76.0, { 33.0, 119.0 }, 120 },

@@ -12,7 +12,7 @@ build="${BUILD_DIR:-$root/build}"
 jobs="${JOBS:-$(nproc)}"
 
 packages=(build-essential cmake ninja-build libinsighttoolkit5-dev libvtk9-dev libeigen3-dev libcgal-dev
-  libgdcm-dev libfftw3-dev libsuitesparse-dev libopenblas-dev libmetis-dev libtbb-dev nlohmann-json3-dev time python3-matplotlib python3-numpy
+  libgdcm-dev libfftw3-dev libsuitesparse-dev libopenblas-dev libmetis-dev libtbb-dev libjemalloc-dev nlohmann-json3-dev time python3-matplotlib python3-numpy
   python3-dev pybind11-dev python3-pytest python3-pydicom libxml2-utils zlib1g-dev
   snakemake plastimatch dicom3tools)
 missing=()

@@ -374,8 +374,8 @@ FillingOutsideCalibration(const SliceCalibration & calibration, double fillingCh
   }
   if (fillingChangeML < calibration.fillingRangeML[0] || fillingChangeML > calibration.fillingRangeML[1])
   {
-    os << "and this pair's, " << fillingChangeML << " mL, lies outside the " << calibration.fillingRangeML[0]
-       << " to " << calibration.fillingRangeML[1] << " mL it was calibrated on";
+    os << "and this pair's, " << fillingChangeML << " mL, lies outside the " << calibration.fillingRangeML[0] << " to "
+       << calibration.fillingRangeML[1] << " mL it was calibrated on";
     return os.str();
   }
   return {};
@@ -402,7 +402,7 @@ struct CalibrationAtFilling
 };
 
 /** Bisection of a sign change of \a f in [lo, hi] (f(lo) and f(hi) of opposite signs) to 1e-13 in x. */
-template <typename F>
+template<typename F>
 double
 Bisect(const F & f, double lo, double hi)
 {
@@ -422,8 +422,8 @@ Bisect(const F & f, double lo, double hi)
 std::array<double, 2>
 ConsistentTruths(const CalibrationAtFilling & line, double y, double k, double xLow, double xHigh)
 {
-  const auto above = [&](double x) { return line.Mean(x) + k * line.Sigma(x) - y; };
-  const auto below = [&](double x) { return line.Mean(x) - k * line.Sigma(x) - y; };
+  const auto   above = [&](double x) { return line.Mean(x) + k * line.Sigma(x) - y; };
+  const auto   below = [&](double x) { return line.Mean(x) - k * line.Sigma(x) - y; };
   const double lower = above(xLow) >= 0.0 ? xLow : above(xHigh) < 0.0 ? xHigh : Bisect(above, xLow, xHigh);
   if (below(xHigh) <= 0.0)
   {
@@ -459,21 +459,21 @@ SliceCalibratedInterval(double                      fit,
     pipeline::DeclareNotDetermined(i, unknown, outside);
     return i;
   }
-  const double z = HasFillingTerm(calibration) ? fillingChangeML - calibration.fillingReferenceML : 0.0;
+  const double               z = HasFillingTerm(calibration) ? fillingChangeML - calibration.fillingReferenceML : 0.0;
   const CalibrationAtFilling line{ calibration.offset + calibration.fillingSlope * z,
                                    calibration.slope,
                                    std::log(calibration.logSigma) + calibration.sigmaFillingSlope * z,
                                    calibration.sigmaSlope };
-  const double E0 = SliceCalibrationReferenceKPa;
-  const double y = std::log(fit / E0);
+  const double               E0 = SliceCalibrationReferenceKPa;
+  const double               y = std::log(fit / E0);
   // The classical calibration's estimate: the truth whose line passes through the fit.
   const double estimate = (y - line.shift) / line.slope;
   i.estimate = E0 * std::exp(estimate);
   i.logBias = std::log(fit / i.estimate);
   i.logSigma = line.Sigma(estimate) / line.slope;
   i.biasCorrected = true;
-  const unsigned int parameters = 2 + (calibration.fillingSlope != 0.0) + (calibration.sigmaSlope != 0.0) +
-                                  (calibration.sigmaFillingSlope != 0.0);
+  const unsigned int parameters =
+    2 + (calibration.fillingSlope != 0.0) + (calibration.sigmaSlope != 0.0) + (calibration.sigmaFillingSlope != 0.0);
   const std::array<double, 2> k = pipeline::StudentHalfWidths(calibration.pairs, parameters);
   const double                xLow = std::log(unknown.lowerBound / E0), xHigh = std::log(unknown.upperBound / E0);
   for (std::size_t level = 0; level < 2; ++level)

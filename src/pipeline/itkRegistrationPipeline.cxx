@@ -375,7 +375,8 @@ StateIntervals(RegistrationResult &                r,
     // A filling outside the calibration: the warning says what the statement says.
     for (const std::string & reason : reasons)
     {
-      clock.Warn(r.state.warnings, { "the modulus is not determined: " + reason + " (the registration itself is not affected)" });
+      clock.Warn(r.state.warnings,
+                 { "the modulus is not determined: " + reason + " (the registration itself is not affected)" });
     }
   }
   else if (!setup.statesModulus)
@@ -695,7 +696,8 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   pipeline::StageClock clock(observer, r.state.stages);
   clock.Warn(r.state.warnings, scene.Warnings());
   const double coarsestVoxel = ReadVoxels(r, clock, scene, settings, movingLabels, fixedLabels);
-  pipeline::MeasureLabelVolumes(r, scene, movingLabels, fixedLabels); // before the interval: its filling term needs them
+  pipeline::MeasureLabelVolumes(
+    r, scene, movingLabels, fixedLabels); // before the interval: its filling term needs them
 
   const MovingAnatomyMeshes * premeshed = settings.meshes;
   // What is meshed (here, or by MeshMovingAnatomy() for premeshed, and by the interval's resamples): the moving

@@ -138,10 +138,10 @@ CheckCensoredFit()
 std::array<double, 2>
 CalibrationHalfWidths(const itk::SliceCalibration & c)
 {
-  const unsigned int parameters =
-    2 + (c.fillingSlope != 0.0) + (c.sigmaSlope != 0.0) + (c.sigmaFillingSlope != 0.0);
+  const unsigned int parameters = 2 + (c.fillingSlope != 0.0) + (c.sigmaSlope != 0.0) + (c.sigmaFillingSlope != 0.0);
   const unsigned int n = c.pairs - parameters + 1;
-  const auto   student = itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, n);
+  const auto         student =
+    itk::IntervalHalfWidths(itk::UncertaintyMethodEnum::Rescan, itk::IntervalQuantilesEnum::Student, n);
   const double predictive = std::sqrt(1.0 + 1.0 / c.pairs) / std::sqrt(1.0 + 1.0 / n);
   return { { student[0] * predictive, student[1] * predictive } };
 }
@@ -202,9 +202,9 @@ CheckVaryingSpread(const itk::SliceCalibration & c)
   const bmr::UnknownModulus   unknown = ProstateUnknown();
   const double                E0 = itk::SliceCalibrationReferenceKPa, V0 = c.fillingReferenceML;
   const std::array<double, 2> k = CalibrationHalfWidths(c);
-  const auto mu = [&](double E) { return c.offset + c.slope * std::log(E / E0); };
-  const auto sigma = [&](double E) { return c.logSigma * std::exp(c.sigmaSlope * std::log(E / E0)); };
-  const itk::ModulusInterval i = itk::SliceCalibratedInterval(100.0, c, unknown, V0);
+  const auto                  mu = [&](double E) { return c.offset + c.slope * std::log(E / E0); };
+  const auto                  sigma = [&](double E) { return c.logSigma * std::exp(c.sigmaSlope * std::log(E / E0)); };
+  const itk::ModulusInterval  i = itk::SliceCalibratedInterval(100.0, c, unknown, V0);
   // |y - mu(x)| - k sigma(x) at an end, in units of log E.
   const auto miss = [&](double E, double kk) { return std::abs(std::abs(0.0 - mu(E)) - kk * sigma(E)) / c.slope; };
   ok &= bmr::test::Expect(Near(i.estimate, E0 * std::exp(-c.offset / c.slope), 1e-12) &&
@@ -215,9 +215,10 @@ CheckVaryingSpread(const itk::SliceCalibration & c)
   const double truth = 150.0;
   const double highFit = E0 * std::exp(mu(truth) + k[1] * sigma(truth));
   const double lowFit = E0 * std::exp(mu(truth) - k[1] * sigma(truth));
-  ok &= bmr::test::Expect(Near(itk::SliceCalibratedInterval(highFit, c, unknown, V0).interval95[0], truth, 1e-10) &&
-                            Near(itk::SliceCalibratedInterval(lowFit, c, unknown, V0).interval95[1], truth, 1e-10),
-                          "a fit k95 sigma above (below) the line of 150 kPa has 150 kPa as its 95 % lower (upper) end");
+  ok &=
+    bmr::test::Expect(Near(itk::SliceCalibratedInterval(highFit, c, unknown, V0).interval95[0], truth, 1e-10) &&
+                        Near(itk::SliceCalibratedInterval(lowFit, c, unknown, V0).interval95[1], truth, 1e-10),
+                      "a fit k95 sigma above (below) the line of 150 kPa has 150 kPa as its 95 % lower (upper) end");
   itk::SliceCalibration steep = c;
   steep.sigmaSlope = 2.0; // the spread outgrows the line (beta < k c sigma) below the upper search bound
   const double               stiffFit = 300.0;
@@ -227,16 +228,16 @@ CheckVaryingSpread(const itk::SliceCalibration & c)
   ok &= bmr::test::Expect(open.lowerDetermined && !open.upperDetermined && open.interval95[1] == 600.0 &&
                             std::abs(yStiff - muTop) <= k[1] * sigmaTop,
                           "a spread that outgrows the line: the upper end not determined, and 600 kPa is indeed "
-                          "within k95 sigma of the fit: " + itk::ModulusIntervalText("prostate", open));
+                          "within k95 sigma of the fit: " +
+                            itk::ModulusIntervalText("prostate", open));
   const itk::ModulusInterval onBound = itk::SliceCalibratedInterval(600.0, c, unknown, V0);
   const itk::ModulusInterval onLower = itk::SliceCalibratedInterval(20.0, c, unknown, V0);
-  ok &= bmr::test::Expect(onBound.lowerDetermined && !onBound.upperDetermined && onBound.notDeterminedReason.empty() &&
-                            itk::ModulusIntervalText("prostate", onBound).find(">=") != std::string::npos &&
-                            !onLower.lowerDetermined && onLower.upperDetermined &&
-                            itk::ModulusIntervalText("prostate", onLower).find("<=") != std::string::npos,
-                          "a fit on the upper (lower) search bound: E >= (E <=): " +
-                            itk::ModulusIntervalText("prostate", onBound) + "; " +
-                            itk::ModulusIntervalText("prostate", onLower));
+  ok &= bmr::test::Expect(
+    onBound.lowerDetermined && !onBound.upperDetermined && onBound.notDeterminedReason.empty() &&
+      itk::ModulusIntervalText("prostate", onBound).find(">=") != std::string::npos && !onLower.lowerDetermined &&
+      onLower.upperDetermined && itk::ModulusIntervalText("prostate", onLower).find("<=") != std::string::npos,
+    "a fit on the upper (lower) search bound: E >= (E <=): " + itk::ModulusIntervalText("prostate", onBound) + "; " +
+      itk::ModulusIntervalText("prostate", onLower));
   return ok;
 }
 
