@@ -78,6 +78,12 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
    * earlier estimate of nearly the same data). Used by the resamples of the stated interval. */
   std::vector<double> startModuli;
   double              startRelativeCurvature{ 0.0 };
+
+  /** Throws itk::InvalidArgumentError (bmr::FailInput) naming the first setting out of range: fewer than 3 sweep
+   * samples, a gradient tolerance not positive, a step tolerance negative or not finite, an uncertainty step
+   * outside [1e-4, 1]. */
+  void
+  Validate() const;
 };
 
 /** What ElasticityEstimator::Run() found. Vectors over the unknowns are in the order they were given. */

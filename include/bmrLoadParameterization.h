@@ -141,6 +141,10 @@ struct BiomechanicalRegistration_EXPORT WallLoadSettings
   {
     return controlSpacing > 0.0 || motion == WallMotionEnum::UniformPressure;
   }
+  /** Throws itk::InvalidArgumentError (bmr::FailInput) for a negative or non-finite control spacing or
+   * regularization. */
+  void
+  Validate() const;
 };
 
 /** A loaded wall of WallLoads: its mesh nodes, and the boundary-face label whose faces give its normals. */

@@ -31,6 +31,21 @@
 #include <string>
 #include <vector>
 
+/** Set/Get of one field of FEMElasticityOptimizer's settings structs: the struct is the one place the value lives. */
+#define bmrFEMSettingMacro(name, type, field)                                                                          \
+  void Set##name(type value)                                                                                           \
+  {                                                                                                                    \
+    if (field != value)                                                                                                \
+    {                                                                                                                  \
+      field = value;                                                                                                   \
+      this->Modified();                                                                                                \
+    }                                                                                                                  \
+  }                                                                                                                    \
+  type Get##name() const                                                                                               \
+  {                                                                                                                    \
+    return field;                                                                                                      \
+  }
+
 namespace itk {
 
 /** \class FEMElasticityOptimizer
@@ -124,38 +139,48 @@ public:
     return m_Scene;
   }
 
-  itkSetMacro(NumberOfSweepSamples, unsigned int);
-  itkGetConstMacro(NumberOfSweepSamples, unsigned int);
-  itkSetMacro(MaximumNumberOfInnerIterations, unsigned int);
-  itkGetConstMacro(MaximumNumberOfInnerIterations, unsigned int);
-  itkSetMacro(MaximumNumberOfOuterIterations, unsigned int);
-  itkGetConstMacro(MaximumNumberOfOuterIterations, unsigned int);
-  itkSetMacro(InnerGradientTolerance, double);
-  itkGetConstMacro(InnerGradientTolerance, double);
+  /** The estimator's settings in one struct (bmr::EstimatorSettings; defaults there): what the setters below set
+   * one at a time. Its derived fields (gaussNewtonInner from the wall settings, startModuli and
+   * startRelativeCurvature from SetWarmStart()) are this object's to fill: what is set there is ignored. Checked
+   * by Update() (bmr::EstimatorSettings::Validate()). */
+  void
+  SetEstimatorSettings(const bmr::EstimatorSettings & settings);
+  const bmr::EstimatorSettings &
+  GetEstimatorSettings() const
+  {
+    return m_EstimatorSettings;
+  }
+  /** How the walls' unknown loads act, in one struct (bmr::WallLoadSettings): what the Wall* setters below set. */
+  void
+  SetWallLoadSettings(const bmr::WallLoadSettings & settings);
+  const bmr::WallLoadSettings &
+  GetWallLoadSettings() const
+  {
+    return m_WallLoadSettings;
+  }
+
+  bmrFEMSettingMacro(NumberOfSweepSamples, unsigned int, m_EstimatorSettings.numberOfSweepSamples);
+  bmrFEMSettingMacro(MaximumNumberOfInnerIterations, unsigned int, m_EstimatorSettings.maximumInnerIterations);
+  bmrFEMSettingMacro(MaximumNumberOfOuterIterations, unsigned int, m_EstimatorSettings.maximumOuterIterations);
+  bmrFEMSettingMacro(InnerGradientTolerance, double, m_EstimatorSettings.innerGradientTolerance);
   /** L-BFGS inner solves: the looser inner tolerance (relative, as InnerGradientTolerance) of the sweep's samples
    * and, with one unknown modulus, of the fine evaluations the secant search only passes through; the point it
    * stops on is solved on to InnerGradientTolerance (default 3e-4; not above InnerGradientTolerance: every solve
    * in full). */
-  itkSetMacro(LooseInnerGradientTolerance, double);
-  itkGetConstMacro(LooseInnerGradientTolerance, double);
-  itkSetMacro(OuterGradientTolerance, double);
-  itkGetConstMacro(OuterGradientTolerance, double);
+  bmrFEMSettingMacro(LooseInnerGradientTolerance, double, m_EstimatorSettings.looseInnerGradientTolerance);
+  bmrFEMSettingMacro(OuterGradientTolerance, double, m_EstimatorSettings.outerGradientTolerance);
   /** One unknown modulus: the secant search stops when its next step in log E would be shorter than this
    * (default 1e-3, 0.1 % of E). */
-  itkSetMacro(OuterStepTolerance, double);
-  itkGetConstMacro(OuterStepTolerance, double);
+  bmrFEMSettingMacro(OuterStepTolerance, double, m_EstimatorSettings.outerStepTolerance);
   /** Spacing [mm] of the control points of the smooth wall basis (bmr::WallBasis); 0: one per wall node; not used
    * with WallMotion UniformPressure. */
-  itkSetMacro(WallControlSpacing, double);
-  itkGetConstMacro(WallControlSpacing, double);
+  bmrFEMSettingMacro(WallControlSpacing, double, m_WallLoadSettings.controlSpacing);
   /** Weight of the E-independent prior alpha/2 |p|^2 on the wall parameters (bmr::WallLoads::SetRegularization()). */
-  itkSetMacro(WallRegularization, double);
-  itkGetConstMacro(WallRegularization, double);
+  bmrFEMSettingMacro(WallRegularization, double, m_WallLoadSettings.regularization);
   /** How the walls' unknown loads act (bmr::WallLoads::SetMotion()): displacements along the walls' normals
    * (default), free displacements, normal tractions (lumen pressures that may vary along a wall) under which the
    * walls move as the tissue lets them, or one uniform pressure per wall (UniformPressure). */
-  itkSetEnumMacro(WallMotion, bmr::WallMotionEnum);
-  itkGetEnumMacro(WallMotion, bmr::WallMotionEnum);
+  bmrFEMSettingMacro(WallMotion, bmr::WallMotionEnum, m_WallLoadSettings.motion);
   /** Shorthand: along the normals (on) or free (off). */
   void
   SetWallMotionAlongNormals(bool normal)
@@ -165,15 +190,13 @@ public:
   bool
   GetWallMotionAlongNormals() const
   {
-    return m_WallMotion == bmr::WallMotionEnum::AlongNormals;
+    return m_WallLoadSettings.motion == bmr::WallMotionEnum::AlongNormals;
   }
   itkBooleanMacro(WallMotionAlongNormals);
-  itkSetMacro(FlatnessThreshold, double);
-  itkGetConstMacro(FlatnessThreshold, double);
+  bmrFEMSettingMacro(FlatnessThreshold, double, m_EstimatorSettings.flatnessThreshold);
   /** Step limit against element inversion (default off; needs WallControlSpacing 0): the inner L-BFGS line
    * search rejects every trial point that inverts more elements than its start point. */
-  itkSetMacro(LimitElementInversion, bool);
-  itkGetConstMacro(LimitElementInversion, bool);
+  bmrFEMSettingMacro(LimitElementInversion, bool, m_EstimatorSettings.limitElementInversion);
   itkBooleanMacro(LimitElementInversion);
   /** Threads for the fine model's factorizations and triangular solves (default, and never more than,
    * MultiThreaderBase::GetGlobalDefaultNumberOfThreads(): all cores unless the program says otherwise). Set fewer
@@ -186,12 +209,10 @@ public:
   /** Elements turned inside out by the estimated displacement (deformed volume <= 0). */
   itkGetConstMacro(NumberOfInvertedElements, SizeValueType);
   /** Compute the standard uncertainty of log E at the estimate (two extra inner solves per unknown). */
-  itkSetMacro(EstimateUncertainty, bool);
-  itkGetConstMacro(EstimateUncertainty, bool);
+  bmrFEMSettingMacro(EstimateUncertainty, bool, m_EstimatorSettings.estimateUncertainty);
   itkBooleanMacro(EstimateUncertainty);
-  /** Step delta in log E of the central differences for the curvature of Phi* (default 0.05). */
-  itkSetClampMacro(UncertaintyStep, double, 1e-4, 1.0);
-  itkGetConstMacro(UncertaintyStep, double);
+  /** Step delta in log E of the central differences for the curvature of Phi* (default 0.05; 1e-4 to 1). */
+  bmrFEMSettingMacro(UncertaintyStep, double, m_EstimatorSettings.uncertaintyStep);
   /** Warm start from an earlier estimate of nearly the same data: moduli [kPa] by unknown label name (all of
    * them, within their bounds) and that estimate's GetResult().relativeCurvature. The sweep is then skipped (no
    * coarse mesh needed) and the outer search starts there. Empty (default): sweep. */
@@ -293,15 +314,9 @@ protected:
   GenerateData() override;
 
 private:
-  /** The estimator's settings from this object's. */
+  /** The estimator's settings with the derived fields filled (see SetEstimatorSettings()). */
   bmr::EstimatorSettings
-  Settings() const;
-  /** WallControlSpacing, WallRegularization and WallMotion. */
-  bmr::WallLoadSettings
-  WallSettings() const
-  {
-    return { m_WallControlSpacing, m_WallRegularization, m_WallMotion };
-  }
+  EffectiveSettings() const;
   /** NumberOfFineSolveThreads, at most ITK's global default number of threads. */
   unsigned int
   FineSolveThreads() const;
@@ -313,24 +328,11 @@ private:
   void
   TakeResult(const bmr::EstimationResult & result);
 
-  bmr::Scene               m_Scene;
-  std::vector<std::string> m_DistanceMapNames;
-  // Defaults: those of the library's estimator and wall loads (one place, read by the CLI too).
-  unsigned int                  m_NumberOfSweepSamples{ bmr::EstimatorSettings{}.numberOfSweepSamples };
-  unsigned int                  m_MaximumNumberOfInnerIterations{ bmr::EstimatorSettings{}.maximumInnerIterations };
-  unsigned int                  m_MaximumNumberOfOuterIterations{ bmr::EstimatorSettings{}.maximumOuterIterations };
-  double                        m_InnerGradientTolerance{ bmr::EstimatorSettings{}.innerGradientTolerance };
-  double                        m_LooseInnerGradientTolerance{ bmr::EstimatorSettings{}.looseInnerGradientTolerance };
-  double                        m_OuterGradientTolerance{ bmr::EstimatorSettings{}.outerGradientTolerance };
-  double                        m_OuterStepTolerance{ bmr::EstimatorSettings{}.outerStepTolerance };
-  double                        m_FlatnessThreshold{ bmr::EstimatorSettings{}.flatnessThreshold };
-  bool                          m_EstimateUncertainty{ bmr::EstimatorSettings{}.estimateUncertainty };
-  bool                          m_LimitElementInversion{ bmr::EstimatorSettings{}.limitElementInversion };
+  bmr::Scene                    m_Scene;
+  std::vector<std::string>      m_DistanceMapNames;
+  bmr::EstimatorSettings        m_EstimatorSettings;
+  bmr::WallLoadSettings         m_WallLoadSettings;
   unsigned int                  m_NumberOfFineSolveThreads{ MultiThreaderBase::GetGlobalDefaultNumberOfThreads() };
-  double                        m_UncertaintyStep{ bmr::EstimatorSettings{}.uncertaintyStep };
-  double                        m_WallControlSpacing{ bmr::WallLoadSettings{}.controlSpacing };
-  double                        m_WallRegularization{ bmr::WallLoadSettings{}.regularization };
-  bmr::WallMotionEnum           m_WallMotion{ bmr::WallLoadSettings{}.motion };
   std::map<std::string, double> m_WarmStartModuli;
   double                        m_WarmStartRelativeCurvature{ 0.0 };
   MeshSourceType                m_MeshSource;
@@ -355,5 +357,7 @@ private:
 };
 
 } // namespace itk
+
+#undef bmrFEMSettingMacro
 
 #endif

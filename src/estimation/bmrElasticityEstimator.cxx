@@ -34,6 +34,28 @@
 #include <sstream>
 
 namespace bmr {
+void
+EstimatorSettings::Validate() const
+{
+  const char * where = "EstimatorSettings";
+  if (numberOfSweepSamples < 3)
+  {
+    FailInput(where, "numberOfSweepSamples must be at least 3, got " + std::to_string(numberOfSweepSamples));
+  }
+  if (!(innerGradientTolerance > 0.0) || !(outerGradientTolerance > 0.0) || !(looseInnerGradientTolerance > 0.0))
+  {
+    FailInput(where, "the gradient tolerances (inner, loose inner, outer) must be positive");
+  }
+  if (!(outerStepTolerance >= 0.0 && std::isfinite(outerStepTolerance)))
+  {
+    FailInput(where, "outerStepTolerance must be finite and not negative, got " + std::to_string(outerStepTolerance));
+  }
+  if (!(uncertaintyStep >= 1e-4 && uncertaintyStep <= 1.0))
+  {
+    FailInput(where, "uncertaintyStep must lie in [1e-4, 1] (log E), got " + std::to_string(uncertaintyStep));
+  }
+}
+
 namespace {
 /** vnl's L-BFGS-B (under itk::LBFGSBOptimizerv4) keeps its iteration state in function-local static variables
  * (ITK issue #230): two outer searches running at once in one process corrupt each other. The outer search is
@@ -637,16 +659,7 @@ ElasticityEstimator::ElasticityEstimator(std::function<EstimationObjective &()> 
       Fail("ElasticityEstimator", "the warm start of \"" + m_Unknowns[k].name + "\" lies outside its bounds");
     }
   }
-  if (m_Settings.numberOfSweepSamples < 3)
-  {
-    Fail("ElasticityEstimator",
-         "NumberOfSweepSamples must be at least 3, got " + std::to_string(m_Settings.numberOfSweepSamples));
-  }
-  if (!(m_Settings.innerGradientTolerance > 0.0) || !(m_Settings.outerGradientTolerance > 0.0) ||
-      !(m_Settings.looseInnerGradientTolerance > 0.0))
-  {
-    Fail("ElasticityEstimator", "the gradient tolerances must be positive");
-  }
+  m_Settings.Validate();
 }
 
 EstimationObjective &

@@ -29,6 +29,21 @@
 #include <set>
 
 namespace bmr {
+void
+WallLoadSettings::Validate() const
+{
+  if (!(controlSpacing >= 0.0 && std::isfinite(controlSpacing)))
+  {
+    FailInput("WallLoadSettings",
+              "controlSpacing must be finite and not negative [mm], got " + std::to_string(controlSpacing));
+  }
+  if (!(regularization >= 0.0 && std::isfinite(regularization)))
+  {
+    FailInput("WallLoadSettings",
+              "regularization must be finite and not negative, got " + std::to_string(regularization));
+  }
+}
+
 namespace {
 /** Width [mm] of the Gaussian that averages wall face normals: several voxels (the staircase of a
  * voxelized wall), below the walls' radii of curvature (13 mm for the rectum). */

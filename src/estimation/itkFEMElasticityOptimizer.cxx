@@ -252,24 +252,28 @@ FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
       itkExceptionMacro(<< "no distance map for objective label \"" << term.label << "\" (SetDistanceMap)");
     }
   }
-  if (m_NumberOfSweepSamples < 3)
-  {
-    itkExceptionMacro(<< "NumberOfSweepSamples must be at least 3, got " << m_NumberOfSweepSamples);
-  }
-  if (!(m_InnerGradientTolerance > 0.0) || !(m_OuterGradientTolerance > 0.0) || !(m_LooseInnerGradientTolerance > 0.0))
-  {
-    itkExceptionMacro(<< "the gradient tolerances must be positive");
-  }
-  if (!(m_OuterStepTolerance >= 0.0 && std::isfinite(m_OuterStepTolerance)))
-  {
-    itkExceptionMacro(<< "OuterStepTolerance must be finite and not negative, got " << m_OuterStepTolerance);
-  }
-  if (m_LimitElementInversion && this->WallSettings().ReducedBasis())
+  m_EstimatorSettings.Validate();
+  m_WallLoadSettings.Validate();
+  if (m_EstimatorSettings.limitElementInversion && m_WallLoadSettings.ReducedBasis())
   {
     itkExceptionMacro(<< "LimitElementInversion needs one parameter per wall node (WallControlSpacing 0, got "
-                      << m_WallControlSpacing << " mm; WallMotion " << m_WallMotion
+                      << m_WallLoadSettings.controlSpacing << " mm; WallMotion " << m_WallLoadSettings.motion
                       << "): the reduced-basis solver sees only the objective nodes");
   }
+}
+
+void
+FEMElasticityOptimizer::SetEstimatorSettings(const bmr::EstimatorSettings & settings)
+{
+  m_EstimatorSettings = settings;
+  this->Modified();
+}
+
+void
+FEMElasticityOptimizer::SetWallLoadSettings(const bmr::WallLoadSettings & settings)
+{
+  m_WallLoadSettings = settings;
+  this->Modified();
 }
 
 unsigned int
@@ -279,22 +283,13 @@ FEMElasticityOptimizer::FineSolveThreads() const
 }
 
 bmr::EstimatorSettings
-FEMElasticityOptimizer::Settings() const
+FEMElasticityOptimizer::EffectiveSettings() const
 {
-  bmr::EstimatorSettings s;
-  s.numberOfSweepSamples = m_NumberOfSweepSamples;
-  s.maximumInnerIterations = m_MaximumNumberOfInnerIterations;
-  s.maximumOuterIterations = m_MaximumNumberOfOuterIterations;
-  s.innerGradientTolerance = m_InnerGradientTolerance;
-  s.looseInnerGradientTolerance = m_LooseInnerGradientTolerance;
-  s.outerGradientTolerance = m_OuterGradientTolerance;
-  s.outerStepTolerance = m_OuterStepTolerance;
-  s.flatnessThreshold = m_FlatnessThreshold;
-  s.estimateUncertainty = m_EstimateUncertainty;
-  s.uncertaintyStep = m_UncertaintyStep;
-  s.limitElementInversion = m_LimitElementInversion;
+  bmr::EstimatorSettings s = m_EstimatorSettings;
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
-  s.gaussNewtonInner = this->WallSettings().ReducedBasis();
+  s.gaussNewtonInner = m_WallLoadSettings.ReducedBasis();
+  s.startModuli.clear();
+  s.startRelativeCurvature = 0.0;
   if (!m_WarmStartModuli.empty())
   {
     for (const bmr::UnknownModulus & u : bmr::SceneUnknownModuli(m_Scene))
@@ -318,9 +313,9 @@ FEMElasticityOptimizer::MakeObjective(
 {
   std::unique_ptr<bmr::SurfaceMatchingObjective> objective(
     new bmr::SurfaceMatchingObjective(mesh, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, mesh, samplers)));
-  objective->SetWallControlSpacing(m_WallControlSpacing);
-  objective->SetWallRegularization(m_WallRegularization);
-  objective->SetWallMotion(m_WallMotion);
+  objective->SetWallControlSpacing(m_WallLoadSettings.controlSpacing);
+  objective->SetWallRegularization(m_WallLoadSettings.regularization);
+  objective->SetWallMotion(m_WallLoadSettings.motion);
   return objective;
 }
 
@@ -412,7 +407,7 @@ FEMElasticityOptimizer::GenerateData()
     },
     coarseObjective.get(),
     unknowns,
-    this->Settings());
+    this->EffectiveSettings());
   if (alongside)
   {
     estimator.SetSweepPrediction(
@@ -440,26 +435,27 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
 {
   Superclass::PrintSelf(os, indent);
   os << indent << "Scene: " << m_Scene.name << " (" << m_Scene.labels.size() << " labels)" << std::endl;
-  os << indent << "NumberOfSweepSamples: " << m_NumberOfSweepSamples << std::endl;
-  os << indent << "MaximumNumberOfInnerIterations: " << m_MaximumNumberOfInnerIterations << std::endl;
-  os << indent << "MaximumNumberOfOuterIterations: " << m_MaximumNumberOfOuterIterations << std::endl;
-  os << indent << "InnerGradientTolerance: " << m_InnerGradientTolerance << std::endl;
-  os << indent << "LooseInnerGradientTolerance: " << m_LooseInnerGradientTolerance << std::endl;
-  os << indent << "OuterGradientTolerance: " << m_OuterGradientTolerance << std::endl;
-  os << indent << "OuterStepTolerance: " << m_OuterStepTolerance << std::endl;
-  os << indent << "FlatnessThreshold: " << m_FlatnessThreshold << std::endl;
-  os << indent << "EstimateUncertainty: " << (m_EstimateUncertainty ? "On" : "Off") << std::endl;
-  os << indent << "UncertaintyStep: " << m_UncertaintyStep << std::endl;
+  const bmr::EstimatorSettings & e = m_EstimatorSettings;
+  os << indent << "NumberOfSweepSamples: " << e.numberOfSweepSamples << std::endl;
+  os << indent << "MaximumNumberOfInnerIterations: " << e.maximumInnerIterations << std::endl;
+  os << indent << "MaximumNumberOfOuterIterations: " << e.maximumOuterIterations << std::endl;
+  os << indent << "InnerGradientTolerance: " << e.innerGradientTolerance << std::endl;
+  os << indent << "LooseInnerGradientTolerance: " << e.looseInnerGradientTolerance << std::endl;
+  os << indent << "OuterGradientTolerance: " << e.outerGradientTolerance << std::endl;
+  os << indent << "OuterStepTolerance: " << e.outerStepTolerance << std::endl;
+  os << indent << "FlatnessThreshold: " << e.flatnessThreshold << std::endl;
+  os << indent << "EstimateUncertainty: " << (e.estimateUncertainty ? "On" : "Off") << std::endl;
+  os << indent << "UncertaintyStep: " << e.uncertaintyStep << std::endl;
   os << indent << "WarmStart: " << m_WarmStartModuli.size() << " moduli, relative curvature "
      << m_WarmStartRelativeCurvature << std::endl;
   os << indent << "MeshSource: " << (m_MeshSource ? "set" : "none (input Mesh)") << std::endl;
-  os << indent << "LimitElementInversion: " << (m_LimitElementInversion ? "On" : "Off") << std::endl;
+  os << indent << "LimitElementInversion: " << (e.limitElementInversion ? "On" : "Off") << std::endl;
   os << indent << "NumberOfFineSolveThreads: " << m_NumberOfFineSolveThreads << std::endl;
   os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
   os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
-  os << indent << "WallControlSpacing: " << m_WallControlSpacing << " mm" << std::endl;
-  os << indent << "WallRegularization: " << m_WallRegularization << std::endl;
-  os << indent << "WallMotion: " << m_WallMotion << std::endl;
+  os << indent << "WallControlSpacing: " << m_WallLoadSettings.controlSpacing << " mm" << std::endl;
+  os << indent << "WallRegularization: " << m_WallLoadSettings.regularization << std::endl;
+  os << indent << "WallMotion: " << m_WallLoadSettings.motion << std::endl;
   os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
   for (const auto & kv : m_EstimatedYoungsModuli)
   {

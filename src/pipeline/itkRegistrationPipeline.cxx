@@ -586,23 +586,11 @@ RunEstimation(const EstimationSetup &                                 setup,
   {
     optimizer->SetDistanceMap(kv.first, kv.second);
   }
-  const bmr::EstimatorSettings & e = setup.settings->estimator;
-  optimizer->SetNumberOfSweepSamples(e.numberOfSweepSamples);
-  optimizer->SetMaximumNumberOfInnerIterations(e.maximumInnerIterations);
-  optimizer->SetMaximumNumberOfOuterIterations(e.maximumOuterIterations);
-  optimizer->SetInnerGradientTolerance(e.innerGradientTolerance);
-  optimizer->SetLooseInnerGradientTolerance(e.looseInnerGradientTolerance);
-  optimizer->SetOuterGradientTolerance(e.outerGradientTolerance);
-  optimizer->SetOuterStepTolerance(e.outerStepTolerance);
-  optimizer->SetFlatnessThreshold(e.flatnessThreshold);
-  optimizer->SetEstimateUncertainty(curvature && e.estimateUncertainty);
-  optimizer->SetUncertaintyStep(e.uncertaintyStep);
-  optimizer->SetLimitElementInversion(e.limitElementInversion);
+  bmr::EstimatorSettings estimator = setup.settings->estimator;
+  estimator.estimateUncertainty = curvature && estimator.estimateUncertainty;
+  optimizer->SetEstimatorSettings(estimator);
+  optimizer->SetWallLoadSettings(setup.settings->walls);
   optimizer->SetNumberOfFineSolveThreads(setup.fineSolveThreads);
-  const bmr::WallLoadSettings & walls = setup.settings->walls;
-  optimizer->SetWallControlSpacing(walls.controlSpacing);
-  optimizer->SetWallRegularization(walls.regularization);
-  optimizer->SetWallMotion(walls.motion);
   if (!setup.warmStartModuli.empty())
   {
     optimizer->SetWarmStart(setup.warmStartModuli, setup.warmStartRelativeCurvature);

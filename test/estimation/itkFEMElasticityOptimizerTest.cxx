@@ -21,7 +21,8 @@
 // forces-only estimate must bring the cavity wall to the fixed surface (RMS of
 // the surface distance below 0.1 mm, from 1.5 mm); the joint estimate, whose
 // minimum lies on the lower bound here, must say so; bad set-ups give
-// exceptions naming the input.
+// exceptions naming the input, among them settings out of range (the settings structs validate themselves;
+// the setters write those structs, the one place each setting lives).
 #include "itkFEMElasticityOptimizer.h"
 #include "itkSceneDistanceMaps.h"
 
@@ -278,6 +279,41 @@ CheckMeshSource(itk::FEMElasticityOptimizer & optimizer, const itk::TetrahedralM
   return ok;
 }
 
+/** The settings live in one place: a setter shows in the struct and the struct in the getters; a struct out of range
+ * is refused by Update(), naming the setting; the object's own settings are restored after. */
+bool
+CheckSettingsStructs(itk::FEMElasticityOptimizer & optimizer)
+{
+  const bmr::EstimatorSettings saved = optimizer.GetEstimatorSettings();
+  const bmr::WallLoadSettings  savedWalls = optimizer.GetWallLoadSettings();
+  optimizer.SetOuterStepTolerance(0.0125);
+  bool                   ok = Expect(optimizer.GetEstimatorSettings().outerStepTolerance == 0.0125,
+                   "a setter writes the estimator's settings struct");
+  bmr::EstimatorSettings e = saved;
+  e.numberOfSweepSamples = 7;
+  e.uncertaintyStep = 0.03;
+  optimizer.SetEstimatorSettings(e);
+  ok &= Expect(optimizer.GetNumberOfSweepSamples() == 7 && optimizer.GetUncertaintyStep() == 0.03,
+               "the getters read the struct set by SetEstimatorSettings");
+  e.numberOfSweepSamples = 2;
+  optimizer.SetEstimatorSettings(e);
+  ok &= bmr::test::ExpectException(
+    "2 sweep samples", [&] { optimizer.Update(); }, "numberOfSweepSamples");
+  e.numberOfSweepSamples = 7;
+  e.uncertaintyStep = 2.0;
+  optimizer.SetEstimatorSettings(e);
+  ok &= bmr::test::ExpectException(
+    "an uncertainty step of 2", [&] { optimizer.Update(); }, "uncertaintyStep");
+  optimizer.SetEstimatorSettings(saved);
+  bmr::WallLoadSettings walls = savedWalls;
+  walls.controlSpacing = -1.0;
+  optimizer.SetWallLoadSettings(walls);
+  ok &= Expect(optimizer.GetWallControlSpacing() == -1.0, "the wall getters read the wall settings struct");
+  ok &= bmr::test::ExpectException(
+    "a negative control spacing", [&] { optimizer.Update(); }, "controlSpacing");
+  optimizer.SetWallLoadSettings(savedWalls);
+  return ok;
+}
 } // namespace
 
 int
@@ -383,6 +419,7 @@ itkFEMElasticityOptimizerTest(int, char *[])
     "step limit with a reduced basis", [&] { optimizer->Update(); }, "LimitElementInversion");
   optimizer->LimitElementInversionOff();
   optimizer->SetDistanceMap("cavity", SphereMap(-6.0, 7.5));
+  ok &= CheckSettingsStructs(*optimizer);
 
   // Joint estimation. The fixed inclusion map is the undeformed inclusion while the cavity grows by
   // 1.5 mm: the inclusion can only stay put by deforming as little as it can, which the softest modulus
