@@ -205,9 +205,17 @@ public:
   itkSetClampMacro(NumberOfFineSolveThreads, unsigned int, 1, NumericTraits<unsigned int>::max());
   itkGetConstMacro(NumberOfFineSolveThreads, unsigned int);
   /** Trial points rejected by LimitElementInversion over the last Update(). */
-  itkGetConstMacro(NumberOfRejectedSteps, SizeValueType);
+  SizeValueType
+  GetNumberOfRejectedSteps() const
+  {
+    return m_Result.rejectedSteps;
+  }
   /** Elements turned inside out by the estimated displacement (deformed volume <= 0). */
-  itkGetConstMacro(NumberOfInvertedElements, SizeValueType);
+  SizeValueType
+  GetNumberOfInvertedElements() const
+  {
+    return m_Result.invertedElements;
+  }
   /** Compute the standard uncertainty of log E at the estimate (two extra inner solves per unknown). */
   bmrFEMSettingMacro(EstimateUncertainty, bool, m_EstimatorSettings.estimateUncertainty);
   itkBooleanMacro(EstimateUncertainty);
@@ -242,30 +250,35 @@ public:
   const std::vector<IterationRecord> &
   GetSweep() const
   {
-    return m_Sweep;
+    return m_Result.sweep;
   }
   const std::vector<IterationRecord> &
   GetHistory() const
   {
-    return m_History;
+    return m_Result.history;
   }
   /** The accepted iterates of the outer search (Phi* at each, E); empty without unknown moduli. */
   const std::vector<IterationRecord> &
   GetOuterIterations() const
   {
-    return m_OuterIterations;
+    return m_Result.outerIterations;
   }
   const std::string &
   GetOuterStopCondition() const
   {
-    return m_OuterStopCondition;
+    return m_Result.outerStopCondition;
   }
   const std::vector<SurfaceDistance> &
   GetSurfaceDistances() const
   {
-    return m_SurfaceDistances;
+    return m_Result.residuals;
   }
-  itkGetConstMacro(FinalValue, double);
+  /** Phi* at the estimate [mm^2]. */
+  double
+  GetFinalValue() const
+  {
+    return m_Result.value;
+  }
   /** Standard deviation of log E [dimensionless] by unknown label name: E is known to a factor exp(+-sigma).
    * Empty when not computed (EstimateUncertainty off, no unknown, estimate on a bound). */
   const std::map<std::string, double> &
@@ -274,20 +287,32 @@ public:
     return m_ModulusUncertainty;
   }
   /** Residual standard deviation s of the objective nodes at the estimate [mm]. */
-  itkGetConstMacro(ResidualStandardDeviation, double);
+  double
+  GetResidualStandardDeviation() const
+  {
+    return m_Result.residualStandardDeviation;
+  }
   /** Curvature d2 Phi* / d(log E)^2 [mm^2] at the estimate (first unknown; 0 when not computed). */
-  itkGetConstMacro(ModulusCurvature, double);
-  itkGetConstMacro(Identifiable, bool);
+  double
+  GetModulusCurvature() const
+  {
+    return m_Result.curvature.empty() ? 0.0 : m_Result.curvature[0];
+  }
+  bool
+  GetIdentifiable() const
+  {
+    return m_Result.identifiable;
+  }
   const std::string &
   GetIdentifiabilityMessage() const
   {
-    return m_IdentifiabilityMessage;
+    return m_Result.identifiabilityMessage;
   }
   /** Wall time [s] of the stages: "sweep", "initial loads", "fine", "uncertainty". */
   const std::map<std::string, double> &
   GetTimings() const
   {
-    return m_Timings;
+    return m_Result.timings;
   }
   /** Everything the last Update() found (bmr::ElasticityEstimator's result; vectors in scene order of the
    * unknown labels). */
@@ -324,7 +349,7 @@ private:
   std::unique_ptr<bmr::SurfaceMatchingObjective>
   MakeObjective(const bmr::TetrahedralMesh &                                                      mesh,
                 const std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> & samplers) const;
-  /** Copies the estimator's result into the outputs. */
+  /** Keeps the estimator's result (GetResult(), which the getters read) and its moduli by label name. */
   void
   TakeResult(const bmr::EstimationResult & result);
 
@@ -336,22 +361,9 @@ private:
   std::map<std::string, double> m_WarmStartModuli;
   double                        m_WarmStartRelativeCurvature{ 0.0 };
   MeshSourceType                m_MeshSource;
-  SizeValueType                 m_NumberOfRejectedSteps{ 0 };
-  SizeValueType                 m_NumberOfInvertedElements{ 0 };
   std::map<std::string, double> m_ModulusUncertainty;
-  double                        m_ResidualStandardDeviation{ 0.0 };
-  double                        m_ModulusCurvature{ 0.0 };
   std::map<std::string, double> m_EstimatedYoungsModuli;
   std::string                   m_GaugeLabel;
-  std::vector<IterationRecord>  m_Sweep;
-  std::vector<IterationRecord>  m_History;
-  std::vector<SurfaceDistance>  m_SurfaceDistances;
-  std::vector<IterationRecord>  m_OuterIterations;
-  std::string                   m_OuterStopCondition;
-  double                        m_FinalValue{ 0.0 };
-  bool                          m_Identifiable{ true };
-  std::string                   m_IdentifiabilityMessage;
-  std::map<std::string, double> m_Timings;
   IterationRecord               m_CurrentRecord;
   bmr::EstimationResult         m_Result;
 };

@@ -333,19 +333,6 @@ FEMElasticityOptimizer::TakeResult(const bmr::EstimationResult & result)
       m_ModulusUncertainty[unknowns[k].name] = result.logModulusSigma[k];
     }
   }
-  m_Sweep = result.sweep;
-  m_History = result.history;
-  m_OuterIterations = result.outerIterations;
-  m_OuterStopCondition = result.outerStopCondition;
-  m_SurfaceDistances = result.residuals;
-  m_FinalValue = result.value;
-  m_Identifiable = result.identifiable;
-  m_IdentifiabilityMessage = result.identifiabilityMessage;
-  m_ResidualStandardDeviation = result.residualStandardDeviation;
-  m_ModulusCurvature = result.curvature.empty() ? 0.0 : result.curvature[0];
-  m_NumberOfRejectedSteps = result.rejectedSteps;
-  m_NumberOfInvertedElements = result.invertedElements;
-  m_Timings = result.timings;
   m_Result = result;
 }
 
@@ -451,8 +438,8 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "MeshSource: " << (m_MeshSource ? "set" : "none (input Mesh)") << std::endl;
   os << indent << "LimitElementInversion: " << (e.limitElementInversion ? "On" : "Off") << std::endl;
   os << indent << "NumberOfFineSolveThreads: " << m_NumberOfFineSolveThreads << std::endl;
-  os << indent << "NumberOfRejectedSteps: " << m_NumberOfRejectedSteps << std::endl;
-  os << indent << "NumberOfInvertedElements: " << m_NumberOfInvertedElements << std::endl;
+  os << indent << "NumberOfRejectedSteps: " << m_Result.rejectedSteps << std::endl;
+  os << indent << "NumberOfInvertedElements: " << m_Result.invertedElements << std::endl;
   os << indent << "WallControlSpacing: " << m_WallLoadSettings.controlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallLoadSettings.regularization << std::endl;
   os << indent << "WallMotion: " << m_WallLoadSettings.motion << std::endl;
@@ -461,16 +448,16 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   {
     os << indent << "EstimatedYoungsModulus[" << kv.first << "]: " << kv.second << " kPa" << std::endl;
   }
-  os << indent << "FinalValue: " << m_FinalValue << " mm^2" << std::endl;
+  os << indent << "FinalValue: " << m_Result.value << " mm^2" << std::endl;
   for (const auto & kv : m_ModulusUncertainty)
   {
     os << indent << "ModulusUncertainty[" << kv.first << "]: " << kv.second << " (standard deviation of log E)"
        << std::endl;
   }
-  os << indent << "ResidualStandardDeviation: " << m_ResidualStandardDeviation << " mm" << std::endl;
-  os << indent << "ModulusCurvature: " << m_ModulusCurvature << " mm^2" << std::endl;
-  os << indent << "Identifiable: " << m_Identifiable << " (" << m_IdentifiabilityMessage << ")" << std::endl;
-  os << indent << "Sweep samples: " << m_Sweep.size() << ", fine iterations: " << m_History.size() << std::endl;
+  os << indent << "ResidualStandardDeviation: " << m_Result.residualStandardDeviation << " mm" << std::endl;
+  os << indent << "ModulusCurvature: " << this->GetModulusCurvature() << " mm^2" << std::endl;
+  os << indent << "Identifiable: " << m_Result.identifiable << " (" << m_Result.identifiabilityMessage << ")" << std::endl;
+  os << indent << "Sweep samples: " << m_Result.sweep.size() << ", fine iterations: " << m_Result.history.size() << std::endl;
 }
 
 } // namespace itk
