@@ -456,8 +456,10 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   }
   os << indent << "ResidualStandardDeviation: " << m_Result.residualStandardDeviation << " mm" << std::endl;
   os << indent << "ModulusCurvature: " << this->GetModulusCurvature() << " mm^2" << std::endl;
-  os << indent << "Identifiable: " << m_Result.identifiable << " (" << m_Result.identifiabilityMessage << ")" << std::endl;
-  os << indent << "Sweep samples: " << m_Result.sweep.size() << ", fine iterations: " << m_Result.history.size() << std::endl;
+  os << indent << "Identifiable: " << m_Result.identifiable << " (" << m_Result.identifiabilityMessage << ")"
+     << std::endl;
+  os << indent << "Sweep samples: " << m_Result.sweep.size() << ", fine iterations: " << m_Result.history.size()
+     << std::endl;
 }
 
 } // namespace itk
