@@ -8,9 +8,27 @@ import json
 import pathlib
 import statistics
 import subprocess
+import tempfile
 import time
 
 MODES = ("none", "rescan")  # --uncertainty: the point estimate, and with the stated interval
+
+
+def prepare(cli, out):
+    """Creates \a out and a scratch folder holding the demo pair; returns the pair's folder."""
+    out.mkdir(parents=True, exist_ok=True)
+    pair = pathlib.Path(tempfile.mkdtemp()) / "pair"
+    demo_pair(cli, pair)
+    return pair
+
+
+def rounds(runs, ways):
+    """(run, mode, way) of \a runs alternating rounds: both modes each round, the ways in order in odd rounds and
+    reversed in even ones (so that no way always runs right after another)."""
+    for run in range(1, runs + 1):
+        for mode in MODES:
+            for way in ways if run % 2 else list(reversed(ways)):
+                yield run, mode, way
 
 
 def demo_pair(cli, pair):

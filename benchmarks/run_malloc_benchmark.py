@@ -16,9 +16,8 @@ Writes benchmarks/results/malloc/{malloc_runs.csv, malloc.csv, malloc.png} and p
 import os
 import pathlib
 import sys
-import tempfile
 
-from alternating_runs import demo_pair, modulus, register_command, summarize, timed, write_csv
+from alternating_runs import modulus, prepare, register_command, rounds, summarize, timed, write_csv
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CLI = pathlib.Path(os.environ.get("BUILD_DIR", ROOT / "build")) / "bin" / "biomechreg"
@@ -27,32 +26,27 @@ OUT = ROOT / "benchmarks" / "results" / "malloc"
 
 
 def ways():
-    """(name, program, environment changes) of each way."""
-    listed = [("jemalloc_hugepages", CLI, {}), ("jemalloc_plain", CLI, {"MALLOC_CONF": "thp:never"})]
+    """{name: (program, environment changes)} of each way."""
+    listed = {"jemalloc_hugepages": (CLI, {}), "jemalloc_plain": (CLI, {"MALLOC_CONF": "thp:never"})}
     if BASELINE:
-        listed += [("glibc_hugepages_restart", BASELINE, {}),
-                   ("glibc_plain", BASELINE, {"GLIBC_TUNABLES": "glibc.malloc.hugetlb=0"})]
+        listed["glibc_hugepages_restart"] = (BASELINE, {})
+        listed["glibc_plain"] = (BASELINE, {"GLIBC_TUNABLES": "glibc.malloc.hugetlb=0"})
     return listed
 
 
 def main(runs):
-    OUT.mkdir(parents=True, exist_ok=True)
-    work = pathlib.Path(tempfile.mkdtemp())
-    pair = work / "pair"
-    demo_pair(CLI, pair)
+    pair = prepare(CLI, OUT)
     rows = []
-    for run in range(1, runs + 1):
-        for uncertainty in ("none", "rescan"):
-            for name, program, changes in ways() if run % 2 else reversed(ways()):
-                out = work / f"{name}_{uncertainty}_{run}"
-                env = {k: v for k, v in os.environ.items() if k not in ("GLIBC_TUNABLES", "MALLOC_CONF")}
-                env.update(changes)
-                seconds = timed(register_command(program, pair, uncertainty, out), env)
-                rows.append({"run": run, "mode": uncertainty, "way": name, "wall_s": round(seconds, 3),
-                             "modulus_kPa": repr(modulus(out))})
+    for run, uncertainty, name in rounds(runs, list(ways())):
+        program, changes = ways()[name]
+        out = pair.parent / f"{name}_{uncertainty}_{run}"
+        env = {k: v for k, v in os.environ.items() if k not in ("GLIBC_TUNABLES", "MALLOC_CONF")}
+        env.update(changes)
+        seconds = timed(register_command(program, pair, uncertainty, out), env)
+        rows.append({"run": run, "mode": uncertainty, "way": name, "wall_s": round(seconds, 3),
+                     "modulus_kPa": repr(modulus(out))})
     write_csv(OUT / "malloc_runs.csv", rows)
-    names = [name for name, _, _ in ways()]
-    summarize(rows, names, "glibc_hugepages_restart" if BASELINE else "jemalloc_plain", OUT, "malloc",
+    summarize(rows, list(ways()), "glibc_hugepages_restart" if BASELINE else "jemalloc_plain", OUT, "malloc",
               "register on the demo pair: the program's malloc")
 
 

@@ -14,9 +14,8 @@ prints the table (medians, ranges, Python / CLI)."""
 import os
 import pathlib
 import sys
-import tempfile
 
-from alternating_runs import demo_pair, modulus, register_command, summarize, timed, write_csv
+from alternating_runs import modulus, prepare, register_command, rounds, summarize, timed, write_csv
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CLI = pathlib.Path(os.environ.get("BUILD_DIR", ROOT / "build")) / "bin" / "biomechreg"
@@ -35,24 +34,19 @@ WAYS = ("cli", "python", "python_hugepages")
 
 
 def main(runs):
-    OUT.mkdir(parents=True, exist_ok=True)
-    work = pathlib.Path(tempfile.mkdtemp())
-    pair = work / "pair"
-    demo_pair(CLI, pair)
+    pair = prepare(CLI, OUT)
     rows = []
-    for run in range(1, runs + 1):
-        for uncertainty in ("none", "rescan"):
-            for way in WAYS if run % 2 else reversed(WAYS):
-                out = work / f"{way}_{uncertainty}_{run}"
-                if way == "cli":
-                    seconds = timed(register_command(CLI, pair, uncertainty, out))
-                else:
-                    env = dict(os.environ)
-                    if way == "python_hugepages":
-                        env["GLIBC_TUNABLES"] = "glibc.malloc.hugetlb=1"
-                    seconds = timed(["/usr/bin/python3", "-c", PYTHON_RUN, str(pair), str(out), uncertainty], env)
-                rows.append({"run": run, "mode": uncertainty, "way": way, "wall_s": round(seconds, 3),
-                             "modulus_kPa": repr(modulus(out))})
+    for run, uncertainty, way in rounds(runs, WAYS):
+        out = pair.parent / f"{way}_{uncertainty}_{run}"
+        if way == "cli":
+            seconds = timed(register_command(CLI, pair, uncertainty, out))
+        else:
+            env = dict(os.environ)
+            if way == "python_hugepages":
+                env["GLIBC_TUNABLES"] = "glibc.malloc.hugetlb=1"
+            seconds = timed(["/usr/bin/python3", "-c", PYTHON_RUN, str(pair), str(out), uncertainty], env)
+        rows.append({"run": run, "mode": uncertainty, "way": way, "wall_s": round(seconds, 3),
+                     "modulus_kPa": repr(modulus(out))})
     write_csv(OUT / "python_binding_runs.csv", rows)
     summarize(rows, WAYS, "cli", OUT, "python_binding", "register on the demo pair: CLI and Python")
 

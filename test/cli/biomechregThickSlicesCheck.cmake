@@ -14,15 +14,20 @@
 #   reason names the bladder's volume change, and the run's warning says the same.
 # Run with: cmake -DCLI=<biomechreg> -DOUT=<scratch dir> -P biomechregThickSlicesCheck.cmake
 file(REMOVE_RECURSE ${OUT})
-set(P ${OUT}/phantom)
-execute_process(COMMAND ${CLI} phantom --scene pelvis --size 200,160,54 --spacing 1,1,3 --bladder-mm 8 --rectum-mm 4
-  --true-E-kPa 80 --fixed-grid-shift-voxels 0.5 --truth-mesh-scale 1.5 --out ${P}
-  RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "phantom failed: ${err}")
-endif()
-set(inputs --moving-ct ${P}/moving_ct.nrrd --moving-labels ${P}/moving_labels.nrrd --fixed-ct ${P}/fixed_ct.nrrd
-  --fixed-labels ${P}/fixed_labels.nrrd --scene ${P}/scene.json --outputs report)
+# A 1 x 1 x 3 mm pelvis pair of 80 kPa with the bladder's wall moved by BLADDER mm into OUT/NAME; sets inputs, the
+# arguments that register it.
+function(make_phantom name bladder)
+  set(P ${OUT}/${name})
+  execute_process(COMMAND ${CLI} phantom --scene pelvis --size 200,160,54 --spacing 1,1,3 --bladder-mm ${bladder}
+    --rectum-mm 4 --true-E-kPa 80 --fixed-grid-shift-voxels 0.5 --truth-mesh-scale 1.5 --out ${P}
+    RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "phantom (${bladder} mm filling) failed: ${err}")
+  endif()
+  set(inputs --moving-ct ${P}/moving_ct.nrrd --moving-labels ${P}/moving_labels.nrrd --fixed-ct ${P}/fixed_ct.nrrd
+    --fixed-labels ${P}/fixed_labels.nrrd --scene ${P}/scene.json --outputs report PARENT_SCOPE)
+endfunction()
+make_phantom(phantom 8)
 
 # Runs register with the inputs and ARGN into OUT/<name>; sets report (report.json) and output (what it printed).
 function(register_into name)
@@ -83,15 +88,7 @@ if(NOT "${output}" MATCHES "warning: label voxels of up to 3 mm: the modulus's i
 endif()
 # A bladder that barely filled (1 mm of wall motion, about 11 mL) lies outside the 3 mm calibration's volume changes:
 # no modulus, the reason names the bladder's volume change, and the run's warning says the same.
-set(P ${OUT}/phantom_empty)
-execute_process(COMMAND ${CLI} phantom --scene pelvis --size 200,160,54 --spacing 1,1,3 --bladder-mm 1 --rectum-mm 4
-  --true-E-kPa 80 --fixed-grid-shift-voxels 0.5 --truth-mesh-scale 1.5 --out ${P}
-  RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "phantom (1 mm filling) failed: ${err}")
-endif()
-set(inputs --moving-ct ${P}/moving_ct.nrrd --moving-labels ${P}/moving_labels.nrrd --fixed-ct ${P}/fixed_ct.nrrd
-  --fixed-labels ${P}/fixed_labels.nrrd --scene ${P}/scene.json --outputs report)
+make_phantom(phantom_empty 1)
 register_into(empty)
 string(JSON statement GET "${report}" youngs_modulus_interval prostate statement)
 string(JSON reason GET "${report}" youngs_modulus_interval prostate not_determined_reason)
