@@ -386,7 +386,7 @@ struct CalibrationAtFilling
 {
   double shift;      ///< a + gamma (dV - V_0)
   double slope;      ///< beta
-  double logSigma;   ///< log s + d (dV - V_0)
+  double sigmaLog0;  ///< log(sigma) at x = 0: log s + d (dV - V_0)
   double sigmaSlope; ///< c
 
   double
@@ -397,7 +397,7 @@ struct CalibrationAtFilling
   double
   Sigma(double x) const
   {
-    return std::exp(logSigma + sigmaSlope * x);
+    return std::exp(sigmaLog0 + sigmaSlope * x);
   }
 };
 
