@@ -150,13 +150,18 @@ def scale_line(rows, filling, reference):
     return a, beta, gamma, math.exp(log_s), c, d, len(rows)
 
 
+def filling_reference(rows, filling):
+    """V0 [mL]: the rows' mean volume change, rounded (it only centres z: the fitted model does not depend on it)."""
+    return round(statistics.mean(filling(r) for r in rows))
+
+
 def fit_filling_constants(rows):
     """Per thickness, the line with the bladder's volume change dV as a second regressor and a residual SD that
     varies with the modulus and dV (scale_line(); the residuals' spread grows with E and shrinks with the filling:
     docs/history/benchmarks.md); V0 the pairs' mean change, rounded; the calibrated range the pairs' own (outward
     to 1 mL). Prints the constants for include/itkModulusInterval.h and a markdown table."""
     filling = filling_relation(rows)
-    reference = round(statistics.mean(filling(r) for r in rows))
+    reference = filling_reference(rows, filling)
     print("| slices [mm] | pairs | on the upper bound | a | beta | gamma [1/mL] | s at E0, V0 | c (per log E) | "
           "d [1/mL] | filling range [mL] |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
@@ -261,17 +266,18 @@ def tails(fit_rows, check_rows, out):
                     statement_covers(r, lines[t], nu, covariate, level) for r in rows)
             table.append(row)
     filling = filling_relation(fit_rows + check_rows)
+    reference = filling_reference(fit_rows, filling)
     for t, rows in by_slice(check_rows).items():
         group = by_slice(fit_rows).get(t)
         if not group:
             continue
-        params = scale_line(group, filling, 76.0)
+        params = scale_line(group, filling, reference)
         row = OrderedDict(model="normal + bladder volume change, spread by E and filling", slice_mm=t, nu=math.inf,
                           negative_log_likelihood=float("nan"), sigma=params[3], bladder_per_mm=params[2],
                           check_pairs=len(rows))
         for level in (0.68, 0.95):
             row[f"cover{int(level * 100)}"] = statistics.mean(
-                scale_statement_covers(r, params, filling, 76.0, level) for r in rows)
+                scale_statement_covers(r, params, filling, reference, level) for r in rows)
         table.append(row)
     write_table(f"{out}/slice_calibration_tails.csv", table)
     print("| residual model | slices [mm] | nu | -log L (fit pairs) | s (at E0) | per mm of filling | check pairs | 68 % covers "

@@ -102,6 +102,11 @@ struct BiomechanicalRegistration_EXPORT RegistrationResult
   std::map<std::string, double>          dice;                ///< warped against fixed labels, by name
   /** By label name, its volume [mL] in the moving and in the fixed labels (a filling the scans show). */
   std::map<std::string, std::array<double, 2>> labelVolumeML;
+  /** Label \a name's volume change between the scans [mL] (fixed minus moving, from labelVolumeML): the filling
+   * term of the thick slices' calibration for SliceCalibrationFillingOrgan (SliceCalibratedInterval()); NaN when
+   * the scene has no such label or neither scan shows it. */
+  double
+  VolumeChangeML(const std::string & name) const;
   /** Whether the organs were interpolated between thick slices (RegistrationSettings::interpolateSlices and
    * a moving or fixed label image with ThickSlices()). */
   bool   slicesInterpolated{ false };

@@ -62,16 +62,16 @@ MeasureLabelVolumes(RegistrationResult &                r,
   }
 }
 
+} // namespace pipeline
+
 double
-FillingChangeML(const RegistrationResult & r)
+RegistrationResult::VolumeChangeML(const std::string & name) const
 {
-  const auto found = r.labelVolumeML.find(SliceCalibrationFillingOrgan);
-  if (found == r.labelVolumeML.end() || (found->second[0] == 0.0 && found->second[1] == 0.0))
+  const auto found = labelVolumeML.find(name);
+  if (found == labelVolumeML.end() || (found->second[0] == 0.0 && found->second[1] == 0.0))
   {
     return std::numeric_limits<double>::quiet_NaN();
   }
   return found->second[1] - found->second[0];
 }
-
-} // namespace pipeline
 } // namespace itk

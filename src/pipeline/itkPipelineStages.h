@@ -343,12 +343,6 @@ MeasureLabelVolumes(RegistrationResult &                r,
                     const BiomechanicalLabelImageType * movingLabels,
                     const BiomechanicalLabelImageType * fixedLabels);
 
-/** The filling organ's volume change between the scans [mL] from r.labelVolumeML (fixed minus moving labels; the
- * thick slices' calibration's filling term, SliceCalibrationFillingOrgan), NaN when the scene has no such label or
- * neither scan shows it. */
-double
-FillingChangeML(const RegistrationResult & r);
-
 } // namespace pipeline
 } // namespace itk
 

@@ -366,8 +366,8 @@ StateIntervals(RegistrationResult &                r,
     {
       if (method != UncertaintyMethodEnum::None)
       {
-        const ModulusInterval & i = r.modulusInterval[u.name] =
-          SliceCalibratedInterval(r.youngsModulus.at(u.name), *setup.sliceCalibration, u, pipeline::FillingChangeML(r));
+        const ModulusInterval & i = r.modulusInterval[u.name] = SliceCalibratedInterval(
+          r.youngsModulus.at(u.name), *setup.sliceCalibration, u, r.VolumeChangeML(SliceCalibrationFillingOrgan));
         reasons.insert(i.notDeterminedReason);
       }
     }

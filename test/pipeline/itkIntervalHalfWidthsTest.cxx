@@ -44,8 +44,11 @@
 // - where the spread outgrows the line (c large, a fit near stiff truths) every stiffer truth is consistent: the
 //   upper end is not determined, and the truth at the search bound is indeed within k95 sigma of the fit;
 // - a fit on the upper search bound states "E >=", the upper end not determined; on the lower one "E <=";
-// - a filling outside the calibrated volume changes, or no bladder label, states no modulus and says why.
+// - a filling outside the calibrated volume changes, or no bladder label, states no modulus and says why; the filling
+//   a registration hands over (RegistrationResult::VolumeChangeML) is the fixed minus the moving volume, NaN where
+//   neither scan shows the organ.
 #include "itkModulusInterval.h"
+#include "itkRegistrationPipeline.h"
 #include "itkIntervalTestSupport.h"
 #include "bmrTestUtilities.h"
 
@@ -182,6 +185,12 @@ CheckOneSpread()
                           "beta), k = t_(m-3) sqrt(1 + 1/m)");
   ok &= bmr::test::Expect(itk::ModulusIntervalText("prostate", i).find("3 mm slices") != std::string::npos,
                           "the statement names the calibration's slices: " + itk::ModulusIntervalText("prostate", i));
+  // The filling a registration hands over: the fixed minus the moving volume, NaN where neither scan shows it.
+  itk::RegistrationResult r;
+  r.labelVolumeML = { { "bladder", { { 40.0, 100.0 } } }, { "rectum", { { 0.0, 0.0 } } } };
+  ok &= bmr::test::Expect(r.VolumeChangeML("bladder") == 60.0 && std::isnan(r.VolumeChangeML("rectum")) &&
+                            std::isnan(r.VolumeChangeML("prostate")),
+                          "RegistrationResult::VolumeChangeML: 100 - 40 mL, NaN without the organ in either scan");
   for (double outside : { 30.0, 130.0, std::numeric_limits<double>::quiet_NaN() })
   {
     const itk::ModulusInterval o = itk::SliceCalibratedInterval(150.0, c, unknown, outside);
