@@ -32,6 +32,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from interval_rows import covers, determined, write_table  # noqa: E402
 
 BOUNDS_KPA = (20.0, 600.0)
+BOUND_LEVEL = 0.999  # itk::SliceCalibrationBoundLevel
 
 
 def slice_mm(r):
@@ -236,16 +237,22 @@ def scale_statement_covers(r, params, filling, reference, level):
     from scipy.stats import t as student
     a, beta, gamma, s, c, d, m = params
     z = filling(r) - reference
-    k = student.ppf((1 + level) / 2, m - 6) * math.sqrt(1 + 1 / m)
+    k_at = lambda lev: student.ppf((1 + lev) / 2, m - 6) * math.sqrt(1 + 1 / m)  # noqa: E731
     y = math.log(float(r["fit_kPa"]) / E0_KPA)
     lo_x, hi_x = (math.log(b / E0_KPA) for b in BOUNDS_KPA)
-    edge = lambda x, sign: a + beta * x + gamma * z + sign * k * s * math.exp(c * x + d * z) - y  # noqa: E731
-    lower = lo_x if edge(lo_x, 1) >= 0 else hi_x if edge(hi_x, 1) < 0 else brentq(edge, lo_x, hi_x, args=(1,))
+    edge = lambda x, sign, k: a + beta * x + gamma * z + sign * k * s * math.exp(c * x + d * z) - y  # noqa: E731
+
+    def lower_end(k):
+        return lo_x if edge(lo_x, 1, k) >= 0 else hi_x if edge(hi_x, 1, k) < 0 else brentq(edge, lo_x, hi_x, (1, k))
+    k = k_at(level)
     grid = [hi_x - 0.01 * i for i in range(int((hi_x - lo_x) / 0.01) + 2)]
     upper = hi_x
-    if y < math.log(BOUNDS_KPA[1] / E0_KPA) - 1e-6 and edge(hi_x, -1) > 0:
-        upper = next((brentq(edge, max(x, lo_x), min(x + 0.01, hi_x), args=(-1,)) for x in grid[1:]
-                      if edge(max(x, lo_x), -1) <= 0), lo_x)
+    if y < math.log(BOUNDS_KPA[1] / E0_KPA) - 1e-6 and edge(hi_x, -1, k) > 0:
+        upper = next((brentq(edge, max(x, lo_x), min(x + 0.01, hi_x), args=(-1, k)) for x in grid[1:]
+                      if edge(max(x, lo_x), -1, k) <= 0), lo_x)
+    # A 95 % bound (no upper end) states its lower end at BOUND_LEVEL, as itk::SliceCalibratedInterval does.
+    bound = upper >= hi_x - 1e-9 and level >= 0.95
+    lower = lower_end(k_at(BOUND_LEVEL) if bound else k)
     return lower <= math.log(float(r["true_E_kPa"]) / E0_KPA) <= upper
 
 

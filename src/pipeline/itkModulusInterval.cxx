@@ -99,14 +99,19 @@ JudgeBounds(ModulusInterval & i, const bmr::UnknownModulus & u, bool lowerReache
   i.estimate = std::min(std::max(i.estimate, u.lowerBound), u.upperBound);
 }
 
-/** Student's half-widths t_(n-p) sqrt(1 + 1/n) at 68 % and 95 %: the predictive interval of one more draw about a
- * model of \a parameters fitted to \a n draws (1: their mean; 2: a line). */
+/** Student's predictive half-width t_(n-p) sqrt(1 + 1/n) at the two-sided \a level: the interval of one more draw
+ * about a model of \a parameters fitted to \a n draws (1: their mean; 2: a line). */
+double
+StudentHalfWidth(double level, std::size_t n, std::size_t parameters)
+{
+  return StudentQuantile(0.5 + 0.5 * level, double(n - parameters)) * std::sqrt(1.0 + 1.0 / double(n));
+}
+
+/** StudentHalfWidth() at 68 % and 95 %. */
 std::array<double, 2>
 StudentHalfWidths(std::size_t n, std::size_t parameters = 1)
 {
-  const double predictive = std::sqrt(1.0 + 1.0 / double(n));
-  const double degrees = double(n - parameters);
-  return { { StudentQuantile(0.84, degrees) * predictive, StudentQuantile(0.975, degrees) * predictive } };
+  return { { StudentHalfWidth(0.68, n, parameters), StudentHalfWidth(0.95, n, parameters) } };
 }
 } // namespace
 } // namespace pipeline
@@ -483,7 +488,14 @@ SliceCalibratedInterval(double                      fit,
   }
   // A fit on a search bound would have gone at least (at most) there: the bound's own interval end stands, the
   // other is not determined.
-  pipeline::JudgeBounds(i, unknown, pipeline::ReachesLower(fit, unknown), pipeline::ReachesUpper(fit, unknown));
+  const bool lowerReached = pipeline::ReachesLower(fit, unknown), upperReached = pipeline::ReachesUpper(fit, unknown);
+  pipeline::JudgeBounds(i, unknown, lowerReached, upperReached);
+  if (i.lowerDetermined && !i.upperDetermined)
+  {
+    const double kBound = pipeline::StudentHalfWidth(SliceCalibrationBoundLevel, calibration.pairs, parameters);
+    i.interval95[0] = E0 * std::exp(ConsistentTruths(line, y, kBound, xLow, xHigh)[0]);
+    pipeline::JudgeBounds(i, unknown, lowerReached, upperReached);
+  }
   return i;
 }
 
