@@ -21,6 +21,7 @@
 #include "itkBiomechanicalReports.h"
 #include "itkDicomRT.h"
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -47,34 +48,57 @@ ParseUncertaintySettings(const Arguments & args, itk::UncertaintySettings & u)
                   ? itk::IntervalQuantilesEnum::Student
                   : itk::IntervalQuantilesEnum::Calibrated;
   u.statedVoxelLimitMM = args.Number("--uncertainty-voxel-limit-mm", u.statedVoxelLimitMM);
-  if (!(u.statedVoxelLimitMM > 0.0) || !std::isfinite(u.statedVoxelLimitMM))
-  {
-    throw UsageError("--uncertainty-voxel-limit-mm must be a finite number > 0 (mm)");
-  }
-  // What the resamples vary (UncertaintySettings): each must be >= 0; 0 switches that source off.
-  const std::pair<const char *, double *> scales[] = {
-    { "--uncertainty-mesh-jitter", &u.meshJitter },           { "--uncertainty-shift-voxels", &u.shiftVoxels },
-    { "--uncertainty-rotation-deg", &u.rotationDegrees },     { "--uncertainty-wall-slip", &u.tangentialWallFraction },
-    { "--uncertainty-smoothing-voxels", &u.smoothingVoxels }, { "--uncertainty-step-tolerance", &u.stepTolerance }
-  };
+  // What the resamples vary (UncertaintySettings; their ranges: UncertaintySettings::Validate).
+  const std::pair<const char *, double *> scales[] = { { "--uncertainty-mesh-jitter", &u.meshJitter },
+                                                       { "--uncertainty-shift-voxels", &u.shiftVoxels },
+                                                       { "--uncertainty-rotation-deg", &u.rotationDegrees },
+                                                       { "--uncertainty-wall-slip", &u.tangentialWallFraction },
+                                                       { "--uncertainty-smoothing-voxels", &u.smoothingVoxels },
+                                                       { "--uncertainty-step-tolerance", &u.stepTolerance },
+                                                       { "--uncertainty-simulation-mesh-scale",
+                                                         &u.simulationMeshScale } };
   for (const auto & [key, value] : scales)
   {
     *value = args.Number(key, *value);
-    if (!(*value >= 0.0) || !std::isfinite(*value))
+  }
+}
+
+/** \a description of a settings struct's refusal (RegistrationSettings::Validate) with each setting it names
+ * replaced by the option that sets it. */
+std::string
+InOptionNames(std::string description)
+{
+  static const std::pair<const char *, const char *> options[] = {
+    { "coarseFactor", "--coarse-factor" },
+    { "meshScale", "--mesh-scale" },
+    { "controlSpacing", "--wall-spacing-mm" },
+    { "regularization", "--wall-regularization" },
+    { "outerGradientTolerance", "--outer-tolerance" },
+    { "limitElementInversion", "--element-inversion limit" },
+    { "resamples", "--resamples" },
+    { "meshJitter", "--uncertainty-mesh-jitter" },
+    { "shiftVoxels", "--uncertainty-shift-voxels" },
+    { "rotationDegrees", "--uncertainty-rotation-deg" },
+    { "tangentialWallFraction", "--uncertainty-wall-slip" },
+    { "smoothingVoxels", "--uncertainty-smoothing-voxels" },
+    { "stepTolerance", "--uncertainty-step-tolerance" },
+    { "simulationMeshScale", "--uncertainty-simulation-mesh-scale" },
+    { "statedVoxelLimitMM", "--uncertainty-voxel-limit-mm" }
+  };
+  const auto isWordChar = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; };
+  for (const auto & [setting, option] : options)
+  {
+    const std::string name(setting);
+    for (std::size_t at = description.find(name); at != std::string::npos; at = description.find(name, at + 1))
     {
-      throw UsageError(std::string(key) + " must be a finite number >= 0 (0: not varied)");
+      const std::size_t end = at + name.size();
+      if ((at == 0 || !isWordChar(description[at - 1])) && (end == description.size() || !isWordChar(description[end])))
+      {
+        description.replace(at, name.size(), option);
+      }
     }
   }
-  u.simulationMeshScale = args.Number("--uncertainty-simulation-mesh-scale", u.simulationMeshScale);
-  if (!(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
-  {
-    throw UsageError("--uncertainty-simulation-mesh-scale must lie in [0.25, 2] (resimulation mesh sizes relative to "
-                     "the estimation's)");
-  }
-  if (u.meshJitter >= 0.9)
-  {
-    throw UsageError("--uncertainty-mesh-jitter must lie in [0, 0.9) (mesh sizes x U(1 - j, 1 + j))");
-  }
+  return description;
 }
 
 /** --fixed-probabilities prostate=p.nrrd,bladder=b.nrrd: one probability image per organ (empty: none). */
@@ -152,15 +176,7 @@ ParseRegistrationSettings(const Arguments & args)
   bmr::EstimatorSettings &  e = s.estimator;
   e.numberOfSweepSamples = args.Count("--sweep-samples", e.numberOfSweepSamples, 3, 100);
   s.coarseFactor = args.Number("--coarse-factor", s.coarseFactor);
-  if (!(s.coarseFactor > 0.0 && s.coarseFactor <= 10.0))
-  {
-    throw UsageError("--coarse-factor must lie in (0, 10] (1 or less: sweep on the fine mesh)");
-  }
   s.walls.controlSpacing = args.Number("--wall-spacing-mm", s.walls.controlSpacing);
-  if (!(s.walls.controlSpacing >= 0.0))
-  {
-    throw UsageError("--wall-spacing-mm must be >= 0 (0: every wall node free)");
-  }
   const std::string motion = args.Choice("--wall-motion", { "normal", "free", "traction", "pressure" });
   s.walls.motion = motion == "normal"     ? bmr::WallMotionEnum::AlongNormals
                    : motion == "free"     ? bmr::WallMotionEnum::Free
@@ -174,29 +190,21 @@ ParseRegistrationSettings(const Arguments & args)
     }
   }
   s.walls.regularization = args.Number("--wall-regularization", s.walls.regularization);
-  if (!(s.walls.regularization >= 0.0))
-  {
-    throw UsageError("--wall-regularization must be >= 0");
-  }
   e.limitElementInversion = args.Choice("--element-inversion", { "allow", "limit" }) == "limit";
-  if (e.limitElementInversion && s.walls.ReducedBasis())
-  {
-    throw UsageError("--element-inversion limit needs --wall-spacing-mm 0 and a wall motion other than pressure "
-                     "(one parameter per wall node)");
-  }
   e.gaussNewtonInner = s.walls.ReducedBasis();
   s.meshScale = args.Number("--mesh-scale", s.meshScale);
-  if (!(s.meshScale >= 0.25 && s.meshScale <= 4.0))
-  {
-    throw UsageError("--mesh-scale must lie in [0.25, 4] (mesh sizes relative to the scene's)");
-  }
   s.interpolateSlices = args.Choice("--slice-interpolation", { "off", "on" }) == "on";
   ParseUncertaintySettings(args, s.uncertainty);
   e.maximumOuterIterations = args.Count("--max-outer-iterations", e.maximumOuterIterations, 1, 1000);
   e.outerGradientTolerance = args.Number("--outer-tolerance", e.outerGradientTolerance);
-  if (!(e.outerGradientTolerance > 0.0 && e.outerGradientTolerance < 1.0))
+  // The ranges are the library's (one place); out of range is a usage error here, as a wrong option is.
+  try
   {
-    throw UsageError("--outer-tolerance must lie in (0, 1) (relative to Phi*)");
+    s.Validate();
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    throw UsageError(InOptionNames(e.GetDescription()));
   }
   return s;
 }

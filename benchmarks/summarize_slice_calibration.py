@@ -230,14 +230,14 @@ def statement_covers(r, line, nu, covariate, level):
 
 def scale_statement_covers(r, params, filling, reference, level):
     """As SliceCalibratedInterval with a spread that varies (scale_line()): whether the set of truths x with
-    |y - mu(x)| <= k sigma(x) over the search range, k = t_(m-6) sqrt(1 + 1/m), covers the truth of row \a r; its lower
+    |y - mu(x)| <= k sigma(x) over the search range, k = t_(m-5) sqrt(1 + 1/m), covers the truth of row \a r; its lower
     end is the crossing of mu + k sigma, its upper end the last crossing of mu - k sigma below the upper bound (none:
     not determined), a fit on the upper bound a lower bound."""
     from scipy.optimize import brentq
     from scipy.stats import t as student
     a, beta, gamma, s, c, d, m = params
     z = filling(r) - reference
-    k_at = lambda lev: student.ppf((1 + lev) / 2, m - 6) * math.sqrt(1 + 1 / m)  # noqa: E731
+    k_at = lambda lev: student.ppf((1 + lev) / 2, m - 5) * math.sqrt(1 + 1 / m)  # noqa: E731
     y = math.log(float(r["fit_kPa"]) / E0_KPA)
     lo_x, hi_x = (math.log(b / E0_KPA) for b in BOUNDS_KPA)
     edge = lambda x, sign, k: a + beta * x + gamma * z + sign * k * s * math.exp(c * x + d * z) - y  # noqa: E731

@@ -210,6 +210,12 @@ struct BiomechanicalRegistration_EXPORT UncertaintySettings
    * that measures coverage at coarser voxels (benchmarks/run_calibration_benchmark.sh) raises it; the run then
    * warns that the interval is stated where its coverage was not shown. */
   double statedVoxelLimitMM{ bmr::StatedModulusVoxelLimitMM };
+
+  /** Throws itk::InvalidArgumentError naming the first setting out of its range: at least 3 resamples for rescans
+   * or the bootstrap, meshJitter in [0, 0.9), the other scales finite and >= 0, simulationMeshScale in [0.25, 2],
+   * statedVoxelLimitMM > 0. */
+  void
+  Validate() const;
 };
 
 /** Standard errors of the resamples' median beyond which ModulusInterval corrects the fit for the bias b

@@ -57,6 +57,12 @@ struct BiomechanicalRegistration_EXPORT RegistrationSettings
   /** The moving anatomy's meshes, made beforehand by MeshMovingAnatomy() for these labels, scene and settings
    * (not owned; must outlive the call). Null (default): RegisterSegmentedPair() meshes them itself. */
   const MovingAnatomyMeshes * meshes{ nullptr };
+
+  /** Throws itk::InvalidArgumentError naming the first setting out of its range (estimator, walls and uncertainty
+   * included): coarseFactor in (0, 10], meshScale in [0.25, 4], limitElementInversion only with one parameter per
+   * wall node. RegisterSegmentedPair() calls it; `biomechreg register` reports it as a usage error. */
+  void
+  Validate() const;
 };
 
 /** \brief The moving anatomy's meshes for RegisterSegmentedPair(), made before the fixed scan is there.

@@ -46,6 +46,12 @@ EstimatorSettings::Validate() const
   {
     FailInput(where, "the gradient tolerances (inner, loose inner, outer) must be positive");
   }
+  if (!(outerGradientTolerance < 1.0))
+  {
+    FailInput(where,
+              "outerGradientTolerance must lie in (0, 1) (relative to Phi*), got " +
+                std::to_string(outerGradientTolerance));
+  }
   if (!(outerStepTolerance >= 0.0 && std::isfinite(outerStepTolerance)))
   {
     FailInput(where, "outerStepTolerance must be finite and not negative, got " + std::to_string(outerStepTolerance));

@@ -256,34 +256,6 @@ ProbabilityOrgans(const OrganProbabilityImages & probabilities, const bmr::Scene
   return organs;
 }
 
-/** Fails, naming the setting, on resampling scales the resamples cannot honour (negative, non-finite, a mesh jitter
- * that would make sizes vanish, a resimulation mesh outside [0.25, 2]): what the CLI checks, for library users too. */
-void
-CheckUncertaintySettings(const UncertaintySettings & u)
-{
-  const std::pair<const char *, double> scales[] = {
-    { "meshJitter", u.meshJitter },           { "shiftVoxels", u.shiftVoxels },
-    { "rotationDegrees", u.rotationDegrees }, { "tangentialWallFraction", u.tangentialWallFraction },
-    { "smoothingVoxels", u.smoothingVoxels }, { "stepTolerance", u.stepTolerance }
-  };
-  for (const auto & [name, value] : scales)
-  {
-    if (!(value >= 0.0) || !std::isfinite(value))
-    {
-      bmr::FailInput("RegisterSegmentedPair", std::string("UncertaintySettings::") + name + " must be finite and >= 0");
-    }
-  }
-  if (!(u.statedVoxelLimitMM > 0.0))
-  {
-    bmr::FailInput("RegisterSegmentedPair", "UncertaintySettings::statedVoxelLimitMM must be > 0 [mm]");
-  }
-  if (u.meshJitter >= 0.9 || !(u.simulationMeshScale >= 0.25 && u.simulationMeshScale <= 2.0))
-  {
-    bmr::FailInput("RegisterSegmentedPair",
-                   "UncertaintySettings: meshJitter must lie in [0, 0.9) and simulationMeshScale in [0.25, 2]");
-  }
-}
-
 /** The fit: FEMElasticityOptimizer on \a setup, its timings as stages and its outputs in \a r. */
 void
 Estimate(RegistrationResult &                                    r,
@@ -602,7 +574,7 @@ RunEstimation(const EstimationSetup &                                 setup,
 } // namespace pipeline
 
 namespace {
-/** Refuses missing or disjoint label images, bad uncertainty settings, and premeshed moving anatomy
+/** Refuses missing or disjoint label images, settings out of range, and premeshed moving anatomy
  * (RegistrationSettings::meshes) made from other inputs than \a movingLabels, \a scene and \a settings. */
 void
 CheckRegistrationInputs(const BiomechanicalLabelImageType * movingLabels,
@@ -615,7 +587,7 @@ CheckRegistrationInputs(const BiomechanicalLabelImageType * movingLabels,
     bmr::FailInput("RegisterSegmentedPair", "the moving and the fixed label images are required");
   }
   CheckOverlap(movingLabels, fixedLabels);
-  CheckUncertaintySettings(settings.uncertainty);
+  settings.Validate();
   if (settings.meshes != nullptr &&
       settings.meshes->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, scene, settings))
   {

@@ -104,7 +104,7 @@ expect_error(nothing_to_estimate "nothing to estimate"
 expect_error(bad_step_limit "--element-inversion must be allow or limit"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --element-inversion sometimes --out ${TEMP}/r4)
-expect_error(step_limit_reduced_basis "--element-inversion limit needs --wall-spacing-mm 0"
+expect_error(step_limit_reduced_basis "--element-inversion limit needs one parameter per wall node: --wall-spacing-mm 0"
   register ${ok_register} --fixed-labels ${TEMP}/ok/fixed_labels.nrrd --scene ${TEMP}/ok/scene.json
   --element-inversion limit --wall-spacing-mm 6 --out ${TEMP}/r5)
 expect_error(pressure_with_spacing "--wall-spacing-mm does not apply to --wall-motion pressure"
