@@ -62,6 +62,14 @@ def test_settings_errors(small_pair):
                             settings=_jittered(2.0))
 
 
+def test_settings_validate_names_the_setting():
+    biomechreg.RegistrationSettings().validate()  # the defaults pass
+    settings = biomechreg.RegistrationSettings()
+    settings.mesh_scale = 5.0
+    with pytest.raises(ValueError, match=r"RegistrationSettings: meshScale must lie in \[0.25, 4\]"):
+        settings.validate()
+
+
 def _jittered(jitter):
     settings = biomechreg.RegistrationSettings()
     settings.uncertainty.mesh_jitter = jitter

@@ -141,7 +141,11 @@ BindRegistrationSettings(py::module_ & m)
     .def_readwrite("mesh_scale", &R::meshScale)
     .def_readwrite("push_field", &R::pushField)
     .def_readwrite("interpolate_slices", &R::interpolateSlices)
-    .def_readwrite("element_state", &R::elementState);
+    .def_readwrite("element_state", &R::elementState)
+    .def("validate",
+         &R::Validate,
+         "Raises ValueError naming the first setting out of its range (RegistrationSettings::Validate); "
+         "register() does it too.");
 }
 
 void
