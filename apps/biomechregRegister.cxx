@@ -191,7 +191,6 @@ ParseRegistrationSettings(const Arguments & args)
   }
   s.walls.regularization = args.Number("--wall-regularization", s.walls.regularization);
   e.limitElementInversion = args.Choice("--element-inversion", { "allow", "limit" }) == "limit";
-  e.gaussNewtonInner = s.walls.ReducedBasis();
   s.meshScale = args.Number("--mesh-scale", s.meshScale);
   s.interpolateSlices = args.Choice("--slice-interpolation", { "off", "on" }) == "on";
   ParseUncertaintySettings(args, s.uncertainty);

@@ -139,11 +139,11 @@ public:
    * neo-Hookean) every trial p is a Newton solve (an infeasible one is rejected like a rise of Phi), and A =
    * du/dp is recomputed from the tangent at each accepted p: one back-substitution per parameter. */
   LoadSolution
-  SolveLoadsGaussNewton(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
+  SolveLoadsLevenbergMarquardt(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
 
   /** The barrier against crushed elements added to Phi with a nonlinear model (CompressionBarrier, J_0 = 0.25,
-   * w = 0.1); null with a linear model, whose states may invert elements. In SolveLoadsGaussNewton() it is part of
-   * the value that accepts a step, not of the residuals' Jacobian. */
+   * w = 0.1); null with a linear model, whose states may invert elements. In SolveLoadsLevenbergMarquardt() it is part
+   * of the value that accepts a step, not of the residuals' Jacobian. */
   const CompressionBarrier *
   GetCompressionBarrier() const
   {

@@ -160,7 +160,7 @@ public:
   ForgetState()
   {}
   /** True when u is affine in the forces and prescribed displacements at fixed moduli, so that
-   * du/dp can be computed once per modulus (the Gauss-Newton inner solver needs it). */
+   * du/dp can be computed once per modulus (the Levenberg-Marquardt inner solver needs it). */
   virtual bool
   IsLinear() const = 0;
   /** The work of every solve since construction (zeros for a model that does not count it). */

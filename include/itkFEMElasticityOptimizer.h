@@ -140,7 +140,7 @@ public:
   }
 
   /** The estimator's settings in one struct (bmr::EstimatorSettings; defaults there): what the setters below set
-   * one at a time. Its derived fields (gaussNewtonInner from the wall settings, startModuli and
+   * one at a time. Its derived fields (levenbergMarquardtInner from the wall settings, startModuli and
    * startRelativeCurvature from SetWarmStart()) are this object's to fill: what is set there is ignored. Checked
    * by Update() (bmr::EstimatorSettings::Validate()). */
   void

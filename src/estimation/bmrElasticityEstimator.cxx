@@ -296,7 +296,7 @@ struct ElasticityEstimator::Stages
     InnerSettings inner;
     inner.maximumIterations = settings.maximumInnerIterations;
     inner.tolerance = tolerance;
-    inner.gaussNewton = settings.gaussNewtonInner;
+    inner.levenbergMarquardt = settings.levenbergMarquardtInner;
     inner.limitInversion = settings.limitElementInversion;
     const SolverWork before = objective.GetForwardModel().GetSolverWork();
     LoadSolution     s = SolveInner(objective, E, start, inner, result.rejectedSteps);
@@ -324,7 +324,7 @@ struct ElasticityEstimator::Stages
   bool
   LooseSweep() const
   {
-    return !settings.gaussNewtonInner && settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
+    return !settings.levenbergMarquardtInner && settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
   }
   /** One unknown besides: the outer search's evaluations are loose first. */
   bool

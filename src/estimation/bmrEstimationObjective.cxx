@@ -488,7 +488,7 @@ TangentResponse(ForwardModel & model, const LoadParameterization & loads, const 
   return A;
 }
 
-/** The residuals SolveLoadsGaussNewton() minimizes, on the dofs they read (from their Jacobian's pattern at the
+/** The residuals SolveLoadsLevenbergMarquardt() minimizes, on the dofs they read (from their Jacobian's pattern at the
  * unloaded state), with the prior's weight. A linear model's state is affine in p: computed once. A nonlinear one
  * is solved at every p, and its derivative du/dp taken from the tangent at each point where the Jacobian is
  * needed. */
@@ -639,7 +639,8 @@ StartIterate(LoadResiduals & residuals, const std::vector<double> & start)
     s.value = residuals(s.p, s.rp, &s.J);
     if (!std::isfinite(s.value))
     {
-      Fail("EstimationObjective::SolveLoadsGaussNewton", "no equilibrium at the start's loads nor at zero loads");
+      Fail("EstimationObjective::SolveLoadsLevenbergMarquardt",
+           "no equilibrium at the start's loads nor at zero loads");
     }
   }
   return s;
@@ -686,19 +687,19 @@ TakeMarquardtStep(LoadResiduals &         residuals,
 } // namespace
 
 LoadSolution
-EstimationObjective::SolveLoadsGaussNewton(const std::vector<double> & start,
-                                           unsigned int                maximumIterations,
-                                           double                      tolerance)
+EstimationObjective::SolveLoadsLevenbergMarquardt(const std::vector<double> & start,
+                                                  unsigned int                maximumIterations,
+                                                  double                      tolerance)
 {
   const std::size_t np = GetNumberOfParameters();
   if (start.size() != np)
   {
-    Fail("EstimationObjective::SolveLoadsGaussNewton",
+    Fail("EstimationObjective::SolveLoadsLevenbergMarquardt",
          "the start holds " + std::to_string(start.size()) + " values, expected " + std::to_string(np));
   }
   if (!m_Loads.IsAffine())
   {
-    Fail("EstimationObjective::SolveLoadsGaussNewton", "needs an affine load parameterization");
+    Fail("EstimationObjective::SolveLoadsLevenbergMarquardt", "needs an affine load parameterization");
   }
   LoadResiduals residuals(m_Model, m_Loads, m_Terms, m_Barrier.get(), m_Infeasible, np);
   const double  alpha = residuals.GetAlpha();

@@ -175,9 +175,9 @@ SolveInner(EstimationObjective &       objective,
            std::size_t &               rejected)
 {
   objective.SetYoungsModuli(moduli);
-  if (settings.gaussNewton && objective.GetNumberOfParameters() > 0)
+  if (settings.levenbergMarquardt && objective.GetNumberOfParameters() > 0)
   {
-    return objective.SolveLoadsGaussNewton(start, settings.maximumIterations, settings.tolerance);
+    return objective.SolveLoadsLevenbergMarquardt(start, settings.maximumIterations, settings.tolerance);
   }
   LoadSolution result;
   result.parameters = start;

@@ -98,8 +98,8 @@ struct InnerSettings
 {
   unsigned int maximumIterations{ 2000 };
   double       tolerance{ 1e-5 };
-  bool         gaussNewton{ false };    ///< Levenberg-Marquardt (EstimationObjective::SolveLoadsGaussNewton)
-  bool         limitInversion{ false }; ///< L-BFGS only: reject trial points that invert new elements
+  bool         levenbergMarquardt{ false }; ///< Levenberg-Marquardt (EstimationObjective::SolveLoadsLevenbergMarquardt)
+  bool         limitInversion{ false };     ///< L-BFGS only: reject trial points that invert new elements
 };
 
 /** min_p Phi(E, p) from \a start at the moduli \a moduli: Levenberg-Marquardt, or L-BFGS (libLBFGS through

@@ -287,7 +287,7 @@ FEMElasticityOptimizer::EffectiveSettings() const
 {
   bmr::EstimatorSettings s = m_EstimatorSettings;
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
-  s.gaussNewtonInner = m_WallLoadSettings.ReducedBasis();
+  s.levenbergMarquardtInner = m_WallLoadSettings.ReducedBasis();
   s.startModuli.clear();
   s.startRelativeCurvature = 0.0;
   if (!m_WarmStartModuli.empty())

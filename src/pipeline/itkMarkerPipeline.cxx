@@ -238,7 +238,7 @@ struct BoxModel
     }
     const bmr::LandmarkTerm  term(mesh, targets);
     bmr::EstimationObjective objective(*model, *loads, { &term }, {});
-    const bmr::LoadSolution  solution = objective.SolveLoadsGaussNewton(
+    const bmr::LoadSolution  solution = objective.SolveLoadsLevenbergMarquardt(
       std::vector<double>(loads->GetNumberOfParameters(), 0.0), settings.maximumIterations, 1e-8);
     if (iterations)
     {

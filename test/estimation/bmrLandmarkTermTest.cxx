@@ -154,7 +154,7 @@ MarkersAreFitted()
   const bmr::LandmarkTerm  term(m.mesh, m.Targets(1.0));
   bmr::EstimationObjective objective(*m.model, *m.loads, { &term }, {});
   const auto               solution =
-    objective.SolveLoadsGaussNewton(std::vector<double>(objective.GetNumberOfParameters(), 0.0), 30, 1e-10);
+    objective.SolveLoadsLevenbergMarquardt(std::vector<double>(objective.GetNumberOfParameters(), 0.0), 30, 1e-10);
   const auto stats = term.ComputeStatistics(objective.ComputeDisplacement(solution.parameters));
   std::cout << "fit: " << solution.iterations << " iterations, marker RMS " << stats[0].rms << " mm" << std::endl;
   return Expect(stats[0].rms < 1e-3,

@@ -105,8 +105,8 @@ CheckInfeasibleStart(bmr::SurfaceMatchingObjective & objective, const std::vecto
     return false;
   }
   const bmr::LoadSolution fromZero =
-    objective.SolveLoadsGaussNewton(std::vector<double>(infeasible.size(), 0.0), 200, 1e-8);
-  const bmr::LoadSolution fromInfeasible = objective.SolveLoadsGaussNewton(infeasible, 200, 1e-8);
+    objective.SolveLoadsLevenbergMarquardt(std::vector<double>(infeasible.size(), 0.0), 200, 1e-8);
+  const bmr::LoadSolution fromInfeasible = objective.SolveLoadsLevenbergMarquardt(infeasible, 200, 1e-8);
   double                  difference = 0.0, size = 0.0;
   for (std::size_t i = 0; i < infeasible.size(); ++i)
   {
@@ -334,7 +334,7 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
       const std::vector<double> start = reduced.MatchSurfaces();
       std::vector<double>       gStart;
       const double              phiStart = reduced.Evaluate(start, &gStart, nullptr);
-      const bmr::LoadSolution   lm = reduced.SolveLoadsGaussNewton(start, 200, 1e-8);
+      const bmr::LoadSolution   lm = reduced.SolveLoadsLevenbergMarquardt(start, 200, 1e-8);
       double                    normStart = 0.0, normEnd = 0.0;
       for (std::size_t i = 0; i < gStart.size(); ++i)
       {
