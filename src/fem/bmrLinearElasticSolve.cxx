@@ -18,11 +18,11 @@
 // LinearElasticModel's analysis, factorization (own supernodal or CHOLMOD's) and solves.
 #include "bmrLinearElasticModelInternal.h"
 
+#include "bmrParallel.h"
 #include "bmrStopwatch.h"
 
 #include <algorithm>
 #include <cmath>
-#include <future>
 #include <utility>
 
 namespace bmr {
@@ -182,24 +182,20 @@ LinearElasticModel::Analyze()
   fem::CheckRigidBodyModes(d.mesh, d.constrained, "LinearElasticModel");
   d.timings.assemble += SecondsSince(t0);
   t0 = Clock::now();
-  {
-    // The element stiffnesses are summed on a second thread, when there is one, while this one computes the
-    // fill-reducing order from the node graph (nine times fewer edges than CHOLMOD's dof graph), given to CHOLMOD as
-    // the free dofs' numbering: neither reads what the other writes.
-    std::future<void> accumulated;
-    if (!d.accumulated && d.solveThreads > 1)
-    {
-      accumulated = std::async(std::launch::async, [&d]() { d.AccumulateStiffnesses(); });
-    }
-    {
+  // Two tasks on the solves' budget (side by side when it has two threads, else one after the other): the
+  // fill-reducing order from the node graph (nine times fewer edges than CHOLMOD's dof graph), given to CHOLMOD as
+  // the free dofs' numbering, and the element stiffnesses' sums. Neither reads what the other writes.
+  const bool accumulate = !d.accumulated;
+  bmr::ParallelFor(
+    "analysis: ordering beside the stiffness sums", accumulate ? 2 : 1, d.solveThreads, [&d](int task, int) {
+      if (task == 1)
+      {
+        d.AccumulateStiffnesses();
+        return;
+      }
       const auto serialized = fem::LockOrdering();
       d.nfree = fem::NumberFreeDofsByNestedDissection(d.pattern, d.constrained, d.freeIndex);
-    }
-    if (accumulated.valid())
-    {
-      accumulated.get();
-    }
-  }
+    });
   d.freePatternCurrent = false; // K_ff in the new numbering
   d.freeBlockCurrent = false;
   if (d.nfree == 0)
