@@ -24,6 +24,7 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
+#include <tbb/task_group.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -151,6 +152,74 @@ ParallelFor(const char * name, int count, unsigned threads, const std::function<
     const std::lock_guard<std::mutex> guard(trace->lock);
     trace->events[static_cast<std::size_t>(region)].end = end;
   }
+}
+
+struct BackgroundTask::Impl
+{
+  const char *                     name;
+  std::function<void()>            work;
+  std::unique_ptr<tbb::task_arena> arena; // null: run in Wait()
+  tbb::task_group                  group;
+  bool                             waited{ false };
+};
+
+BackgroundTask::BackgroundTask(const char * name, bool alongside, std::function<void()> work)
+  : m_Impl(std::make_unique<Impl>())
+{
+  Impl & d = *m_Impl;
+  d.name = name;
+  d.work = std::move(work);
+  // Two slots, the waiting thread's reserved; none for a worker where TBB may use one core only.
+  if (alongside && tbb::info::default_concurrency() > 1)
+  {
+    d.arena = std::make_unique<tbb::task_arena>(2, 1);
+    d.arena->execute([&d]() {
+      d.group.run([&d]() {
+        const TracedSpan span(TracedSpan::Kind::Background, d.name);
+        d.work();
+      });
+    });
+  }
+}
+
+BackgroundTask::~BackgroundTask()
+{
+  if (m_Impl->arena == nullptr || m_Impl->waited)
+  {
+    return; // nothing started, or already taken
+  }
+  try
+  {
+    Wait();
+  }
+  catch (...)
+  {
+    // Dropped: the caller that wanted it called Wait().
+  }
+}
+
+void
+BackgroundTask::Wait()
+{
+  Impl & d = *m_Impl;
+  if (d.waited)
+  {
+    return;
+  }
+  d.waited = true;
+  if (d.arena == nullptr)
+  {
+    d.work();
+    return;
+  }
+  const TracedSpan wait(TracedSpan::Kind::Wait, d.name);
+  d.arena->execute([&d]() { d.group.wait(); });
+}
+
+bool
+BackgroundTask::Alongside() const
+{
+  return m_Impl->arena != nullptr;
 }
 
 TaskTrace::TaskTrace()

@@ -19,7 +19,10 @@
 #define bmrParallel_h
 
 // Independent tasks on the library's thread budget (private to src/).
+#include "BiomechanicalRegistrationExport.h"
+
 #include <functional>
+#include <memory>
 
 namespace bmr {
 
@@ -41,6 +44,38 @@ ParallelFor(const char * name, int count, unsigned threads, const std::function<
 /** The number of worker slots ParallelFor() uses for \a count tasks on \a threads threads. */
 unsigned
 ParallelWorkers(int count, unsigned threads);
+
+/** \brief Work that runs beside the calling thread until Wait() takes its end (a mesh made while the sweep runs,
+ * the resamples' inputs made while the fit runs).
+ *
+ * With \a alongside (the caller's budget has a thread for it), \a work starts at construction as a task of an arena
+ * of its own with two slots, one for a worker of TBB's pool and one for the thread that will wait: it shares the
+ * pool with ParallelFor() and with the host, and the library starts no thread of its own. A ParallelFor() inside it
+ * takes its own budget. Without (a budget of one thread, or one core), it runs in Wait(), on the waiting thread.
+ * Either way the result is the same. A bmr::TaskTrace records the work as background work named \a name, and the
+ * wait for it. */
+class BiomechanicalRegistration_EXPORT BackgroundTask
+{
+public:
+  BackgroundTask(const char * name, bool alongside, std::function<void()> work);
+  /** Waits for work that started (work that did not start is not run); what it threw is dropped (call Wait() to
+   * see it). */
+  ~BackgroundTask();
+  BackgroundTask(const BackgroundTask &) = delete;
+  BackgroundTask &
+  operator=(const BackgroundTask &) = delete;
+
+  /** Returns when the work is done, having run it here if it had not started; rethrows what it threw. Once. */
+  void
+  Wait();
+  /** Whether the work was started beside the caller. */
+  bool
+  Alongside() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m_Impl;
+};
 
 } // namespace bmr
 

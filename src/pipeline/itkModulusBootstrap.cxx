@@ -41,7 +41,6 @@
 #include <limits>
 #include <mutex>
 #include <random>
-#include <thread>
 
 namespace itk {
 namespace pipeline {
@@ -676,36 +675,28 @@ IntervalsFromResamples(const RegistrationResult &               r,
 } // namespace
 
 RescanMapsPrefetch::RescanMapsPrefetch(const BiomechanicalLabelImageType * fixedLabels, const EstimationSetup & setup)
-{
-  m_Maps = std::async(std::launch::async, [this, fixedLabels, setup]() {
-    const bmr::TracedSpan       span(bmr::TracedSpan::Kind::Background, "rescan maps alongside");
+  : m_Task("rescan maps alongside", true, [this, fixedLabels, setup]() {
     const ResampleSource        source = MakeResampleSource(setup, nullptr, fixedLabels);
     const UncertaintySettings & u = setup.settings->uncertainty;
-    std::vector<DistanceMaps>   maps;
     for (unsigned int k = 0; k < u.resamples && !m_Stop; ++k)
     {
       Random rng = ResampleRandom(u, k);
       ResampleMeshScene(*setup.scene, u, rng); // a resample draws its mesh scene first, then its grid
-      maps.push_back(RescanMaps(source, setup, rng));
+      m_Maps.push_back(RescanMaps(source, setup, rng));
     }
-    return maps;
-  });
-}
+  })
+{}
 
 RescanMapsPrefetch::~RescanMapsPrefetch()
 {
-  m_Stop = true;
-  if (m_Maps.valid())
-  {
-    m_Maps.wait(); // its exception, if any, dies with the future
-  }
+  m_Stop = true; // the maps under way are finished and waited for by m_Task, their exception dropped
 }
 
 std::vector<DistanceMaps>
 RescanMapsPrefetch::Finish()
 {
-  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "rescan maps alongside");
-  return m_Maps.get();
+  m_Task.Wait();
+  return std::move(m_Maps);
 }
 
 std::map<std::string, ModulusInterval>

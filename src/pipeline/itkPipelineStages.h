@@ -19,6 +19,7 @@
 #define itkPipelineStages_h
 
 // Stages shared by the pipelines (private to src/pipeline).
+#include "bmrParallel.h"
 #include "bmrRandom.h"
 #include "itkBiomechanicalPipelines.h"
 #include "itkFEMElasticityOptimizer.h"
@@ -30,10 +31,8 @@
 
 #include <atomic>
 #include <functional>
-#include <future>
 #include <mutex>
 #include <random>
-#include <thread>
 
 namespace itk {
 namespace pipeline {
@@ -79,8 +78,8 @@ MeshLabelImage(const BiomechanicalLabelImageType * labels,
                StageClock &                        clock,
                const std::string &                 stage);
 
-/** A mesh made on a second thread (CGAL meshes on one core) while the caller does other work, when more than one
- * thread may run; otherwise made in Take(). The mesh is the same either way. */
+/** A mesh made beside the caller (CGAL meshes on one core; a bmr::BackgroundTask on TBB's pool) while it does other
+ * work, when more than one thread may run; otherwise made in Take(). The mesh is the same either way. */
 class BackgroundMesh
 {
 public:
@@ -93,11 +92,11 @@ public:
    * to the wall time, and its detail says how long the meshing took in all. Rethrows the mesher's exception. */
   bmr::TetrahedralMesh
   Take(StageClock & clock, const std::string & stage);
-  /** Whether the mesh is being made on a second thread (until it is taken). */
+  /** Whether the mesh is being made beside the caller (until it is taken). */
   bool
   Alongside() const
   {
-    return m_Made.valid();
+    return m_Task != nullptr;
   }
   /** The mesh made alongside, waiting for it (from any thread); \a detail says what was made. Only when
    * Alongside(); rethrows the mesher's exception. */
@@ -120,10 +119,11 @@ private:
   static Made
   Make(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene);
 
-  const BiomechanicalLabelImageType * m_Labels;
-  bmr::Scene                          m_Scene;
-  std::future<Made>                   m_Made;
-  double                              m_Seconds{ 0.0 };
+  const BiomechanicalLabelImageType *  m_Labels;
+  bmr::Scene                           m_Scene;
+  Made                                 m_Made;
+  std::unique_ptr<bmr::BackgroundTask> m_Task; // null: not alongside, or taken
+  double                               m_Seconds{ 0.0 };
 };
 
 /** The pull-back field of result.mesh's displacement on \a fixedReference's grid and, when asked, the push
@@ -178,13 +178,9 @@ public:
   Finish();
 
 private:
-  /** Asks the thread to stop after the mesh under way and waits for it. */
-  void
-  Stop();
-
   std::vector<bmr::TetrahedralMesh> m_Meshes;
   std::atomic<bool>                 m_Stop{ false };
-  std::thread                       m_Thread;
+  bmr::BackgroundTask               m_Task;
 };
 
 class RescanMapsPrefetch;
@@ -237,13 +233,14 @@ public:
   RescanMapsPrefetch &
   operator=(const RescanMapsPrefetch &) = delete;
 
-  /** Waits for the maps, by rescan; rethrows what the thread threw. */
+  /** Waits for the maps, by rescan; rethrows what their making threw. */
   std::vector<DistanceMaps>
   Finish();
 
 private:
-  std::atomic<bool>                      m_Stop{ false };
-  std::future<std::vector<DistanceMaps>> m_Maps;
+  std::atomic<bool>         m_Stop{ false };
+  std::vector<DistanceMaps> m_Maps;
+  bmr::BackgroundTask       m_Task;
 };
 
 /** Whether the registration of \a scaledScene (mesh sizes scaled by settings.meshScale) sweeps on a coarse mesh. */

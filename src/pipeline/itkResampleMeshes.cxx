@@ -38,12 +38,10 @@ ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * m
                                            const bmr::Scene &                  scene,
                                            const UncertaintySettings &         u)
   : m_Meshes(u.resamples)
-{
   // Beside the fit, which keeps two cores busy at most: the meshes side by side on the rest of the budget (one
   // after the other on a small machine); each resample's mesh is drawn from its own random stream.
-  const unsigned int threads = ResampleThreads(u) > 2 ? ResampleThreads(u) - 2 : 1;
-  m_Thread = std::thread([this, movingLabels, scene, u, threads]() {
-    const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "resample meshes alongside");
+  , m_Task("resample meshes alongside", true, [this, movingLabels, scene, u]() {
+    const unsigned int threads = ResampleThreads(u) > 2 ? ResampleThreads(u) - 2 : 1;
     bmr::ParallelFor("resample meshes", static_cast<int>(u.resamples), threads, [&](int k, int) {
       if (m_Stop)
       {
@@ -61,29 +59,19 @@ ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * m
         // Left empty: the resample meshes again and reports the failure where it belongs.
       }
     });
-  });
-}
+  })
+{}
 
 ResampleMeshPrefetch::~ResampleMeshPrefetch()
 {
-  Stop();
-}
-
-void
-ResampleMeshPrefetch::Stop()
-{
-  m_Stop = true;
-  if (m_Thread.joinable())
-  {
-    m_Thread.join();
-  }
+  m_Stop = true; // the mesh under way is finished and waited for by m_Task
 }
 
 std::vector<bmr::TetrahedralMesh>
 ResampleMeshPrefetch::Finish()
 {
-  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "resample meshes alongside");
-  Stop();
+  m_Stop = true;
+  m_Task.Wait(); // the meshes not started stay empty: their resamples mesh them
   return std::move(m_Meshes);
 }
 

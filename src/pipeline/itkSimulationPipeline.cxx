@@ -102,22 +102,16 @@ BackgroundMesh::BackgroundMesh(const BiomechanicalLabelImageType * labels, const
   : m_Labels(labels)
   , m_Scene(scene)
 {
-  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  m_Task = std::make_unique<bmr::BackgroundTask>("fine mesh alongside",
+                                                 MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1,
+                                                 [this]() { m_Made = Make(m_Labels, m_Scene); });
+  if (!m_Task->Alongside())
   {
-    m_Made = std::async(std::launch::async, [this]() {
-      const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "fine mesh alongside");
-      return Make(m_Labels, m_Scene);
-    });
+    m_Task.reset(); // Take() meshes, as a stage of its own
   }
 }
 
-BackgroundMesh::~BackgroundMesh()
-{
-  if (m_Made.valid())
-  {
-    m_Made.wait(); // its exception, if any, dies with the future
-  }
-}
+BackgroundMesh::~BackgroundMesh() = default; // a mesh under way is waited for, its exception dropped
 
 auto
 BackgroundMesh::Make(const BiomechanicalLabelImageType * labels, const bmr::Scene & scene) -> Made
@@ -135,7 +129,7 @@ BackgroundMesh::Make(const BiomechanicalLabelImageType * labels, const bmr::Scen
 bmr::TetrahedralMesh
 BackgroundMesh::Take(StageClock & clock, const std::string & stage)
 {
-  if (!m_Made.valid())
+  if (!Alongside())
   {
     return MeshLabelImage(m_Labels, m_Scene, clock, stage);
   }
@@ -149,11 +143,11 @@ BackgroundMesh::Take(StageClock & clock, const std::string & stage)
 bmr::TetrahedralMesh
 BackgroundMesh::TakeAlongside(std::string & detail)
 {
-  const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "fine mesh alongside");
-  Made                  made = m_Made.get();
-  detail = made.detail;
-  m_Seconds = made.seconds;
-  return std::move(made.mesh);
+  const std::unique_ptr<bmr::BackgroundTask> task = std::move(m_Task);
+  task->Wait();
+  detail = m_Made.detail;
+  m_Seconds = m_Made.seconds;
+  return std::move(m_Made.mesh);
 }
 
 void
