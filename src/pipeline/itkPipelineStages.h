@@ -221,7 +221,7 @@ struct EstimationSetup
 /** The objective organs' distance maps by name. */
 using DistanceMaps = std::map<std::string, Image<float, 3>::Pointer>;
 
-/** \brief The rescans' distance maps (UncertaintyMethodEnum::Rescan), made on a second thread while the fit runs:
+/** \brief The rescans' distance maps (UncertaintyMethodEnum::Rescan), made beside the fit (a bmr::BackgroundTask):
  * they need only the fixed labels. The same maps, by rescan, as BootstrapModuli() would make itself. */
 class RescanMapsPrefetch
 {

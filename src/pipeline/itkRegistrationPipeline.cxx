@@ -288,7 +288,7 @@ Estimate(RegistrationResult &                                    r,
   r.unknowns = bmr::SceneUnknownModuli(*setup.scene);
 }
 
-/** The resamples' meshes on a second thread while the fit runs (pipeline::ResampleMeshPrefetch), when the interval
+/** The resamples' meshes beside the fit (pipeline::ResampleMeshPrefetch, a bmr::BackgroundTask), when the interval
  * resamples, there is a modulus to estimate and more than one thread may run; null otherwise. */
 std::unique_ptr<pipeline::ResampleMeshPrefetch>
 StartResampleMeshes(const BiomechanicalLabelImageType * movingLabels,
@@ -304,7 +304,7 @@ StartResampleMeshes(const BiomechanicalLabelImageType * movingLabels,
   return std::make_unique<pipeline::ResampleMeshPrefetch>(movingLabels, scene, u);
 }
 
-/** The rescans' distance maps on a second thread while the fit runs (pipeline::RescanMapsPrefetch), when the
+/** The rescans' distance maps beside the fit (pipeline::RescanMapsPrefetch, a bmr::BackgroundTask), when the
  * interval rescans, there is a modulus to estimate and more than one thread may run; null otherwise. */
 std::unique_ptr<pipeline::RescanMapsPrefetch>
 StartRescanMaps(const BiomechanicalLabelImageType * fixedLabels, const pipeline::EstimationSetup & setup)
@@ -680,7 +680,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   };
   setup.resampleMeshes = premeshed ? &premeshed->resamples : nullptr;
   const bool resamples = PlanStatement(setup, coarsestVoxel, movingLabels, fixedLabels);
-  // The interval's prefetches (second thread) start once the fit's mesh is made, so as not to slow its meshing: on
+  // The interval's prefetches (background tasks) start once the fit's mesh is made, so as not to slow its meshing: on
   // the estimation's thread that takes the mesh when it is finished during the sweep.
   std::unique_ptr<pipeline::ResampleMeshPrefetch> prefetch;
   std::unique_ptr<pipeline::RescanMapsPrefetch>   rescanMaps;
