@@ -73,11 +73,6 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
   double uncertaintyStep{ 0.05 };          ///< delta in log E of the curvature's central differences
   bool   limitElementInversion{ false };   ///< one parameter per wall node only
   bool   levenbergMarquardtInner{ false }; ///< Levenberg-Marquardt inner solve (reduced wall basis)
-  /** Warm start [kPa, unknowns' order]: when given, there is no sweep (and no coarse objective is needed) and
-   * the outer search starts here, its first step from startRelativeCurvature (EstimationResult's, of an
-   * earlier estimate of nearly the same data). Used by the resamples of the stated interval. */
-  std::vector<double> startModuli;
-  double              startRelativeCurvature{ 0.0 };
 
   /** Throws itk::InvalidArgumentError (bmr::FailInput) naming the first setting out of range: fewer than 3 sweep
    * samples, a gradient tolerance not positive, a step tolerance negative or not finite, an uncertainty step
@@ -187,6 +182,13 @@ public:
     m_FineStartLoads = std::move(source);
   }
 
+  /** Warm start [kPa, the unknowns' order]: no sweep (and no coarse objective needed), the outer search starts at
+   * \a moduli, its first step from \a relativeCurvature (EstimationResult's, of an earlier estimate of nearly the
+   * same data). Used by the resamples of the stated interval. Throws unless it gives one modulus per unknown, each
+   * within its bounds. */
+  void
+  SetWarmStart(std::vector<double> moduli, double relativeCurvature);
+
   EstimationResult
   Run();
 
@@ -200,6 +202,8 @@ private:
   EstimationObjective *                  m_Coarse;
   std::vector<UnknownModulus>            m_Unknowns;
   EstimatorSettings                      m_Settings;
+  std::vector<double>                    m_StartModuli; ///< kPa, empty: no warm start
+  double                                 m_StartRelativeCurvature{ 0.0 };
   Observer                               m_Observer;
   SweepPrediction                        m_SweepPrediction;
   FineStartLoads                         m_FineStartLoads;

@@ -140,8 +140,8 @@ public:
   }
 
   /** The estimator's settings in one struct (bmr::EstimatorSettings; defaults there): what the setters below set
-   * one at a time. Its derived fields (levenbergMarquardtInner from the wall settings, startModuli and
-   * startRelativeCurvature from SetWarmStart()) are this object's to fill: what is set there is ignored. Checked
+   * one at a time. Its derived field levenbergMarquardtInner (from the wall settings) is this object's to fill: what
+   * is set there is ignored; the warm start is SetWarmStart()'s. Checked
    * by Update() (bmr::EstimatorSettings::Validate()). */
   void
   SetEstimatorSettings(const bmr::EstimatorSettings & settings);
@@ -342,6 +342,9 @@ private:
   /** The estimator's settings with the derived fields filled (see SetEstimatorSettings()). */
   bmr::EstimatorSettings
   EffectiveSettings() const;
+  /** The warm start's moduli (SetWarmStart) in the order of \a unknowns; throws naming an unknown it does not give. */
+  std::vector<double>
+  WarmStartInOrder(const std::vector<bmr::UnknownModulus> & unknowns) const;
   /** NumberOfFineSolveThreads, at most ITK's global default number of threads. */
   unsigned int
   FineSolveThreads() const;

@@ -653,19 +653,25 @@ ElasticityEstimator::ElasticityEstimator(std::function<EstimationObjective &()> 
       Fail("ElasticityEstimator", "the bounds of \"" + u.name + "\" must satisfy 0 < lower < upper < inf [kPa]");
     }
   }
-  if (!m_Settings.startModuli.empty() && m_Settings.startModuli.size() != m_Unknowns.size())
+  m_Settings.Validate();
+}
+
+void
+ElasticityEstimator::SetWarmStart(std::vector<double> moduli, double relativeCurvature)
+{
+  if (moduli.size() != m_Unknowns.size())
   {
-    Fail("ElasticityEstimator", "the warm start must give one modulus per unknown");
+    FailInput("ElasticityEstimator", "the warm start must give one modulus per unknown");
   }
-  for (std::size_t k = 0; k < m_Settings.startModuli.size(); ++k)
+  for (std::size_t k = 0; k < moduli.size(); ++k)
   {
-    const double E = m_Settings.startModuli[k];
-    if (!(E >= m_Unknowns[k].lowerBound && E <= m_Unknowns[k].upperBound))
+    if (!(moduli[k] >= m_Unknowns[k].lowerBound && moduli[k] <= m_Unknowns[k].upperBound))
     {
-      Fail("ElasticityEstimator", "the warm start of \"" + m_Unknowns[k].name + "\" lies outside its bounds");
+      FailInput("ElasticityEstimator", "the warm start of \"" + m_Unknowns[k].name + "\" lies outside its bounds");
     }
   }
-  m_Settings.Validate();
+  m_StartModuli = std::move(moduli);
+  m_StartRelativeCurvature = relativeCurvature;
 }
 
 EstimationObjective &
@@ -688,10 +694,10 @@ ElasticityEstimator::Run()
 {
   Stages run(*this);
   auto   t0 = Clock::now();
-  if (!m_Settings.startModuli.empty())
+  if (!m_StartModuli.empty())
   {
-    run.moduli = m_Settings.startModuli;
-    run.status[0].relativeCurvature = m_Settings.startRelativeCurvature;
+    run.moduli = m_StartModuli;
+    run.status[0].relativeCurvature = m_StartRelativeCurvature;
   }
   else if (!m_Unknowns.empty())
   {

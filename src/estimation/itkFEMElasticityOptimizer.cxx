@@ -288,22 +288,23 @@ FEMElasticityOptimizer::EffectiveSettings() const
   bmr::EstimatorSettings s = m_EstimatorSettings;
   // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
   s.levenbergMarquardtInner = m_WallLoadSettings.ReducedBasis();
-  s.startModuli.clear();
-  s.startRelativeCurvature = 0.0;
-  if (!m_WarmStartModuli.empty())
-  {
-    for (const bmr::UnknownModulus & u : bmr::SceneUnknownModuli(m_Scene))
-    {
-      const auto it = m_WarmStartModuli.find(u.name);
-      if (it == m_WarmStartModuli.end())
-      {
-        itkExceptionMacro(<< "the warm start gives no modulus for the unknown label \"" << u.name << "\"");
-      }
-      s.startModuli.push_back(it->second);
-    }
-    s.startRelativeCurvature = m_WarmStartRelativeCurvature;
-  }
   return s;
+}
+
+std::vector<double>
+FEMElasticityOptimizer::WarmStartInOrder(const std::vector<bmr::UnknownModulus> & unknowns) const
+{
+  std::vector<double> moduli;
+  for (const bmr::UnknownModulus & u : unknowns)
+  {
+    const auto it = m_WarmStartModuli.find(u.name);
+    if (it == m_WarmStartModuli.end())
+    {
+      itkExceptionMacro(<< "the warm start gives no modulus for the unknown label \"" << u.name << "\"");
+    }
+    moduli.push_back(it->second);
+  }
+  return moduli;
 }
 
 std::unique_ptr<bmr::SurfaceMatchingObjective>
@@ -395,6 +396,10 @@ FEMElasticityOptimizer::GenerateData()
     coarseObjective.get(),
     unknowns,
     this->EffectiveSettings());
+  if (!m_WarmStartModuli.empty())
+  {
+    estimator.SetWarmStart(this->WarmStartInOrder(unknowns), m_WarmStartRelativeCurvature);
+  }
   if (alongside)
   {
     estimator.SetSweepPrediction(

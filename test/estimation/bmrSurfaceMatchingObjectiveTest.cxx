@@ -501,13 +501,13 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
   // another start (zero loads) changes the first inner solve's iterations, which shows the handed loads are used.
   {
     bmr::EstimatorSettings settings;
-    settings.startModuli = { 40.0 }; // no sweep: the fine stage alone
     settings.maximumOuterIterations = 3;
     settings.estimateUncertainty = false;
     const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(scene);
     const auto                             run = [&](const bmr::ElasticityEstimator::FineStartLoads & start) {
       bmr::SurfaceMatchingObjective o(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
       bmr::ElasticityEstimator      estimator(o, nullptr, unknowns, settings);
+      estimator.SetWarmStart({ 40.0 }, 0.0); // no sweep: the fine stage alone
       if (start)
       {
         estimator.SetFineStartLoads([&](bmr::EstimationObjective & fine) {
@@ -517,6 +517,16 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
       }
       return estimator.Run();
     };
+    {
+      bmr::SurfaceMatchingObjective o(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
+      bmr::ElasticityEstimator      estimator(o, nullptr, unknowns, settings);
+      ok &= bmr::test::ExpectException(
+        "a warm start without a modulus per unknown",
+        [&] { estimator.SetWarmStart({}, 0.0); },
+        "one modulus per unknown");
+      ok &= bmr::test::ExpectException(
+        "a warm start outside the bounds", [&] { estimator.SetWarmStart({ 1e9 }, 0.0); }, "outside its bounds");
+    }
     unsigned int calls = 0;
     const auto   byDefault = run(nullptr);
     const auto   handedOwn = run([&calls](bmr::EstimationObjective & fine) {
