@@ -83,6 +83,7 @@ MeshMovingAnatomy(const BiomechanicalLabelImageType * movingLabels,
                   const bmr::Scene &                  scene,
                   const RegistrationSettings &        settings)
 {
+  settings.Validate(); // the mesh sizes and the resamples' jitter, as RegisterSegmentedPair() checks them
   if (movingLabels == nullptr)
   {
     bmr::FailInput("MeshMovingAnatomy", "the moving label image is required");

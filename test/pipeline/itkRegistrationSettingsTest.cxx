@@ -18,7 +18,7 @@
 // The settings structs' own checks (itk::RegistrationSettings::Validate, itk::UncertaintySettings::Validate, and the
 // estimator's and walls' they call): the defaults pass; each setting just inside its range passes and just outside
 // it (or NaN) is refused by an itk::InvalidArgumentError whose description names the setting, the name the CLI
-// maps to its option. RegisterSegmentedPair() refuses the same settings before it reads an image.
+// maps to its option. RegisterSegmentedPair() and MeshMovingAnatomy() refuse the same settings before they mesh.
 #include "itkRegistrationPipeline.h"
 #include "bmrTestUtilities.h"
 
@@ -112,5 +112,12 @@ itkRegistrationSettingsTest(int, char *[])
       s.uncertainty.resamples = 2;
     },
     [](auto & s) { s.uncertainty.resamples = 1; });
+  // MeshMovingAnatomy() refuses them too, before it meshes anything.
+  itk::RegistrationSettings jittered;
+  jittered.uncertainty.meshJitter = 0.95;
+  ok &= bmr::test::ExpectException(
+    "MeshMovingAnatomy with a mesh jitter of 0.95",
+    [&] { itk::MeshMovingAnatomy(nullptr, bmr::Scene(), jittered); },
+    "meshJitter must lie in [0, 0.9)");
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }
