@@ -22,6 +22,7 @@
 
 #include <functional>
 #include <map>
+#include <optional>
 
 namespace bmr {
 
@@ -103,6 +104,25 @@ struct BiomechanicalRegistration_EXPORT EstimationResult
   std::map<std::string, double>   timings; ///< s: "sweep", "initial loads", "fine", "uncertainty"
 };
 
+/** Per unknown, what its sweep found (ElasticityEstimator::Sweep()). */
+struct BiomechanicalRegistration_EXPORT SweepAnalysis
+{
+  double      modulus{ 0.0 }; ///< kPa: where the fine stage starts
+  bool        identifiable{ true };
+  bool        onBound{ false };         ///< not flat, but no sign change of dPhi*/dlogE: the minimum is on a bound
+  double      relativeCurvature{ 0.0 }; ///< (d2Phi*/dlogE2) / Phi* across the bracket; 0 without one
+  std::string message;
+};
+
+/** A sweep's outcome (ElasticityEstimator::Sweep()), from which the fine stage starts (SetSweep()). */
+struct BiomechanicalRegistration_EXPORT ModulusSweep
+{
+  std::vector<SweepAnalysis>   unknowns; ///< the unknowns' order
+  std::vector<IterationRecord> samples;
+  std::size_t                  rejectedSteps{ 0 };
+  double                       seconds{ 0.0 };
+};
+
 /** \brief Joint estimation of the loads and the unknown moduli over any EstimationObjective
  * (dissertation chapter 3): sweep, outer bounded optimization, uncertainty, identifiability.
  *
@@ -147,13 +167,6 @@ public:
                       EstimationObjective *       coarse,
                       std::vector<UnknownModulus> unknowns,
                       EstimatorSettings           settings);
-  /** As above, with the fine objective asked of \a fine when it is first needed: after the sweep, when there is a
-   * coarse objective, so that the fine one can still be in the making (e.g. on another thread) while the sweep
-   * runs. \a fine is called once; what it returns must outlive the estimator. Its unknowns are checked then. */
-  ElasticityEstimator(std::function<EstimationObjective &()> fine,
-                      EstimationObjective *                  coarse,
-                      std::vector<UnknownModulus>            unknowns,
-                      EstimatorSettings                      settings);
 
   void
   SetObserver(Observer observer)
@@ -161,26 +174,21 @@ public:
     m_Observer = std::move(observer);
   }
 
-  /** Called once during the sweep, as soon as it knows the moduli the fine stage will start from: when the last
-   * unknown's sweep brackets its minimum (its first sign change of dPhi* / dlogE, which no later sample can change).
-   * Not called when the sweep brackets nothing, or without a sweep. A caller can prepare the fine objective's solves
-   * at those moduli (its factorization) on another core while the sweep's remaining samples run; the results are
-   * the same with or without it. */
-  using SweepPrediction = std::function<void(const std::vector<double> & fineStartModuli)>;
+  /** Runs the sweep now (on the coarse objective, or the fine one) and returns it; Run() does not sweep again. A
+   * caller that has a coarse objective before the fine one constructs an estimator with the coarse objective as its
+   * fine one, sweeps, and hands the sweep to the estimator of the fine objective (SetSweep()), making the fine one
+   * meanwhile: the same result as one estimator with both objectives. */
+  ModulusSweep
+  Sweep();
+  /** The fine stage starts from \a sweep (made by Sweep() of an estimator with the same unknowns and settings)
+   * instead of sweeping. Throws unless it has one analysis per unknown. */
   void
-  SetSweepPrediction(SweepPrediction prediction)
-  {
-    m_SweepPrediction = std::move(prediction);
-  }
-  /** The fine stage's start loads, given the fine objective: by default its EstimateInitialParameters(). A caller
-   * that has computed them ahead (e.g. on the core that waits for the fine objective's factorization) hands them over
-   * here; it must return what EstimateInitialParameters() returns, so that the results are the same. */
-  using FineStartLoads = std::function<std::vector<double>(EstimationObjective & fine)>;
+  SetSweep(ModulusSweep sweep);
+
+  /** The fine stage's start loads instead of the fine objective's EstimateInitialParameters(). Throws unless it has
+   * one value per parameter of the fine objective. */
   void
-  SetFineStartLoads(FineStartLoads source)
-  {
-    m_FineStartLoads = std::move(source);
-  }
+  SetStartLoads(std::vector<double> loads);
 
   /** Warm start [kPa, the unknowns' order]: no sweep (and no coarse objective needed), the outer search starts at
    * \a moduli, its first step from \a relativeCurvature (EstimationResult's, of an earlier estimate of nearly the
@@ -194,19 +202,15 @@ public:
 
 private:
   struct Stages;
-  /** The fine objective, asked of m_FineSource on first use. */
-  EstimationObjective &
-                                         Fine();
-  std::function<EstimationObjective &()> m_FineSource;
-  EstimationObjective *                  m_Fine{ nullptr };
-  EstimationObjective *                  m_Coarse;
-  std::vector<UnknownModulus>            m_Unknowns;
-  EstimatorSettings                      m_Settings;
-  std::vector<double>                    m_StartModuli; ///< kPa, empty: no warm start
-  double                                 m_StartRelativeCurvature{ 0.0 };
-  Observer                               m_Observer;
-  SweepPrediction                        m_SweepPrediction;
-  FineStartLoads                         m_FineStartLoads;
+  EstimationObjective &       m_Fine;
+  EstimationObjective *       m_Coarse;
+  std::vector<UnknownModulus> m_Unknowns;
+  EstimatorSettings           m_Settings;
+  std::vector<double>         m_StartModuli; ///< kPa, empty: no warm start
+  double                      m_StartRelativeCurvature{ 0.0 };
+  std::optional<ModulusSweep> m_Sweep;
+  std::vector<double>         m_StartLoads; ///< empty: the fine objective's own start
+  Observer                    m_Observer;
 };
 
 } // namespace bmr

@@ -25,7 +25,6 @@
 #include "itkProcessObject.h"
 #include "itkTetrahedralMeshObject.h"
 
-#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -53,7 +52,7 @@ namespace itk {
  * the ITK pipeline front door of bmr::ElasticityEstimator.
  *
  * Inputs: the moving anatomy as a tetrahedral mesh (input "Mesh", from LabelImageToTetrahedralMeshFilter with
- * the same scene; or SetMeshSource(), which lets the mesh be finished while the sweep runs), optionally a coarser mesh
+ * the same scene), optionally a coarser mesh
  * of it for the sweep of E ("CoarseMesh"), and one signed distance map [mm] per objective label of the scene
  * (SetDistanceMap(); negative inside, as SignedMaurerDistanceMapImageFilter makes them, see
  * ComputeSceneDistanceMaps()). The unknowns are the loads on the scene's force surfaces and the moduli of the labels
@@ -73,11 +72,10 @@ namespace itk {
  * (\f$ \mathrm{Cov}(\log E) = s^2 w_{\mathrm{eff}} H^{-1} \f$). The estimator's documentation gives the
  * stopping rules, the sweep and the uncertainty; docs/estimation.md the choices and why.
  *
- * Threads: with a coarse mesh to sweep on and more than one thread, a second thread makes the fine objective while
- * the sweep runs on the coarse one (the fine mesh when a source makes it, the objective, its sparse analysis and its
- * factorization at the moduli the sweep brackets), and the thread that then waits for it computes the fine stage's
- * start loads meanwhile (bmr::ElasticityEstimator::SetFineStartLoads()). The results are the same bit for bit as on
- * one thread.
+ * Stages: Update() sweeps (when there is a coarse mesh and no warm start) and runs the fine stage, in order; its
+ * solves take NumberOfFineSolveThreads of the caller's budget and hold no thread of their own. A caller that makes
+ * the fine mesh while the sweep runs (RegisterSegmentedPair(): CGAL meshes on one core) calls SweepCoarseMesh()
+ * first, without the fine mesh, then SetSweep() with its result, SetMesh() and Update(): the same result bit for bit.
  *
  * Gauge: only ratios of moduli are identifiable without measured forces; the scene's gauge label keeps its
  * modulus (GetGaugeLabel()). Step limit (LimitElementInversion, default off, one parameter per wall node
@@ -112,19 +110,21 @@ public:
   SetMesh(const MeshObjectType * mesh);
   const MeshObjectType *
   GetMesh() const;
-  /** Instead of input "Mesh": a function that returns the fine mesh when the estimation first needs it. With a
-   * coarse mesh to sweep on and more than one thread it is called on a second thread while the sweep runs, so a
-   * mesh that is still being made (CGAL meshes on one core) is finished alongside the sweep instead of before it;
-   * otherwise it is called at the start. Called once per Update(); what it throws, Update() throws. The result is
-   * the same as with SetMesh() of the mesh it returns. An empty function (default) uses input "Mesh". */
-  using MeshSourceType = std::function<bmr::TetrahedralMesh()>;
-  void
-  SetMeshSource(MeshSourceType source);
   /** Optional coarser mesh of the same anatomy for the initial sweep of E. */
   void
   SetCoarseMesh(const MeshObjectType * mesh);
   const MeshObjectType *
   GetCoarseMesh() const;
+  /** Runs the sweep of E on the coarse mesh now and returns it, without the fine mesh (which the caller may still be
+   * making): needs the coarse mesh, the distance maps, the scene and the settings Update() would sweep with, and at
+   * least one unknown modulus. Invokes IterationEvent per sample, as Update() does; its solves take
+   * NumberOfFineSolveThreads as set when it is called. Throws itk::ExceptionObject on a missing input. */
+  bmr::ModulusSweep
+  SweepCoarseMesh();
+  /** The sweep the fine stage starts from instead of sweeping: SweepCoarseMesh()'s, made with the same inputs and
+   * settings (an empty one, the default, sweeps). A warm start (SetWarmStart()) takes precedence. */
+  void
+  SetSweep(const bmr::ModulusSweep & sweep);
   /** Signed distance map [mm] of objective label \a labelName in the fixed image. */
   void
   SetDistanceMap(const std::string & labelName, const DistanceMapType * map);
@@ -348,6 +348,15 @@ private:
   /** NumberOfFineSolveThreads, at most ITK's global default number of threads. */
   unsigned int
   FineSolveThreads() const;
+  /** What Update() and SweepCoarseMesh() need besides the meshes: the scene, its distance maps, valid settings. */
+  void
+  VerifySceneAndSettings() const;
+  /** The distance maps as samplers, by label value. */
+  std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>>
+  Samplers() const;
+  /** Turns \a estimator's records into IterationEvents and progress. */
+  void
+  Observe(bmr::ElasticityEstimator & estimator);
   /** The scene's objective on \a mesh with this object's wall settings. */
   std::unique_ptr<bmr::SurfaceMatchingObjective>
   MakeObjective(const bmr::TetrahedralMesh &                                                      mesh,
@@ -363,7 +372,7 @@ private:
   unsigned int                  m_NumberOfFineSolveThreads{ MultiThreaderBase::GetGlobalDefaultNumberOfThreads() };
   std::map<std::string, double> m_WarmStartModuli;
   double                        m_WarmStartRelativeCurvature{ 0.0 };
-  MeshSourceType                m_MeshSource;
+  bmr::ModulusSweep             m_Sweep;
   std::map<std::string, double> m_ModulusUncertainty;
   std::map<std::string, double> m_EstimatedYoungsModuli;
   std::string                   m_GaugeLabel;

@@ -124,16 +124,6 @@ OnBound(double E, const UnknownModulus & unknown)
   return E <= unknown.lowerBound * 1.0001 || E >= unknown.upperBound * 0.9999;
 }
 
-/** What the sweep of one unknown says about it. */
-struct SweepAnalysis
-{
-  double      modulus{ 0.0 };
-  bool        identifiable{ true };
-  bool        onBound{ false };         ///< not flat, but no sign change of dPhi*/dlogE: the minimum is on a bound
-  double      relativeCurvature{ 0.0 }; ///< (d2Phi*/dlogE2) / Phi* across the bracket; 0 without one
-  std::string message;
-};
-
 /** The first bracket of the sweep's minimum: the first sign change of dPhi* / dlogE_k from - to + among the
  * samples so far, its zero interpolated linearly in log E_k. A later sample cannot change it. False: none yet. */
 bool
@@ -270,7 +260,6 @@ struct ElasticityEstimator::Stages
   std::vector<double>        loads;  // warm start of the next inner solve
   std::vector<SweepAnalysis> status; // per unknown
   double                     progress{ 0.0 };
-  bool                       predicted{ false }; // the sweep prediction was called
 
   explicit Stages(ElasticityEstimator & e)
     : estimator(e)
@@ -334,21 +323,6 @@ struct ElasticityEstimator::Stages
   }
   void
   Sweep();
-  /** Tells the sweep prediction the fine stage's start, once, when the last unknown's sweep \a samples bracket it. */
-  void
-  PredictFineStart(const std::vector<IterationRecord> & samples, std::size_t k)
-  {
-    double logE = 0.0, curvature = 0.0;
-    if (!estimator.m_SweepPrediction || predicted || k + 1 != moduli.size() ||
-        !FirstBracket(samples, k, logE, curvature))
-    {
-      return;
-    }
-    predicted = true;
-    std::vector<double> start = moduli;
-    start[k] = std::exp(logE); // as Analyzesweep() sets it
-    estimator.m_SweepPrediction(start);
-  }
   struct FineEvaluations;
   void
   Fine();
@@ -367,7 +341,7 @@ struct ElasticityEstimator::Stages
 void
 ElasticityEstimator::Stages::Sweep()
 {
-  EstimationObjective & objective = estimator.m_Coarse ? *estimator.m_Coarse : estimator.Fine();
+  EstimationObjective & objective = estimator.m_Coarse ? *estimator.m_Coarse : estimator.m_Fine;
   std::vector<double>   start = objective.EstimateInitialParameters();
   const unsigned int    n = settings.numberOfSweepSamples;
   const double          total = double(n) * double(moduli.size());
@@ -389,7 +363,6 @@ ElasticityEstimator::Stages::Sweep()
       samples.push_back(MakeRecord("sweep", index, E, s, SecondsSince(ts)));
       samples.back().loose = LooseSweep();
       Record(samples.back(), result.sweep, 0.5 * double(index + 1) / total);
-      PredictFineStart(samples, k);
     }
     status[k] = Analyzesweep(samples, k, unknown, settings.flatnessThreshold);
     moduli[k] = status[k].modulus;
@@ -419,7 +392,7 @@ struct ElasticityEstimator::Stages::FineEvaluations
       return last;
     }
     const auto ts = Clock::now();
-    last = stages.Solve(stages.estimator.Fine(),
+    last = stages.Solve(stages.estimator.m_Fine,
                         E,
                         stages.loads,
                         loose ? stages.settings.looseInnerGradientTolerance : stages.settings.innerGradientTolerance);
@@ -582,7 +555,7 @@ ElasticityEstimator::Stages::JudgeIdentifiability(const std::vector<double> & es
 void
 ElasticityEstimator::Stages::Outputs(const std::vector<double> & estimate, const std::vector<double> & estimateLoads)
 {
-  EstimationObjective & fine = estimator.Fine();
+  EstimationObjective & fine = estimator.m_Fine;
   result.youngsModuli = estimate;
   result.loadParameters = estimateLoads;
   fine.SetYoungsModuli(estimate);
@@ -610,7 +583,7 @@ ElasticityEstimator::Stages::Uncertainty(const std::vector<double> & estimate,
       const auto          ts = Clock::now();
       std::vector<double> E = estimate;
       E[k] *= std::exp(side == 0 ? delta : -delta);
-      const LoadSolution s = Solve(estimator.Fine(), E, estimateLoads);
+      const LoadSolution s = Solve(estimator.m_Fine, E, estimateLoads);
       gradient[side] = s.logModulusGradient;
       Record(MakeRecord("curvature", unsigned(2 * k + side), E, s, SecondsSince(ts)), result.history, progress);
     }
@@ -628,20 +601,15 @@ ElasticityEstimator::ElasticityEstimator(EstimationObjective &       fine,
                                          EstimationObjective *       coarse,
                                          std::vector<UnknownModulus> unknowns,
                                          EstimatorSettings           settings)
-  : ElasticityEstimator([&fine]() -> EstimationObjective & { return fine; }, coarse, std::move(unknowns), settings)
-{
-  Fine(); // checked now: it exists already
-}
-
-ElasticityEstimator::ElasticityEstimator(std::function<EstimationObjective &()> fine,
-                                         EstimationObjective *                  coarse,
-                                         std::vector<UnknownModulus>            unknowns,
-                                         EstimatorSettings                      settings)
-  : m_FineSource(std::move(fine))
+  : m_Fine(fine)
   , m_Coarse(coarse)
   , m_Unknowns(std::move(unknowns))
   , m_Settings(settings)
 {
+  if (m_Unknowns.size() != fine.GetUnknownLabels().size())
+  {
+    Fail("ElasticityEstimator", "the unknown moduli differ from the objective's unknown labels");
+  }
   if (coarse && m_Unknowns.size() != coarse->GetUnknownLabels().size())
   {
     Fail("ElasticityEstimator", "the unknown moduli differ from the objective's unknown labels");
@@ -674,19 +642,39 @@ ElasticityEstimator::SetWarmStart(std::vector<double> moduli, double relativeCur
   m_StartRelativeCurvature = relativeCurvature;
 }
 
-EstimationObjective &
-ElasticityEstimator::Fine()
+ModulusSweep
+ElasticityEstimator::Sweep()
 {
-  if (m_Fine == nullptr)
+  if (m_Unknowns.empty())
   {
-    EstimationObjective & fine = m_FineSource();
-    if (m_Unknowns.size() != fine.GetUnknownLabels().size())
-    {
-      Fail("ElasticityEstimator", "the unknown moduli differ from the objective's unknown labels");
-    }
-    m_Fine = &fine;
+    Fail("ElasticityEstimator", "there is no unknown modulus to sweep");
   }
-  return *m_Fine;
+  Stages     run(*this);
+  const auto t0 = Clock::now();
+  run.Sweep();
+  ModulusSweep sweep{ run.status, run.result.sweep, run.result.rejectedSteps, SecondsSince(t0) };
+  m_Sweep = sweep;
+  return sweep;
+}
+
+void
+ElasticityEstimator::SetSweep(ModulusSweep sweep)
+{
+  if (sweep.unknowns.size() != m_Unknowns.size())
+  {
+    FailInput("ElasticityEstimator", "the sweep must give one analysis per unknown");
+  }
+  m_Sweep = std::move(sweep);
+}
+
+void
+ElasticityEstimator::SetStartLoads(std::vector<double> loads)
+{
+  if (loads.size() != m_Fine.GetNumberOfParameters())
+  {
+    FailInput("ElasticityEstimator", "the start loads must give one value per parameter of the fine objective");
+  }
+  m_StartLoads = std::move(loads);
 }
 
 EstimationResult
@@ -701,12 +689,26 @@ ElasticityEstimator::Run()
   }
   else if (!m_Unknowns.empty())
   {
-    run.Sweep();
+    if (!m_Sweep)
+    {
+      run.Sweep();
+    }
+    else
+    {
+      run.status = m_Sweep->unknowns;
+      run.result.sweep = m_Sweep->samples;
+      run.result.rejectedSteps = m_Sweep->rejectedSteps;
+      run.progress = 0.5;
+      for (std::size_t k = 0; k < m_Unknowns.size(); ++k)
+      {
+        run.moduli[k] = run.status[k].modulus;
+      }
+    }
   }
-  run.result.timings["sweep"] = SecondsSince(t0);
+  run.result.timings["sweep"] = m_Sweep ? m_Sweep->seconds : SecondsSince(t0);
 
   t0 = Clock::now();
-  run.loads = m_FineStartLoads ? m_FineStartLoads(Fine()) : Fine().EstimateInitialParameters();
+  run.loads = m_StartLoads.empty() ? m_Fine.EstimateInitialParameters() : m_StartLoads;
   run.result.timings["initial loads"] = SecondsSince(t0);
 
   t0 = Clock::now();

@@ -1,23 +1,30 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
 #include "itkFEMElasticityOptimizer.h"
 
-#include "bmrMemoryWarmUp.h"
-#include "bmrTaskTrace.h"
 #include "itkGridGeometryConversion.h"
 #include "itkMultiThreaderBase.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <functional>
-#include <future>
-#include <optional>
 
 namespace itk {
 namespace {
-// The most memory the waiting main thread faults in for the fine factorization [bytes]: about the fine factor of
-// the default pelvis mesh, the part a change of the prostate's modulus refactorizes (kept by
-// bmr::LinearElasticModel::Factorize), the update workspaces and K_ff's values split by label.
-constexpr std::size_t FineFactorWarmUpBytes = std::size_t{ 480 } << 20;
 
 std::shared_ptr<const bmr::SignedDistanceSampler>
 ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string & name)
@@ -34,120 +41,6 @@ ToSampler(const FEMElasticityOptimizer::DistanceMapType * map, const std::string
   return std::make_shared<bmr::SignedDistanceSampler>(GridGeometryOf(map), std::move(values), what.c_str());
 }
 
-/** \brief The fine objective in the making on a second thread while the sweep runs on the coarse one (one core each):
- * its mesh (when a source makes it), the objective, its sparse analysis and, at the moduli the fine stage starts
- * from, its factorization. The sweep tells those moduli (TellStartModuli) as soon as it brackets the minimum, so the
- * factorization overlaps its last samples: the same objective and factor, sooner.
- *
- * The thread that then asks for the objective (Take) and would otherwise wait faults in the memory of the fine
- * factor while the objective is made (bmr::MemoryWarmUp: page faults would otherwise slow the first fine
- * factorization; docs/estimation.md), computes the fine stage's start loads as soon as
- * the objective exists, while the second thread analyzes its matrix (StartLoads hands them over), and then warms
- * on until the factorization starts. */
-class FineObjectiveInMaking
-{
-public:
-  using Maker = std::function<std::unique_ptr<bmr::SurfaceMatchingObjective>()>;
-
-  FineObjectiveInMaking(Maker make, unsigned int solveThreads)
-    : m_WarmUp(FineFactorWarmUpBytes)
-    , m_StartModuliKnown(m_StartModuli.get_future())
-    , m_ObjectiveKnown(m_Objective.get_future())
-  {
-    m_Made = std::async(std::launch::async, [this, make = std::move(make), solveThreads]() {
-      const bmr::TracedSpan span(bmr::TracedSpan::Kind::Background, "fine objective alongside");
-      return this->Make(make, solveThreads);
-    });
-  }
-  /** Should the sweep throw, the second thread learns there is nothing to factorize; m_Made then joins it. */
-  ~FineObjectiveInMaking() { TellStartModuli({}); }
-  ITK_DISALLOW_COPY_AND_MOVE(FineObjectiveInMaking);
-
-  /** The moduli to factorize at (empty: none); the first call counts. */
-  void
-  TellStartModuli(const std::vector<double> & moduli)
-  {
-    if (!m_StartModuliTold)
-    {
-      m_StartModuliTold = true;
-      m_StartModuli.set_value(moduli);
-    }
-  }
-
-  /** Waits for the objective (rethrowing what making it threw), computing the start loads meanwhile. */
-  std::shared_ptr<bmr::SurfaceMatchingObjective>
-  Take()
-  {
-    // On a trace, the start loads computed while waiting count as hidden behind the other thread's work.
-    const bmr::TracedSpan wait(bmr::TracedSpan::Kind::Wait, "fine objective alongside");
-    TellStartModuli({}); // a sweep without a bracket has told nothing
-    if (m_Made.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-    {
-      m_WarmUp.WarmWhile(
-        [this]() { return m_ObjectiveKnown.wait_for(std::chrono::seconds(0)) != std::future_status::ready; });
-      // Shared: should the analysis throw, the objective outlives the other thread's unwinding until this is done.
-      if (const std::shared_ptr<const bmr::SurfaceMatchingObjective> made = m_ObjectiveKnown.get())
-      {
-        m_StartLoads = made->EstimateInitialParameters();
-      }
-      m_WarmUp.WarmWhileOpen();
-    }
-    return m_Made.get();
-  }
-
-  /** The start loads computed in Take(), or computed now: the same values either way. */
-  std::vector<double>
-  StartLoads(bmr::EstimationObjective & objective) const
-  {
-    return m_StartLoads ? *m_StartLoads : objective.EstimateInitialParameters();
-  }
-
-private:
-  std::shared_ptr<bmr::SurfaceMatchingObjective>
-  Make(const Maker & make, unsigned int solveThreads)
-  {
-    struct OnExit // the waiting thread's warm-up ends, and it learns when the objective will not come
-    {
-      FineObjectiveInMaking & self;
-      bool                    told{ false };
-      ~OnExit()
-      {
-        self.m_WarmUp.Close();
-        if (!told)
-        {
-          self.m_Objective.set_value(nullptr);
-        }
-      }
-    } onExit{ *this };
-    const std::shared_ptr<bmr::SurfaceMatchingObjective> objective = make();
-    // Read-only from here on in the other thread: EstimateInitialParameters() reads the mesh, the loads and the data
-    // terms, none of which the analysis and the factorization below write.
-    m_Objective.set_value(objective);
-    onExit.told = true;
-    // The sweep is ending or over: its core joins the analysis (the element stiffnesses are summed alongside the
-    // ordering) and the factorization, the same factor on any number of threads.
-    objective->GetForwardModel().SetNumberOfSolveThreads(solveThreads);
-    objective->GetForwardModel().Prepare();
-    const std::vector<double> moduli = m_StartModuliKnown.get();
-    m_WarmUp.Close(); // its memory released just before the factorization allocates
-    if (!moduli.empty() && objective->GetForwardModel().IsLinear()) // a nonlinear model factorizes per state
-    {
-      objective->SetYoungsModuli(moduli);
-      objective->GetForwardModel().PrepareSolves();
-    }
-    return objective;
-  }
-
-  bmr::MemoryWarmUp                                                  m_WarmUp;
-  std::promise<std::vector<double>>                                  m_StartModuli;
-  bool                                                               m_StartModuliTold{ false };
-  std::future<std::vector<double>>                                   m_StartModuliKnown;
-  std::promise<std::shared_ptr<const bmr::SurfaceMatchingObjective>> m_Objective;
-  std::future<std::shared_ptr<const bmr::SurfaceMatchingObjective>>  m_ObjectiveKnown;
-  std::optional<std::vector<double>>                                 m_StartLoads;
-  // Last: destroyed first, which waits for the thread while everything it uses still exists.
-  std::future<std::shared_ptr<bmr::SurfaceMatchingObjective>> m_Made;
-};
 } // namespace
 
 FEMElasticityOptimizer::FEMElasticityOptimizer()
@@ -168,23 +61,6 @@ const FEMElasticityOptimizer::MeshObjectType *
 FEMElasticityOptimizer::GetMesh() const
 {
   return itkDynamicCastInDebugMode<const MeshObjectType *>(this->GetInput(0));
-}
-
-void
-FEMElasticityOptimizer::SetMeshSource(MeshSourceType source)
-{
-  // With a source the indexed input "Mesh" is not needed; VerifyPreconditions() asks for one of the two.
-  this->SetNumberOfRequiredInputs(source ? 0 : 1);
-  if (source)
-  {
-    this->RemoveRequiredInputName("Primary");
-  }
-  else if (!this->IsRequiredInputName("Primary"))
-  {
-    this->AddRequiredInputName("Primary");
-  }
-  m_MeshSource = std::move(source);
-  this->Modified();
 }
 
 void
@@ -233,10 +109,21 @@ void
 FEMElasticityOptimizer::VerifyPreconditions() ITKv5_CONST
 {
   Superclass::VerifyPreconditions();
-  if (!m_MeshSource && this->GetMesh() == nullptr)
+  if (this->GetMesh() == nullptr)
   {
-    itkExceptionMacro(<< "no mesh: SetMesh() or SetMeshSource()");
+    itkExceptionMacro(<< "no mesh (SetMesh)");
   }
+  this->VerifySceneAndSettings();
+  if (!m_Sweep.unknowns.empty() && m_Sweep.unknowns.size() != bmr::SceneUnknownModuli(m_Scene).size())
+  {
+    itkExceptionMacro(<< "the sweep given (SetSweep) has " << m_Sweep.unknowns.size() << " unknowns, the scene "
+                      << bmr::SceneUnknownModuli(m_Scene).size());
+  }
+}
+
+void
+FEMElasticityOptimizer::VerifySceneAndSettings() const
+{
   if (m_Scene.labels.empty())
   {
     itkExceptionMacro(<< "no scene was set (SetScene)");
@@ -337,85 +224,88 @@ FEMElasticityOptimizer::TakeResult(const bmr::EstimationResult & result)
   m_Result = result;
 }
 
-void
-FEMElasticityOptimizer::GenerateData()
+std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>>
+FEMElasticityOptimizer::Samplers() const
 {
-  // Distance maps are shared by the coarse and the fine objective.
   std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> samplers;
   for (const auto & term : m_Scene.objective)
   {
     samplers[m_Scene.FindLabel(term.label)->value] = ToSampler(this->GetDistanceMap(term.label), term.label);
   }
-  const bmr::SceneLabel * gauge = m_Scene.GaugeLabel();
-  m_GaugeLabel = gauge ? gauge->name : std::string();
-  const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
+  return samplers;
+}
 
-  // The coarse mesh serves the sweep only: not built when there is no modulus to sweep.
-  const bool sweeps = this->GetCoarseMesh() && !unknowns.empty() && m_WarmStartModuli.empty();
-  // The fine mesh: input "Mesh", or the source's, which is asked for only when the fine objective is made.
-  bmr::TetrahedralMesh         sourced;
-  const bmr::TetrahedralMesh * fine = m_MeshSource ? nullptr : &this->GetMesh()->Get();
-  const auto                   makeFineObjective = [this, &fine, &sourced, &samplers]() {
-    if (fine == nullptr)
-    {
-      sourced = m_MeshSource();
-      fine = &sourced;
-    }
-    return this->MakeObjective(*fine, samplers);
-  };
-  // Declared after what the second thread reads (fine, sourced, samplers), so destroyed (joined) before it.
-  std::unique_ptr<FineObjectiveInMaking>         inMaking;
-  std::shared_ptr<bmr::SurfaceMatchingObjective> fineObjective;
-  const bool alongside = sweeps && MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
-  if (alongside)
-  {
-    inMaking = std::make_unique<FineObjectiveInMaking>(makeFineObjective, this->FineSolveThreads());
-  }
-  else
-  {
-    fineObjective = makeFineObjective();
-    fineObjective->GetForwardModel().Prepare();
-  }
-  std::unique_ptr<bmr::SurfaceMatchingObjective> coarseObjective;
-  if (sweeps)
-  {
-    coarseObjective = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
-    // The sweep's solves take the budget but the core that makes the fine objective alongside.
-    const unsigned int threads = this->FineSolveThreads();
-    coarseObjective->GetForwardModel().SetNumberOfSolveThreads(alongside ? std::max(1U, threads - 1) : threads);
-  }
-  bmr::ElasticityEstimator estimator(
-    [&]() -> bmr::EstimationObjective & {
-      if (!fineObjective)
-      {
-        fineObjective = inMaking->Take();
-      }
-      fineObjective->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
-      return *fineObjective;
-    },
-    coarseObjective.get(),
-    unknowns,
-    this->EffectiveSettings());
-  if (!m_WarmStartModuli.empty())
-  {
-    estimator.SetWarmStart(this->WarmStartInOrder(unknowns), m_WarmStartRelativeCurvature);
-  }
-  if (alongside)
-  {
-    estimator.SetSweepPrediction(
-      [&inMaking](const std::vector<double> & moduli) { inMaking->TellStartModuli(moduli); });
-    estimator.SetFineStartLoads(
-      [&inMaking](bmr::EstimationObjective & objective) { return inMaking->StartLoads(objective); });
-  }
+void
+FEMElasticityOptimizer::Observe(bmr::ElasticityEstimator & estimator)
+{
   estimator.SetObserver([this](const IterationRecord & record, double progress) {
     m_CurrentRecord = record;
     this->InvokeEvent(IterationEvent());
     this->UpdateProgress(static_cast<float>(progress));
   });
+}
+
+bmr::ModulusSweep
+FEMElasticityOptimizer::SweepCoarseMesh()
+{
+  this->VerifySceneAndSettings();
+  if (this->GetCoarseMesh() == nullptr)
+  {
+    itkExceptionMacro(<< "SweepCoarseMesh: no coarse mesh (SetCoarseMesh)");
+  }
+  const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
+  if (unknowns.empty())
+  {
+    itkExceptionMacro(<< "SweepCoarseMesh: the scene has no unknown modulus to sweep");
+  }
+  const std::unique_ptr<bmr::SurfaceMatchingObjective> coarse =
+    this->MakeObjective(this->GetCoarseMesh()->Get(), this->Samplers());
+  coarse->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
+  // The coarse objective as the estimator's only one: Sweep() sweeps on it, as Run() would on the coarse one.
+  bmr::ElasticityEstimator estimator(*coarse, nullptr, unknowns, this->EffectiveSettings());
+  this->Observe(estimator);
+  return estimator.Sweep();
+}
+
+void
+FEMElasticityOptimizer::SetSweep(const bmr::ModulusSweep & sweep)
+{
+  m_Sweep = sweep;
+  this->Modified();
+}
+
+void
+FEMElasticityOptimizer::GenerateData()
+{
+  const auto                             samplers = this->Samplers(); // shared by the coarse and the fine objective
+  const bmr::SceneLabel *                gauge = m_Scene.GaugeLabel();
+  const std::vector<bmr::UnknownModulus> unknowns = bmr::SceneUnknownModuli(m_Scene);
+  m_GaugeLabel = gauge ? gauge->name : std::string();
+
+  const std::unique_ptr<bmr::SurfaceMatchingObjective> fine = this->MakeObjective(this->GetMesh()->Get(), samplers);
+  fine->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
+  fine->GetForwardModel().Prepare();
+  // The coarse mesh serves the sweep only: not used when there is no modulus to sweep or the sweep is given.
+  std::unique_ptr<bmr::SurfaceMatchingObjective> coarse;
+  if (this->GetCoarseMesh() && !unknowns.empty() && m_WarmStartModuli.empty() && m_Sweep.unknowns.empty())
+  {
+    coarse = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
+    coarse->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
+  }
+  bmr::ElasticityEstimator estimator(*fine, coarse.get(), unknowns, this->EffectiveSettings());
+  if (!m_WarmStartModuli.empty())
+  {
+    estimator.SetWarmStart(this->WarmStartInOrder(unknowns), m_WarmStartRelativeCurvature);
+  }
+  else if (!m_Sweep.unknowns.empty() && !unknowns.empty())
+  {
+    estimator.SetSweep(m_Sweep);
+  }
+  this->Observe(estimator);
   const bmr::EstimationResult result = estimator.Run();
   this->TakeResult(result);
 
-  bmr::TetrahedralMesh out = *fine; // set: the estimator always asks for the fine objective
+  bmr::TetrahedralMesh out = this->GetMesh()->Get();
   out.displacement = result.displacement;
   out.force = result.boundaryForces;
   this->GetOutput()->Set(out);
@@ -440,7 +330,7 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "UncertaintyStep: " << e.uncertaintyStep << std::endl;
   os << indent << "WarmStart: " << m_WarmStartModuli.size() << " moduli, relative curvature "
      << m_WarmStartRelativeCurvature << std::endl;
-  os << indent << "MeshSource: " << (m_MeshSource ? "set" : "none (input Mesh)") << std::endl;
+  os << indent << "Sweep: " << (m_Sweep.unknowns.empty() ? "none given" : "given (SetSweep)") << std::endl;
   os << indent << "LimitElementInversion: " << (e.limitElementInversion ? "On" : "Off") << std::endl;
   os << indent << "NumberOfFineSolveThreads: " << m_NumberOfFineSolveThreads << std::endl;
   os << indent << "NumberOfRejectedSteps: " << m_Result.rejectedSteps << std::endl;

@@ -561,12 +561,13 @@ MakeResampleSource(const EstimationSetup &             setup,
   return source;
 }
 
-/** A rescan's distance maps: the fixed anatomy revoxelized on its grid, drawn by \a rng (ResampleRandom() after
- * the draw of the resample's mesh scene). */
+/** Rescan \a k's distance maps: the fixed anatomy revoxelized on its grid (the resample's ResampleDraw::Grid). */
 DistanceMaps
-RescanMaps(const ResampleSource & source, const EstimationSetup & setup, Random & rng)
+RescanMaps(const ResampleSource & source, const EstimationSetup & setup, unsigned int k)
 {
-  const bmr::GridGeometry grid = ResampleGrid(source.crop, rng, setup.settings->uncertainty);
+  const UncertaintySettings & u = setup.settings->uncertainty;
+  Random                      rng = ResampleRandom(u, k, ResampleDraw::Grid);
+  const bmr::GridGeometry     grid = ResampleGrid(source.crop, rng, u);
   return RevoxelizedMaps(
     nullptr, grid, source.anatomy, *setup.scene, setup.probabilityOrgans, setup.settings->interpolateSlices);
 }
@@ -584,11 +585,10 @@ Resample(unsigned int                        k,
          const BiomechanicalLabelImageType * movingLabels)
 {
   const UncertaintySettings & u = setup.settings->uncertainty;
-  Random                      rng = ResampleRandom(u, k);
   // The estimation's own meshes at randomly scaled sizes (the coarse one as the registration makes it).
   std::vector<PipelineStage> untimed;
   StageClock                 quiet(nullptr, untimed);
-  const bmr::Scene           scene = ResampleMeshScene(*setup.scene, u, rng);
+  const bmr::Scene           scene = ResampleMeshScene(*setup.scene, u, k);
   const bmr::TetrahedralMesh fine =
     prefetched ? std::move(*prefetched) : MeshLabelImage(movingLabels, scene, quiet, "resample mesh");
   RegistrationSettings settings = *setup.settings;
@@ -597,7 +597,7 @@ Resample(unsigned int                        k,
   resample.settings = &settings;
   resample.prefetch = nullptr;
   resample.fine = &fine;
-  resample.fineSource = nullptr;
+  resample.fineAfterSweep = nullptr;
   bmr::TetrahedralMesh coarse;
   if (u.warmStart)
   {
@@ -618,18 +618,20 @@ Resample(unsigned int                        k,
   }
   else if (!sim)
   {
-    maps = RescanMaps(*source, setup, rng);
+    maps = RescanMaps(*source, setup, k);
   }
   else
   {
-    const std::vector<double> prescribed = PerturbedWallMotion(*sim, rng, u.tangentialWallFraction);
+    Random                    motion = ResampleRandom(u, k, ResampleDraw::WallMotion);
+    const std::vector<double> prescribed = PerturbedWallMotion(*sim, motion, u.tangentialWallFraction);
     bmr::TetrahedralMesh      deformed = sim->mesh;
     {
       const std::lock_guard<std::mutex> lock(sim->solver);
       sim->model->ForgetState(); // the resamples' order varies with the threads; their states must not
       deformed.displacement = sim->model->SolveState(sim->forces, prescribed);
     }
-    const bmr::GridGeometry grid = ResampleGrid(source->crop, rng, u);
+    Random                  gridRandom = ResampleRandom(u, k, ResampleDraw::Grid);
+    const bmr::GridGeometry grid = ResampleGrid(source->crop, gridRandom, u);
     maps = RevoxelizedMaps(
       &deformed, grid, source->anatomy, *setup.scene, setup.probabilityOrgans, setup.settings->interpolateSlices);
   }
@@ -680,9 +682,7 @@ RescanMapsPrefetch::RescanMapsPrefetch(const BiomechanicalLabelImageType * fixed
     const UncertaintySettings & u = setup.settings->uncertainty;
     for (unsigned int k = 0; k < u.resamples && !m_Stop; ++k)
     {
-      Random rng = ResampleRandom(u, k);
-      ResampleMeshScene(*setup.scene, u, rng); // a resample draws its mesh scene first, then its grid
-      m_Maps.push_back(RescanMaps(source, setup, rng));
+      m_Maps.push_back(RescanMaps(source, setup, k));
     }
   })
 {}

@@ -106,9 +106,8 @@ MeshMovingAnatomy(const BiomechanicalLabelImageType * movingLabels,
     pipeline::StageClock       quiet(nullptr, untimed);
     for (unsigned int k = 0; k < settings.uncertainty.resamples; ++k)
     {
-      std::mt19937_64 rng = pipeline::ResampleRandom(settings.uncertainty, k);
       meshes.resamples.push_back(pipeline::MeshLabelImage(
-        anatomy, pipeline::ResampleMeshScene(scaled, settings.uncertainty, rng), quiet, "resample mesh"));
+        anatomy, pipeline::ResampleMeshScene(scaled, settings.uncertainty, k), quiet, "resample mesh"));
     }
     clock.End(std::to_string(meshes.resamples.size()) + " meshes");
   }

@@ -33,6 +33,7 @@
 #include <functional>
 #include <mutex>
 #include <random>
+#include <cstdint>
 
 namespace itk {
 namespace pipeline {
@@ -143,17 +144,32 @@ ResampleThreads(const UncertaintySettings & u)
   return u.threads > 0 ? u.threads : MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
 }
 
-/** The random numbers of resample \a k of the stated interval: the same seed and k, the same resample. */
-inline std::mt19937_64
-ResampleRandom(const UncertaintySettings & u, unsigned int k)
+/** What a resample of the stated interval draws at random, each from a stream of its own: whatever makes one part
+ * of a resample beforehand (ResampleMeshPrefetch, RescanMapsPrefetch) draws that part alone, and a resample's draws
+ * do not depend on which other parts it draws or in which order. */
+enum class ResampleDraw : std::uint32_t
 {
-  return std::mt19937_64(u.seed * 1000003 + k);
+  MeshSizes = 1,  ///< the scale of the fine mesh's sizes (ResampleMeshScene())
+  Grid = 2,       ///< the rescan's voxel grid: shift, rotation, spacing
+  WallMotion = 3, ///< the bootstrap's perturbed wall motion
+};
+
+/** The random numbers \a draw of resample \a k of the stated interval: the same seed, k and draw, the same numbers.
+ * std::seed_seq mixes the four words as the C++ standard fixes, so the streams are the same on every platform. */
+inline std::mt19937_64
+ResampleRandom(const UncertaintySettings & u, unsigned int k, ResampleDraw draw)
+{
+  std::seed_seq words{ static_cast<std::uint32_t>(u.seed),
+                       static_cast<std::uint32_t>(u.seed >> 32),
+                       static_cast<std::uint32_t>(k),
+                       static_cast<std::uint32_t>(draw) };
+  return std::mt19937_64(words);
 }
 
-/** The scene of resample \a k's fine mesh: the scene's mesh sizes scaled by U(1 - jitter, 1 + jitter), the
- * first number \a rng (ResampleRandom()) gives. */
+/** The scene of resample \a k's fine mesh: the scene's mesh sizes scaled by U(1 - jitter, 1 + jitter), drawn from
+ * the resample's ResampleDraw::MeshSizes stream. */
 bmr::Scene
-ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, std::mt19937_64 & rng);
+ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, unsigned int k);
 
 /** \brief The resamples' fine meshes, made on another thread while the fit runs.
  *
@@ -189,9 +205,9 @@ class RescanMapsPrefetch;
 struct EstimationSetup
 {
   const bmr::TetrahedralMesh * fine{ nullptr };
-  /** Or, when fine is null, the function that returns it when the estimation first needs it
-   * (FEMElasticityOptimizer::SetMeshSource). */
-  std::function<bmr::TetrahedralMesh()> fineSource;
+  /** Or, when fine is null, the function that returns it once the sweep on the coarse mesh is done (the fine mesh
+   * made beside the sweep; FEMElasticityOptimizer::SweepCoarseMesh()). */
+  std::function<bmr::TetrahedralMesh()> fineAfterSweep;
   const bmr::TetrahedralMesh *          coarse{ nullptr };
   const bmr::Scene *                    scene{ nullptr };
   const RegistrationSettings *          settings{ nullptr };

@@ -537,16 +537,6 @@ RunEstimation(const EstimationSetup &                                 setup,
               PipelineObserver *                                      observer)
 {
   auto optimizer = FEMElasticityOptimizer::New();
-  if (setup.fine != nullptr)
-  {
-    auto fine = TetrahedralMeshObject::New();
-    fine->Set(*setup.fine);
-    optimizer->SetMesh(fine);
-  }
-  else
-  {
-    optimizer->SetMeshSource(setup.fineSource);
-  }
   if (setup.coarse)
   {
     auto coarse = TetrahedralMeshObject::New();
@@ -568,6 +558,20 @@ RunEstimation(const EstimationSetup &                                 setup,
     optimizer->SetWarmStart(setup.warmStartModuli, setup.warmStartRelativeCurvature);
   }
   ObserveIterations(optimizer, observer);
+  auto fine = TetrahedralMeshObject::New();
+  if (setup.fine != nullptr)
+  {
+    fine->Set(*setup.fine);
+  }
+  else
+  {
+    // The fine mesh is still being made beside: the sweep's solves take the budget but its core, then it is taken.
+    optimizer->SetNumberOfFineSolveThreads(std::max(1U, setup.fineSolveThreads - 1));
+    optimizer->SetSweep(optimizer->SweepCoarseMesh());
+    optimizer->SetNumberOfFineSolveThreads(setup.fineSolveThreads);
+    fine->Set(setup.fineAfterSweep());
+  }
+  optimizer->SetMesh(fine);
   optimizer->Update();
   return optimizer;
 }
@@ -666,8 +670,8 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   // The fine mesh (CGAL, one core) is made alongside the distance maps, the coarse mesh and the sweep.
   const std::unique_ptr<pipeline::BackgroundMesh> fineMesh =
     premeshed ? nullptr : std::make_unique<pipeline::BackgroundMesh>(anatomy.GetPointer(), scene);
-  // With a sweep to run, the estimation takes the fine mesh when the sweep is done (FEMElasticityOptimizer's mesh
-  // source); without, it is taken before.
+  // With a sweep to run, the estimation takes the fine mesh when the sweep is done
+  // (FEMElasticityOptimizer::SweepCoarseMesh()); without, it is taken before.
   const bool meshDuringSweep = fineMesh && fineMesh->Alongside() && pipeline::UsesCoarseMesh(scene, settings);
   clock.Begin("distance maps (fixed labels)");
   const auto maps = pipeline::ObjectiveDistanceMaps(
@@ -695,7 +699,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   const bmr::TetrahedralMesh estimationMesh = r.state.mesh; // empty when made during the sweep
   if (meshDuringSweep)
   {
-    setup.fineSource = [&]() {
+    setup.fineAfterSweep = [&]() {
       bmr::TetrahedralMesh mesh = fineMesh->TakeAlongside(fineMeshDetail);
       startPrefetches();
       return mesh;

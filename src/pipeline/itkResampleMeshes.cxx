@@ -29,8 +29,9 @@ namespace itk {
 namespace pipeline {
 
 bmr::Scene
-ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, std::mt19937_64 & rng)
+ResampleMeshScene(const bmr::Scene & scene, const UncertaintySettings & u, unsigned int k)
 {
+  std::mt19937_64 rng = ResampleRandom(u, k, ResampleDraw::MeshSizes);
   return ScaledMeshSizes(scene, Uniform(rng, 1.0 - u.meshJitter, 1.0 + u.meshJitter));
 }
 
@@ -51,8 +52,8 @@ ResampleMeshPrefetch::ResampleMeshPrefetch(const BiomechanicalLabelImageType * m
       {
         std::vector<PipelineStage> untimed;
         StageClock                 quiet(nullptr, untimed);
-        std::mt19937_64            rng = ResampleRandom(u, static_cast<unsigned int>(k));
-        m_Meshes[k] = MeshLabelImage(movingLabels, ResampleMeshScene(scene, u, rng), quiet, "resample mesh");
+        m_Meshes[k] = MeshLabelImage(
+          movingLabels, ResampleMeshScene(scene, u, static_cast<unsigned int>(k)), quiet, "resample mesh");
       }
       catch (const std::exception &)
       {

@@ -33,7 +33,6 @@
 #include <cstdlib>
 #include <iostream>
 #include <limits>
-#include <thread>
 #include <vector>
 
 namespace {
@@ -218,64 +217,63 @@ CheckLooseEvaluations(itk::FEMElasticityOptimizer & optimizer)
   return ok;
 }
 
-/** A mesh source gives the estimate that input "Mesh" gives, bit for bit, with a coarse mesh to sweep on: it is
- * called once, on another thread than Update()'s when more than one thread may run (it runs alongside the sweep).
- * What it throws, Update() throws; with neither a source nor a mesh, Update() is refused. */
+/** The sweep run first (SweepCoarseMesh(), without the fine mesh, as RegisterSegmentedPair() does while the fine mesh
+ * is made beside it) and handed back (SetSweep()) gives Update()'s own estimate, displacement and sweep bit for bit,
+ * on any number of threads; a sweep without its inputs or of other unknowns is refused. */
 bool
-CheckMeshSource(itk::FEMElasticityOptimizer & optimizer, const itk::TetrahedralMeshObject * mesh)
+CheckSweepFirst(itk::FEMElasticityOptimizer & optimizer, const itk::TetrahedralMeshObject * mesh)
 {
   auto coarse = itk::TetrahedralMeshObject::New();
   coarse->Set(bmr::test::CavityInclusionBall(4.5));
   optimizer.SetCoarseMesh(coarse);
   ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
-  const double              fromInput = optimizer.GetEstimatedYoungsModuli().at("inclusion");
-  const std::vector<double> displacement = optimizer.GetOutput()->Get().displacement;
+  const double                            inOne = optimizer.GetEstimatedYoungsModuli().at("inclusion");
+  const std::vector<double>               displacement = optimizer.GetOutput()->Get().displacement;
+  const std::vector<bmr::IterationRecord> sweepInOne = optimizer.GetSweep();
 
-  unsigned int    calls = 0;
-  std::thread::id caller;
-  optimizer.SetMesh(nullptr);
-  optimizer.SetMeshSource([&]() {
-    ++calls;
-    caller = std::this_thread::get_id();
-    return mesh->Get();
-  });
-  ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
-  const double fromSource = optimizer.GetEstimatedYoungsModuli().at("inclusion");
-  std::cout << "mesh source: E " << fromSource << " kPa (input: " << fromInput << " kPa), " << calls << " call(s)"
-            << std::endl;
-  bool ok = Expect(fromSource == fromInput && optimizer.GetOutput()->Get().displacement == displacement,
-                   "the mesh source gives the input mesh's estimate and displacement bit for bit (" +
-                     ToString(fromSource) + " vs " + ToString(fromInput) + " kPa)");
-  ok &= Expect(calls == 1, "the mesh source is called once (got " + ToString(calls) + ")");
-  const bool alongside = itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1;
-  ok &= Expect((caller != std::this_thread::get_id()) == alongside,
-               std::string("the mesh source is called on ") + (alongside ? "a second thread" : "Update()'s thread"));
-  if (alongside)
-  {
-    // Alongside, the second thread also factorizes the fine model at the moduli the sweep brackets before the sweep
-    // ends; on one thread nothing is done ahead. The estimate must not depend on it.
-    const int threads = itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
-    itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(1);
-    ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
-    itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(threads);
-    ok &= Expect(optimizer.GetEstimatedYoungsModuli().at("inclusion") == fromSource &&
-                   optimizer.GetOutput()->Get().displacement == displacement,
-                 "one thread (nothing factorized ahead) gives the same estimate and displacement bit for bit");
-    // A coarse objective that cannot be made throws while the second thread waits for the sweep's bracket: the
-    // error must reach the caller instead of leaving that thread waiting (a hang, which ctest's timeout fails).
-    auto empty = itk::TetrahedralMeshObject::New();
-    empty->Set(bmr::TetrahedralMesh{});
-    optimizer.SetCoarseMesh(empty);
-    ITK_TRY_EXPECT_EXCEPTION(optimizer.Update());
-    optimizer.SetCoarseMesh(coarse);
-  }
-  optimizer.SetMeshSource([]() -> bmr::TetrahedralMesh { itkGenericExceptionMacro(<< "the mesher gave up"); });
-  ok &= bmr::test::ExpectException(
-    "a failing mesh source", [&] { optimizer.Update(); }, "the mesher gave up");
-  optimizer.SetMeshSource(nullptr);
-  ITK_TRY_EXPECT_EXCEPTION(optimizer.Update()); // neither a mesh nor a source
+  optimizer.SetMesh(nullptr); // the sweep needs no fine mesh
+  bmr::ModulusSweep sweep;
+  ITK_TRY_EXPECT_NO_EXCEPTION(sweep = optimizer.SweepCoarseMesh());
+  optimizer.SetSweep(sweep);
   optimizer.SetMesh(mesh);
+  ITK_TRY_EXPECT_NO_EXCEPTION(optimizer.Update());
+  const double first = optimizer.GetEstimatedYoungsModuli().at("inclusion");
+  std::cout << "sweep first: E " << first << " kPa (in one Update(): " << inOne << " kPa), " << sweep.samples.size()
+            << " samples" << std::endl;
+  bool ok = Expect(first == inOne && optimizer.GetOutput()->Get().displacement == displacement,
+                   "the sweep run first gives Update()'s own estimate and displacement bit for bit (" +
+                     ToString(first) + " vs " + ToString(inOne) + " kPa)");
+  bool sameSweep = sweep.samples.size() == sweepInOne.size() && optimizer.GetSweep().size() == sweepInOne.size();
+  for (std::size_t i = 0; sameSweep && i < sweepInOne.size(); ++i)
+  {
+    sameSweep = sweep.samples[i].value == sweepInOne[i].value && optimizer.GetSweep()[i].value == sweepInOne[i].value;
+  }
+  ok &= Expect(sameSweep, "the sweep run first has the same samples, and the result reports them");
+
+  const int threads = itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads();
+  itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(threads == 1 ? 3 : 1);
+  optimizer.SetNumberOfFineSolveThreads(threads == 1 ? 3 : 1);
+  const bmr::ModulusSweep other = optimizer.SweepCoarseMesh();
+  itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(threads);
+  optimizer.SetNumberOfFineSolveThreads(threads);
+  ok &= Expect(other.unknowns.size() == 1 && other.unknowns[0].modulus == sweep.unknowns[0].modulus &&
+                 other.unknowns[0].relativeCurvature == sweep.unknowns[0].relativeCurvature,
+               "the sweep's start modulus and curvature are the same on " + ToString(threads == 1 ? 3 : 1) +
+                 " threads as on " + ToString(threads));
+
+  bmr::ModulusSweep twoUnknowns = sweep;
+  twoUnknowns.unknowns.push_back(sweep.unknowns[0]);
+  optimizer.SetSweep(twoUnknowns);
+  ok &= bmr::test::ExpectException(
+    "a sweep of two unknowns for a scene of one", [&] { optimizer.Update(); }, "the sweep given");
+  optimizer.SetSweep(bmr::ModulusSweep{});
   optimizer.SetCoarseMesh(nullptr);
+  ok &= bmr::test::ExpectException(
+    "a sweep without a coarse mesh", [&] { optimizer.SweepCoarseMesh(); }, "no coarse mesh");
+  optimizer.SetMesh(nullptr);
+  ok &= bmr::test::ExpectException(
+    "an update without a mesh", [&] { optimizer.Update(); }, "Primary");
+  optimizer.SetMesh(mesh);
   return ok;
 }
 
@@ -473,7 +471,7 @@ itkFEMElasticityOptimizerTest(int, char *[])
   ok &= CheckUncertainty(*optimizer);
   ok &= CheckWarmStart(*optimizer);
   ok &= CheckLooseEvaluations(*optimizer);
-  ok &= CheckMeshSource(*optimizer, mesh);
+  ok &= CheckSweepFirst(*optimizer, mesh);
 
   std::cout << optimizer;
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
