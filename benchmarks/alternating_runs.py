@@ -1,5 +1,5 @@
 """Shared by the benchmarks that time whole `biomechreg register` processes on the demo pair in alternating rounds
-(run_python_binding.py, run_malloc_benchmark.py, run_background_tasks_benchmark.py): the pair, the timed run, the
+(run_python_binding.py, run_malloc_benchmark.py, run_against_baseline.py): the pair, the timed run, the
 modulus it stated, and the summary
 (medians and ranges per way and mode, the ratio to a baseline way measured in the same rounds, whether every run
 stated the same modulus bit for bit) as CSV, a markdown table and a PNG."""

@@ -57,6 +57,17 @@ public:
   {
     m_Stages.push_back({ name, seconds });
   }
+  /** A stage timed elsewhere (\a seconds), told to the observer as it ends, with \a detail. */
+  void
+  Record(const std::string & name, double seconds, const std::string & detail)
+  {
+    m_Stages.push_back({ name, seconds });
+    if (m_Observer)
+    {
+      m_Observer->StageBegin(name);
+      m_Observer->StageEnd(name, seconds, detail);
+    }
+  }
   void
   Warn(std::vector<std::string> & list, const std::vector<std::string> & warnings);
   PipelineObserver *

@@ -622,12 +622,18 @@ PlanStatement(pipeline::EstimationSetup &         setup,
   return resamples;
 }
 
-/** The fine mesh's stage when it was made alongside the sweep: its \a detail and how long the meshing took. */
+/** The fine mesh's stage when it was made alongside the sweep: the wait for it after the sweep (\a waitSeconds), so
+ * that the stages add up to the wall time; its \a detail and how long the meshing took (\a meshingSeconds). */
 void
-ReportMeshedAlongside(pipeline::StageClock & clock, const std::string & detail, double seconds)
+ReportMeshedAlongside(pipeline::StageClock & clock,
+                      const std::string &    detail,
+                      double                 meshingSeconds,
+                      double                 waitSeconds)
 {
-  clock.Begin("mesh (CGAL Mesh_3)");
-  clock.End(detail + " (meshed alongside the sweep: " + bmr::SecondsText(seconds) + " s)");
+  clock.Record("mesh (CGAL Mesh_3)",
+               waitSeconds,
+               detail + " (meshed alongside the sweep: " + bmr::SecondsText(meshingSeconds) +
+                 " s, this stage the wait)");
 }
 } // namespace
 
@@ -696,11 +702,14 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
     }
   };
   std::string                fineMeshDetail;
+  double                     fineMeshWait = 0.0;
   const bmr::TetrahedralMesh estimationMesh = r.state.mesh; // empty when made during the sweep
   if (meshDuringSweep)
   {
     setup.fineAfterSweep = [&]() {
+      const auto           waitStart = bmr::SteadyClock::now();
       bmr::TetrahedralMesh mesh = fineMesh->TakeAlongside(fineMeshDetail);
+      fineMeshWait = bmr::SecondsSince(waitStart);
       startPrefetches();
       return mesh;
     };
@@ -713,7 +722,7 @@ RegisterSegmentedPair(const BiomechanicalLabelImageType * movingLabels,
   Estimate(r, setup, maps, clock);
   if (meshDuringSweep)
   {
-    ReportMeshedAlongside(clock, fineMeshDetail, fineMesh->MeshingSeconds());
+    ReportMeshedAlongside(clock, fineMeshDetail, fineMesh->MeshingSeconds(), fineMeshWait);
   }
   clock.Warn(r.state.warnings, bmr::MeshResolutionWarnings(scene, r.state.mesh));
   setup.prefetch = prefetch.get();
