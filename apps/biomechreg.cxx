@@ -219,7 +219,7 @@ PrintDemoEstimate(const itk::RegistrationResult & result, double trueE)
             << std::noshowpos << " %), fit " << result.youngsModulus.at("prostate") << " kPa"
             << itk::UncertaintyText(result, "prostate") << ", gauge soft_tissue 10 kPa"
             << "\n  (coverage of the interval over 30-500 kPa: docs/results.md)"
-            << "\n  note: " << itk::WallLawCaveat(itk::RegistrationSettings().walls.motion)
+            << "\n  note: " << itk::WallLawCaveat(itk::RegistrationSettings().walls)
             << (result.estimation.identifiable ? "" : "\n  warning: ")
             << (result.estimation.identifiable ? "" : result.estimation.identifiabilityMessage)
             << "\n  Dice after warping:";
@@ -299,6 +299,8 @@ int
 MarkersCommand(const Arguments & args); // biomechregMarkers.cxx
 int
 RTExportCommand(const Arguments & args); // biomechregRTExport.cxx
+int
+TrainBasisCommand(const Arguments & args); // biomechregTrainBasis.cxx
 
 void
 WritePhantom(const std::string &          out,
@@ -347,7 +349,8 @@ RunSubcommand(const std::string & command, const Arguments & options)
     { "cohort-stats", bmrcli::CohortStatsCommand },
     { "dose", bmrcli::DoseCommand },
     { "markers", bmrcli::MarkersCommand },
-    { "rt-export", bmrcli::RTExportCommand }
+    { "rt-export", bmrcli::RTExportCommand },
+    { "train-basis", bmrcli::TrainBasisCommand }
   };
   const auto found = handlers.find(command);
   if (found == handlers.end())

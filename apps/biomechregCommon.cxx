@@ -196,6 +196,22 @@ Arguments::Number(const std::string & key, double fallback) const
   return v;
 }
 
+std::vector<std::string>
+Arguments::RequireList(const std::string & key) const
+{
+  std::vector<std::string> list;
+  std::stringstream        items(Require(key));
+  for (std::string item; std::getline(items, item, ',');)
+  {
+    if (item.empty())
+    {
+      throw UsageError("option " + key + " expects ITEM,ITEM,... without empty items");
+    }
+    list.push_back(item);
+  }
+  return list;
+}
+
 std::map<std::string, double>
 Arguments::NamedNumbers(const std::string & key) const
 {

@@ -241,6 +241,9 @@ public:
   Count(const std::string & key, unsigned int fallback, unsigned int lo, unsigned int hi) const;
   std::array<double, 3>
   Triple(const std::string & key, const std::array<double, 3> & fallback) const;
+  /** A required comma-separated list (empty items refused). */
+  std::vector<std::string>
+  RequireList(const std::string & key) const;
   /** NAME=NUMBER,... (finite numbers; empty when the option is absent). */
   std::map<std::string, double>
   NamedNumbers(const std::string & key) const;

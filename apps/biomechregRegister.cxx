@@ -19,6 +19,7 @@
 // the displacement fields, warped images and report that come out of it.
 #include "biomechregCommon.h"
 #include "itkBiomechanicalReports.h"
+#include "bmrWallMotionBasis.h"
 #include "itkDicomRT.h"
 
 #include <cctype>
@@ -73,6 +74,8 @@ InOptionNames(std::string description)
     { "meshScale", "--mesh-scale" },
     { "controlSpacing", "--wall-spacing-mm" },
     { "regularization", "--wall-regularization" },
+    { "basisModes", "--basis-modes" },
+    { "basisPriorWeight", "--basis-prior-weight" },
     { "outerGradientTolerance", "--outer-tolerance" },
     { "limitElementInversion", "--element-inversion limit" },
     { "resamples", "--resamples" },
@@ -169,6 +172,27 @@ AddOutlineFractions(const std::string &                        fixedLabels,
   PrintLine("  fixed organs' surfaces from the RTSTRUCT's outlines:" + names);
 }
 
+/** --wall-basis FILE (a trained basis of wall motion, `biomechreg train-basis`), --basis-modes K (0: all) and
+ * --basis-prior-weight W [mm^2]. */
+void
+ParseWallBasis(const Arguments & args, bmr::WallLoadSettings & walls)
+{
+  if (!args.Has("--wall-basis"))
+  {
+    for (const char * option : { "--basis-modes", "--basis-prior-weight" })
+    {
+      if (args.Has(option))
+      {
+        throw UsageError(std::string(option) + " needs --wall-basis FILE");
+      }
+    }
+    return;
+  }
+  walls.trainedBasis = std::make_shared<const bmr::WallMotionBasis>(bmr::ReadWallMotionBasis(args.Get("--wall-basis")));
+  walls.basisModes = args.Count("--basis-modes", 0, 0, 1000000);
+  walls.basisPriorWeight = args.Number("--basis-prior-weight", walls.basisPriorWeight);
+}
+
 itk::RegistrationSettings
 ParseRegistrationSettings(const Arguments & args)
 {
@@ -190,6 +214,7 @@ ParseRegistrationSettings(const Arguments & args)
     }
   }
   s.walls.regularization = args.Number("--wall-regularization", s.walls.regularization);
+  ParseWallBasis(args, s.walls);
   e.limitElementInversion = args.Choice("--element-inversion", { "allow", "limit" }) == "limit";
   s.meshScale = args.Number("--mesh-scale", s.meshScale);
   s.interpolateSlices = args.Choice("--slice-interpolation", { "off", "on" }) == "on";
@@ -323,7 +348,7 @@ RegisterCommand(const Arguments & args)
   }
   if (!result.modulusInterval.empty())
   {
-    std::cout << "\n  note: " << itk::WallLawCaveat(settings.walls.motion);
+    std::cout << "\n  note: " << itk::WallLawCaveat(settings.walls);
   }
   if (!result.estimation.identifiable)
   {

@@ -58,6 +58,8 @@ const std::pair<const char *, const char *> commands[] = {
     "                      are mapped by themselves)] --out DIR [--sweep-samples N] [--coarse-factor F]\n"
     "                      [--mesh-scale F] [--wall-spacing-mm D] [--wall-regularization A]\n"
     "                      [--wall-motion normal|free|traction|pressure] [--max-outer-iterations N]\n"
+    "                      [--wall-basis FILE (a trained basis of wall motion, train-basis) [--basis-modes K]\n"
+    "                      [--basis-prior-weight W (mm^2, 0.25)]]\n"
     "                      [--outer-tolerance T] [--element-inversion allow|limit]\n"
     "                      [--slice-interpolation off|on (organs interpolated between thick slices)]\n"
     "                      [--label-surfaces voxels|distance (the moving mesh's surfaces; default: the scene's)]\n"
@@ -73,6 +75,11 @@ const std::pair<const char *, const char *> commands[] = {
     "                      [--field-precision float|double] [--compression-level 0-9 (labels 1, others 0)]\n"
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
     "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
+  { "train-basis",
+    "  biomechreg train-basis --moving-labels FILE --fixed-labels FILE,FILE,... --scene FILE --out BASIS.json\n"
+    "                         [--modes K (all)] [--mesh-scale F] [--slice-interpolation off|on]\n"
+    "    a basis of wall motion from one patient's scans: the moving walls matched to each fixed scan's organs,\n"
+    "    their PCA (mean, modes, variances [mm^2]); register --wall-basis BASIS.json moves the walls in it\n" },
   { "warp",
     "  biomechreg warp --image FILE --field FILE --out DIR [--labels off|on (on: a label map, nearest neighbour)]\n"
     "                  [--outside V (-1000, labels 0)]\n"

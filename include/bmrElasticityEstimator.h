@@ -71,9 +71,8 @@ struct BiomechanicalRegistration_EXPORT EstimatorSettings
   double outerGradientTolerance{ 1e-4 }; ///< relative to Phi* at the start of the fine stage
   double flatnessThreshold{ 0.01 };      ///< relative variation of Phi* over the bounds
   bool   estimateUncertainty{ true };
-  double uncertaintyStep{ 0.05 };          ///< delta in log E of the curvature's central differences
-  bool   limitElementInversion{ false };   ///< one parameter per wall node only
-  bool   levenbergMarquardtInner{ false }; ///< Levenberg-Marquardt inner solve (reduced wall basis)
+  double uncertaintyStep{ 0.05 };        ///< delta in log E of the curvature's central differences
+  bool   limitElementInversion{ false }; ///< one parameter per wall node only
 
   /** Throws itk::InvalidArgumentError (bmr::FailInput) naming the first setting out of range: fewer than 3 sweep
    * samples, a gradient tolerance not positive, a step tolerance negative or not finite, an uncertainty step
@@ -128,7 +127,8 @@ struct BiomechanicalRegistration_EXPORT ModulusSweep
  *
  * - inner: \f$\Phi^*(E) = \min_p \Phi(E, p)\f$ by L-BFGS (itk::LBFGS2Optimizerv4, More-Thuente line
  *   search) with the adjoint gradient, or Levenberg-Marquardt (EstimationObjective::SolveLoadsLevenbergMarquardt)
- *   with levenbergMarquardtInner; each warm-started from the previous optimum;
+ *   when the objective's loads are a reduced basis (LoadParameterization::IsReducedBasis()); each warm-started from the
+ * previous optimum;
  * - sweep (coarse objective, or the fine one): a coordinate sweep. For each unknown in turn, with the
  *   others at their current values, Phi* is sampled at numberOfSweepSamples log-spaced moduli over its
  *   bounds (each sample warm-started from the previous one, so that the sweep follows one branch of

@@ -124,10 +124,14 @@ public:
   /** Residual statistics of every data term in the state \a u [mm]. */
   std::vector<ResidualStatistics>
   ComputeStatistics(const std::vector<double> & u) const;
-  /** Initial load parameters: the data terms' model-free displacement (held nodes kept), fitted by the
-   * load parameterization. */
+  /** Initial load parameters: the data terms' model-free displacement (MatchDisplacement()), fitted by the load
+   * parameterization. */
   std::vector<double>
   EstimateInitialParameters() const;
+  /** The data terms' model-free displacement [mm] (3N): each term moves its own nodes onto its data (surface
+   * matching for the surface distances), the held nodes stay. The examples a trained wall basis learns from. */
+  std::vector<double>
+  MatchDisplacement() const;
 
   /** min_p Phi(E, p) at the current E by Levenberg-Marquardt, for an affine parameterization of a linear
    * model: u = u0 + A p, so A (3 rows per data node, one column per parameter) is computed once with one
@@ -135,9 +139,10 @@ public:
    * \f$ (J^TJ + \mu\,\mathrm{diag}(J^TJ))\,\delta = -J^T r - \nabla R \f$ with \f$ J = \partial r/\partial u\, A \f$.
    * Stops when \f$\|J^T r + \nabla R\| \le\f$ tolerance max(1, |p|), when Phi no longer decreases
    * (relative 1e-10), or after maximumIterations. Meant for reduced bases (tens to hundreds of parameters).
-   * The prior must be alpha/2 |p|^2 (its Hessian is taken as alpha I). With a nonlinear model (the
-   * neo-Hookean) every trial p is a Newton solve (an infeasible one is rejected like a rise of Phi), and A =
-   * du/dp is recomputed from the tangent at each accepted p: one back-substitution per parameter. */
+   * The prior must have no cross terms (the ridge alpha/2 |p|^2, a trained basis's w/2 sum p_k^2/lambda_k): its Hessian
+   * is taken as diag(2 R(e_k)). With a nonlinear model (the neo-Hookean) every trial p is a Newton solve (an infeasible
+   * one is rejected like a rise of Phi), and A = du/dp is recomputed from the tangent at each accepted p: one
+   * back-substitution per parameter. */
   LoadSolution
   SolveLoadsLevenbergMarquardt(const std::vector<double> & start, unsigned int maximumIterations, double tolerance);
 

@@ -26,6 +26,8 @@
 
 namespace bmr {
 
+struct WallMotionBasis;
+
 /** Boundary conditions of one forward solve: nodal forces [mN] (3N, or empty for none) and the
  * prescribed displacements [mm] (3N, read on the constrained dofs only). */
 struct BiomechanicalRegistration_EXPORT BoundaryLoad
@@ -79,6 +81,13 @@ public:
   {
     return true;
   }
+  /** Whether p is a reduced basis, with few parameters for the boundary's nodes: the estimator then solves its inner
+   * problem by Levenberg-Marquardt (one solve per parameter), otherwise by L-BFGS. False by default. */
+  virtual bool
+  IsReducedBasis() const
+  {
+    return false;
+  }
   /** The prior R(p) [mm^2] added to the data terms (0 when there is none). */
   virtual double
   EvaluatePrior(const std::vector<double> & p) const = 0;
@@ -91,6 +100,13 @@ public:
   virtual std::vector<double>
   BoundaryForces(const std::vector<double> & internal) const = 0;
 };
+
+/** The loads [mN] (3N) a boundary exerts on the tissue at its \a nodes in the state with internal forces \a internal
+ * (3N): f_int - f there (\a forces 3N, or empty for none), zero elsewhere. */
+BiomechanicalRegistration_EXPORT std::vector<double>
+                                 ReactionForcesAt(const std::vector<std::int32_t> & nodes,
+                                                  const std::vector<double> &       internal,
+                                                  const std::vector<double> &       forces);
 
 /** The ridge prior alpha/2 |p|^2 of WallLoads and OrganSurfaceForces [mm^2 for p in mm]. */
 inline double
@@ -133,16 +149,23 @@ struct BiomechanicalRegistration_EXPORT WallLoadSettings
    */
   double         regularization{ 0.01 };
   WallMotionEnum motion{ WallMotionEnum::AlongNormals };
+  /** A basis of wall motion learned from examples (TrainedWallLoads), or null (default): the walls move in it instead
+   * of along their normals; controlSpacing, regularization and motion (along the normals or free) then do not apply.
+   */
+  std::shared_ptr<const WallMotionBasis> trainedBasis;
+  std::size_t                            basisModes{ 0 }; ///< the trained basis's modes used (0: all)
+  double basisPriorWeight{ 0.25 };                        ///< w of the trained basis's prior [mm^2] (TrainedWallLoads)
 
-  /** Fewer load parameters than wall nodes (a smooth basis, or one pressure per wall): the estimator then solves
-   * the inner problem by Levenberg-Marquardt, one solve per parameter. */
+  /** Fewer load parameters than wall nodes (a smooth basis, one pressure per wall, or a trained basis): the
+   * estimator then solves the inner problem by Levenberg-Marquardt, one solve per parameter. */
   bool
   ReducedBasis() const
   {
-    return controlSpacing > 0.0 || motion == WallMotionEnum::UniformPressure;
+    return controlSpacing > 0.0 || motion == WallMotionEnum::UniformPressure || trainedBasis != nullptr;
   }
   /** Throws itk::InvalidArgumentError (bmr::FailInput) for a negative or non-finite control spacing or
-   * regularization. */
+   * regularization; with a trained basis, for more modes than it has, a prior weight not positive, a control spacing
+   * or tractions (the basis prescribes the walls' motion). */
   void
   Validate() const;
 };
@@ -250,6 +273,9 @@ public:
   /** Only with NormalTraction and UniformPressure, whose p sets forces. */
   bool
   ReadsForceSensitivity() const override;
+  /** A smooth basis (ControlSpacing > 0) or one pressure per wall (UniformPressure). */
+  bool
+  IsReducedBasis() const override;
   double
   EvaluatePrior(const std::vector<double> & p) const override;
   std::vector<double>

@@ -42,10 +42,25 @@ namespace detail {
 /** The parts SurfaceMatchingObjective owns, built before the objective that references them. */
 struct BiomechanicalRegistration_EXPORT SceneObjectiveParts
 {
-  SceneObjectiveParts(const TetrahedralMesh & mesh, const Scene & scene, std::vector<ObjectiveSurface> surfaces);
-  std::unique_ptr<ForwardModel>        model;
-  std::unique_ptr<WallLoads>           loads;
-  std::unique_ptr<SurfaceDistanceTerm> surfaceDistance;
+  /** With \a trained (a WallLoadSettings with a trained basis) the walls' loads are TrainedWallLoads, else WallLoads.
+   */
+  SceneObjectiveParts(const TetrahedralMesh &       mesh,
+                      const Scene &                 scene,
+                      std::vector<ObjectiveSurface> surfaces,
+                      const WallLoadSettings *      trained);
+  std::unique_ptr<ForwardModel>         model;
+  std::unique_ptr<WallLoads>            loads; ///< null with a trained basis
+  std::unique_ptr<LoadParameterization> trainedLoads;
+  std::unique_ptr<SurfaceDistanceTerm>  surfaceDistance;
+
+  LoadParameterization &
+  ActiveLoads()
+  {
+    return trainedLoads ? *trainedLoads : static_cast<LoadParameterization &>(*loads);
+  }
+  /** The WallLoads, or a refusal naming \a caller with a trained basis. */
+  WallLoads &
+  Walls(const char * caller) const;
 };
 } // namespace detail
 
@@ -64,6 +79,13 @@ public:
    * modulus and no force surface), a force surface has no free wall node in the mesh, or the objective
    * is empty. */
   SurfaceMatchingObjective(const TetrahedralMesh & mesh, const Scene & scene, std::vector<ObjectiveSurface> surfaces);
+  /** As above, the walls moving in the trained basis of \a trained (WallLoadSettings::trainedBasis, which must be set,
+   * with its basisModes and basisPriorWeight): TrainedWallLoads instead of WallLoads, whose setters below then
+   * throw. */
+  SurfaceMatchingObjective(const TetrahedralMesh &       mesh,
+                           const Scene &                 scene,
+                           std::vector<ObjectiveSurface> surfaces,
+                           const WallLoadSettings &      trained);
 
   /** WallLoads::SetControlSpacing() [mm]. */
   void
@@ -90,11 +112,11 @@ public:
   {
     return ComputeStatistics(u);
   }
-  /** The wall loads (control nodes, normals). */
+  /** The wall loads (control nodes, normals); throws with a trained basis. */
   const WallLoads &
   GetWallLoads() const
   {
-    return *loads;
+    return Walls("SurfaceMatchingObjective::GetWallLoads");
   }
 };
 

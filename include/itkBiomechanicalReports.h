@@ -62,13 +62,14 @@ BiomechanicalRegistration_EXPORT std::string
 BiomechanicalRegistration_EXPORT std::string
                                  RecoveredModulusText(const RegistrationResult & result, const std::string & label);
 
-/** What the stated interval of a modulus is conditional on: the wall law \a motion of the estimation. The
+/** What the stated interval of a modulus is conditional on: the wall law of the estimation (\a walls: its motion, or
+ * its trained basis). The
  * rescans vary the voxelization and the mesh, not how the walls move, and on the phantoms the wall law moved
  * the modulus by more than the interval's width (docs/history/benchmarks.md, "Pressure-filled lumens"); one sentence
  * for the printed summary and report.json's "assumes". \ingroup BiomechanicalRegistration
  * BiomechanicalRegistrationIO */
 BiomechanicalRegistration_EXPORT std::string
-                                 WallLawCaveat(bmr::WallMotionEnum motion);
+                                 WallLawCaveat(const bmr::WallLoadSettings & walls);
 
 /** truth.json of a phantom pair (JSON; mm, kPa, mN): the true moduli and Poisson's ratios, the tumour
  * fraction, the wall loads, the truth's mesh, the CT noise and the seed landmarks (moving and fixed).

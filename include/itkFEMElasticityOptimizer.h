@@ -140,9 +140,7 @@ public:
   }
 
   /** The estimator's settings in one struct (bmr::EstimatorSettings; defaults there): what the setters below set
-   * one at a time. Its derived field levenbergMarquardtInner (from the wall settings) is this object's to fill: what
-   * is set there is ignored; the warm start is SetWarmStart()'s. Checked
-   * by Update() (bmr::EstimatorSettings::Validate()). */
+   * one at a time; the warm start is SetWarmStart()'s. Checked by Update() (bmr::EstimatorSettings::Validate()). */
   void
   SetEstimatorSettings(const bmr::EstimatorSettings & settings);
   const bmr::EstimatorSettings &
@@ -321,6 +319,12 @@ public:
   {
     return m_Result;
   }
+  /** The scene's objective on \a mesh as Update() composes it from the distance maps, the scene and the wall settings
+   * set here: to evaluate it, or to match its surfaces (bmr::EstimationObjective::MatchDisplacement(), what a trained
+   * wall basis learns from). Throws itk::ExceptionObject on a missing map or an invalid setting. */
+  std::unique_ptr<bmr::SurfaceMatchingObjective>
+  MakeObjective(const bmr::TetrahedralMesh & mesh) const;
+
   /** Last inner solve, for observers of IterationEvent. */
   const IterationRecord &
   GetCurrentRecord() const
@@ -339,9 +343,6 @@ protected:
   GenerateData() override;
 
 private:
-  /** The estimator's settings with the derived fields filled (see SetEstimatorSettings()). */
-  bmr::EstimatorSettings
-  EffectiveSettings() const;
   /** The warm start's moduli (SetWarmStart) in the order of \a unknowns; throws naming an unknown it does not give. */
   std::vector<double>
   WarmStartInOrder(const std::vector<bmr::UnknownModulus> & unknowns) const;

@@ -20,6 +20,7 @@
 
 #include "bmrMesher.h"
 #include "bmrScene.h"
+#include "bmrSignedDistanceSampler.h"
 #include "bmrTetrahedralMesh.h"
 #include "itkImage.h"
 #include "itkImageRegionIteratorWithIndex.h"
@@ -31,6 +32,7 @@
 #include <functional>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -169,6 +171,39 @@ SphereDistanceMap(const std::array<double, 3> &       center,
     it.Set(static_cast<float>(sign * (std::hypot(p[0] - center[0], p[1] - center[1], p[2] - center[2]) - radius)));
   }
   return map;
+}
+
+inline double
+Distance(const double c[3], double x, double y, double z)
+{
+  return std::sqrt((x - c[0]) * (x - c[0]) + (y - c[1]) * (y - c[1]) + (z - c[2]) * (z - c[2]));
+}
+
+/** Signed distance [mm] to a sphere of radius r around c, sampled on a 48^3 grid of 1 x 1 x 1.1 mm voxels turned
+ * 0.3 rad about z, centred on the origin (the estimation tests' geometry lies within 24 mm of it). */
+inline std::shared_ptr<const SignedDistanceSampler>
+SphereSampler(const double c[3], double r)
+{
+  GridGeometry g;
+  g.size = { { 48, 48, 48 } };
+  g.spacing = { { 1.0, 1.0, 1.1 } };
+  const double a = 0.3; // rotation about z: the sampler must honour direction cosines
+  g.direction = { { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 } };
+  g.origin = { { 0, 0, 0 } };
+  const auto center = g.IndexToPoint({ { 23.5, 23.5, 23.5 } });
+  for (int d = 0; d < 3; ++d)
+  {
+    g.origin[d] -= center[d];
+  }
+  std::vector<float> v(g.GetNumberOfVoxels());
+  for (std::size_t k = 0; k < g.size[2]; ++k)
+    for (std::size_t j = 0; j < g.size[1]; ++j)
+      for (std::size_t i = 0; i < g.size[0]; ++i)
+      {
+        const auto p = g.IndexToPoint({ { double(i), double(j), double(k) } });
+        v[i + g.size[0] * (j + g.size[1] * k)] = static_cast<float>(Distance(c, p[0], p[1], p[2]) - r);
+      }
+  return std::make_shared<SignedDistanceSampler>(g, v, "test map");
 }
 
 /** Runs \a f and checks that it throws an itk::ExceptionObject whose description contains \a expected. */

@@ -260,10 +260,13 @@ struct ElasticityEstimator::Stages
   std::vector<double>        loads;  // warm start of the next inner solve
   std::vector<SweepAnalysis> status; // per unknown
   double                     progress{ 0.0 };
+  // The inner solver follows the loads (LoadParameterization::IsReducedBasis()), the same for the coarse objective.
+  const bool levenbergMarquardt;
 
   explicit Stages(ElasticityEstimator & e)
     : estimator(e)
     , settings(e.m_Settings)
+    , levenbergMarquardt(e.m_Fine.GetLoads().IsReducedBasis())
   {
     for (const UnknownModulus & u : e.m_Unknowns)
     {
@@ -285,7 +288,7 @@ struct ElasticityEstimator::Stages
     InnerSettings inner;
     inner.maximumIterations = settings.maximumInnerIterations;
     inner.tolerance = tolerance;
-    inner.levenbergMarquardt = settings.levenbergMarquardtInner;
+    inner.levenbergMarquardt = levenbergMarquardt;
     inner.limitInversion = settings.limitElementInversion;
     const SolverWork before = objective.GetForwardModel().GetSolverWork();
     LoadSolution     s = SolveInner(objective, E, start, inner, result.rejectedSteps);
@@ -313,7 +316,7 @@ struct ElasticityEstimator::Stages
   bool
   LooseSweep() const
   {
-    return !settings.levenbergMarquardtInner && settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
+    return !levenbergMarquardt && settings.looseInnerGradientTolerance > settings.innerGradientTolerance;
   }
   /** One unknown besides: the outer search's evaluations are loose first. */
   bool

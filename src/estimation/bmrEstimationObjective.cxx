@@ -342,6 +342,12 @@ EstimationObjective::ComputeStatistics(const std::vector<double> & u) const
 std::vector<double>
 EstimationObjective::EstimateInitialParameters() const
 {
+  return m_Loads.FitDisplacement(MatchDisplacement());
+}
+
+std::vector<double>
+EstimationObjective::MatchDisplacement() const
+{
   std::vector<char> held(m_Model.GetMesh().GetNumberOfPoints(), 0);
   for (std::int32_t n : m_Loads.GetHeldNodes())
   {
@@ -357,7 +363,7 @@ EstimationObjective::EstimateInitialParameters() const
       v[i] += vt[i];
     }
   }
-  return m_Loads.FitDisplacement(v);
+  return v;
 }
 
 namespace {
@@ -521,22 +527,43 @@ public:
     {
       m_State.rowOfDof = RowsOfDofs(m_Dofs, 3 * m_Model.GetMesh().GetNumberOfPoints());
     }
-    // The prior's weight alpha from R(e_0) = alpha / 2 (exact in binary floating point).
-    std::vector<double> unit(np, 0.0);
-    if (np > 0)
+    // The prior's curvatures h_k from R(e_k) = h_k / 2 (exact in binary floating point): a prior without cross terms,
+    // the ridge alpha/2 |p|^2 (every h_k = alpha) or a trained basis's w/2 sum p_k^2 / lambda_k.
+    m_PriorCurvature.resize(static_cast<Eigen::Index>(np));
+    for (std::size_t k = 0; k < np; ++k)
     {
-      unit[0] = 1.0;
+      std::vector<double> unit(np, 0.0);
+      unit[k] = 1.0;
+      m_PriorCurvature[static_cast<Eigen::Index>(k)] = 2.0 * m_Loads.EvaluatePrior(unit);
     }
-    m_Alpha = np > 0 ? 2.0 * m_Loads.EvaluatePrior(unit) : 0.0;
+    m_Uniform = np == 0 || (m_PriorCurvature.array() == m_PriorCurvature[0]).all();
   }
 
+  /** The prior's value, its gradient and its Hessian added to \a H; with equal curvatures by the ridge's formulas. */
   double
-  GetAlpha() const
+  Prior(const Eigen::VectorXd & p) const
   {
-    return m_Alpha;
+    return m_Uniform ? 0.5 * Alpha() * p.squaredNorm() : 0.5 * (m_PriorCurvature.array() * p.array().square()).sum();
+  }
+  Eigen::VectorXd
+  PriorGradient(const Eigen::VectorXd & p) const
+  {
+    return m_Uniform ? Eigen::VectorXd(Alpha() * p) : Eigen::VectorXd(m_PriorCurvature.cwiseProduct(p));
+  }
+  void
+  AddPriorHessian(Eigen::MatrixXd & H) const
+  {
+    if (m_Uniform)
+    {
+      H.diagonal().array() += Alpha();
+    }
+    else
+    {
+      H.diagonal() += m_PriorCurvature;
+    }
   }
 
-  /** Residuals r(p) and their Jacobian J = dr/du A; the prior alpha/2 |p|^2 is added to the value.
+  /** Residuals r(p) and their Jacobian J = dr/du A; the prior is added to the value.
    * An infeasible p (no nonlinear state follows its loads) has an infinite value, which LM rejects. */
   double
   operator()(const Eigen::VectorXd & p, Eigen::VectorXd & rp, Eigen::MatrixXd * J)
@@ -557,7 +584,7 @@ public:
     // The barrier (nonlinear models) enters the value that accepts or rejects a step, not the Jacobian (which
     // would need du/dp at every dof): a step that crushes elements is rejected like any rise of Phi.
     const double barrier = m_Barrier ? m_Barrier->Evaluate(u, nullptr) : 0.0;
-    return 0.5 * rp.squaredNorm() + 0.5 * m_Alpha * p.squaredNorm() + barrier;
+    return 0.5 * rp.squaredNorm() + Prior(p) + barrier;
   }
 
 private:
@@ -611,7 +638,14 @@ private:
   std::vector<std::int32_t>             m_Dofs;
   bool                                  m_Linear{ false };
   AffineState                           m_State;
-  double                                m_Alpha{ 0.0 };
+  Eigen::VectorXd                       m_PriorCurvature; ///< h_k of R(p) = 1/2 sum h_k p_k^2
+  bool                                  m_Uniform{ true };
+
+  double
+  Alpha() const
+  {
+    return m_PriorCurvature.size() > 0 ? m_PriorCurvature[0] : 0.0;
+  }
 };
 
 /** The Levenberg-Marquardt iterate: p with its residuals, Jacobian and value, and the damping mu. */
@@ -702,7 +736,6 @@ EstimationObjective::SolveLoadsLevenbergMarquardt(const std::vector<double> & st
     Fail("EstimationObjective::SolveLoadsLevenbergMarquardt", "needs an affine load parameterization");
   }
   LoadResiduals residuals(m_Model, m_Loads, m_Terms, m_Barrier.get(), m_Infeasible, np);
-  const double  alpha = residuals.GetAlpha();
   // Levenberg-Marquardt: (J^T J + mu diag(J^T J)) delta = -J^T r; mu shrinks after a success, grows after a failure.
   MarquardtIterate s = StartIterate(residuals, start);
   LoadSolution     result;
@@ -710,14 +743,14 @@ EstimationObjective::SolveLoadsLevenbergMarquardt(const std::vector<double> & st
   unsigned int it = 0;
   for (; it < maximumIterations && !s.converged; ++it)
   {
-    const Eigen::VectorXd g = s.J.transpose() * s.rp + alpha * s.p;
+    const Eigen::VectorXd g = s.J.transpose() * s.rp + residuals.PriorGradient(s.p);
     if (g.norm() <= tolerance * std::max(1.0, s.p.norm()))
     {
       result.stop = "gradient below tolerance";
       break;
     }
     Eigen::MatrixXd H = s.J.transpose() * s.J;
-    H.diagonal().array() += alpha;
+    residuals.AddPriorHessian(H);
     if (!TakeMarquardtStep(residuals, H, g, s, result))
     {
       result.stop = "no descent";

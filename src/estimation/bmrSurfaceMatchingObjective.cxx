@@ -19,6 +19,7 @@
 
 #include "bmrError.h"
 #include "bmrSimulation.h"
+#include "bmrTrainedWallLoads.h"
 
 namespace bmr {
 namespace {
@@ -105,13 +106,34 @@ SceneLoadedWalls(const Scene & scene, const TetrahedralMesh & mesh)
 namespace detail {
 SceneObjectiveParts::SceneObjectiveParts(const TetrahedralMesh &       mesh,
                                          const Scene &                 scene,
-                                         std::vector<ObjectiveSurface> surfaces)
+                                         std::vector<ObjectiveSurface> surfaces,
+                                         const WallLoadSettings *      trained)
 {
   surfaceDistance.reset(new SurfaceDistanceTerm(mesh, std::move(surfaces)));
   BoundaryConditions bc = SceneBoundaryConditions(scene, mesh);
-  loads.reset(
-    new WallLoads(mesh, bc.dirichletNodes, bc.dirichletValues, std::move(bc.forces), SceneLoadedWalls(scene, mesh)));
-  if (const SceneLabel * gauge = scene.GaugeLabel())
+  if (trained != nullptr)
+  {
+    if (trained->trainedBasis == nullptr)
+    {
+      FailInput("SurfaceMatchingObjective", "the wall settings given for a trained basis have none");
+    }
+    trained->Validate();
+    trainedLoads.reset(new TrainedWallLoads(mesh,
+                                            bc.dirichletNodes,
+                                            bc.dirichletValues,
+                                            std::move(bc.forces),
+                                            SceneLoadedWalls(scene, mesh),
+                                            *trained->trainedBasis,
+                                            trained->basisModes,
+                                            trained->basisPriorWeight));
+  }
+  else
+  {
+    loads.reset(
+      new WallLoads(mesh, bc.dirichletNodes, bc.dirichletValues, std::move(bc.forces), SceneLoadedWalls(scene, mesh)));
+  }
+  const SceneLabel * gauge = scene.GaugeLabel();
+  if (loads && gauge)
   {
     // The tissue around the walls: the scale that makes a normal traction's parameter read as mm of wall motion.
     loads->SetTractionShearModulus(gauge->youngsModulus / (2.0 * (1.0 + gauge->poissonRatio)));
@@ -120,25 +142,43 @@ SceneObjectiveParts::SceneObjectiveParts(const TetrahedralMesh &       mesh,
   newton.restartFromRest = false; // a trial point whose warm path fails is infeasible
   model = MakeForwardModel(scene, mesh, SceneMaterials(scene), newton);
 }
+
+WallLoads &
+SceneObjectiveParts::Walls(const char * caller) const
+{
+  if (!loads)
+  {
+    Fail(caller, "the walls move in a trained basis (TrainedWallLoads), not in WallLoads");
+  }
+  return *loads;
+}
 } // namespace detail
 
 SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &       mesh,
                                                    const Scene &                 scene,
                                                    std::vector<ObjectiveSurface> surfaces)
-  : detail::SceneObjectiveParts(mesh, scene, std::move(surfaces))
-  , EstimationObjective(*model, *loads, Terms(surfaceDistance), UnknownLabelValues(scene))
+  : detail::SceneObjectiveParts(mesh, scene, std::move(surfaces), nullptr)
+  , EstimationObjective(*model, ActiveLoads(), Terms(surfaceDistance), UnknownLabelValues(scene))
+{}
+
+SurfaceMatchingObjective::SurfaceMatchingObjective(const TetrahedralMesh &       mesh,
+                                                   const Scene &                 scene,
+                                                   std::vector<ObjectiveSurface> surfaces,
+                                                   const WallLoadSettings &      trained)
+  : detail::SceneObjectiveParts(mesh, scene, std::move(surfaces), &trained)
+  , EstimationObjective(*model, ActiveLoads(), Terms(surfaceDistance), UnknownLabelValues(scene))
 {}
 
 void
 SurfaceMatchingObjective::SetWallControlSpacing(double spacing)
 {
-  loads->SetControlSpacing(spacing);
+  Walls("SurfaceMatchingObjective::SetWallControlSpacing").SetControlSpacing(spacing);
 }
 
 void
 SurfaceMatchingObjective::SetWallRegularization(double alpha)
 {
-  loads->SetRegularization(alpha);
+  Walls("SurfaceMatchingObjective::SetWallRegularization").SetRegularization(alpha);
 }
 
 void
@@ -150,8 +190,9 @@ SurfaceMatchingObjective::SetWallMotionAlongNormals(bool normal)
 void
 SurfaceMatchingObjective::SetWallMotion(WallMotionEnum motion)
 {
-  loads->SetMotion(motion);
-  model->SetConstrainedNodes(loads->GetConstrainedNodes());
+  WallLoads & walls = Walls("SurfaceMatchingObjective::SetWallMotion");
+  walls.SetMotion(motion);
+  model->SetConstrainedNodes(walls.GetConstrainedNodes());
 }
 
 } // namespace bmr

@@ -19,6 +19,7 @@
 
 #include "bmrError.h"
 #include "bmrWallBasis.h"
+#include "bmrWallMotionBasis.h"
 
 #include <algorithm>
 #include <array>
@@ -41,6 +42,25 @@ WallLoadSettings::Validate() const
   {
     FailInput("WallLoadSettings",
               "regularization must be finite and not negative, got " + std::to_string(regularization));
+  }
+  if (trainedBasis == nullptr)
+  {
+    return;
+  }
+  if (basisModes > trainedBasis->GetNumberOfModes())
+  {
+    FailInput("WallLoadSettings",
+              "basisModes " + std::to_string(basisModes) + " exceeds the trained basis's " +
+                std::to_string(trainedBasis->GetNumberOfModes()) + " modes");
+  }
+  if (!(basisPriorWeight > 0.0 && std::isfinite(basisPriorWeight)))
+  {
+    FailInput("WallLoadSettings", "basisPriorWeight must be positive and finite [mm^2]");
+  }
+  if (controlSpacing > 0.0 || motion == WallMotionEnum::NormalTraction || motion == WallMotionEnum::UniformPressure)
+  {
+    FailInput("WallLoadSettings",
+              "a trained wall basis prescribes the walls' motion itself: no controlSpacing and no tractions with it");
   }
 }
 
@@ -482,6 +502,15 @@ WallLoads::SetControlSpacing(double spacing)
   m_Impl->RebuildBasis();
 }
 
+bool
+WallLoads::IsReducedBasis() const
+{
+  WallLoadSettings settings; // the one rule, WallLoadSettings::ReducedBasis()
+  settings.controlSpacing = m_Impl->controlSpacing;
+  settings.motion = m_Impl->motion;
+  return settings.ReducedBasis();
+}
+
 void
 WallLoads::SetRegularization(double alpha)
 {
@@ -629,13 +658,21 @@ WallLoads::FitDisplacement(const std::vector<double> & u) const
 std::vector<double>
 WallLoads::BoundaryForces(const std::vector<double> & internal) const
 {
+  return ReactionForcesAt(m_Impl->controlNodes, internal, m_Impl->forces);
+}
+
+std::vector<double>
+ReactionForcesAt(const std::vector<std::int32_t> & nodes,
+                 const std::vector<double> &       internal,
+                 const std::vector<double> &       forces)
+{
   std::vector<double> F(internal.size(), 0.0);
-  for (std::int32_t n : m_Impl->controlNodes)
+  for (std::int32_t n : nodes)
   {
     for (int c = 0; c < 3; ++c)
     {
       const std::size_t dof = 3 * static_cast<std::size_t>(n) + c;
-      F[dof] = internal[dof] - (m_Impl->forces.empty() ? 0.0 : m_Impl->forces[dof]);
+      F[dof] = internal[dof] - (forces.empty() ? 0.0 : forces[dof]);
     }
   }
   return F;

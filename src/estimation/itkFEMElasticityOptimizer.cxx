@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkFEMElasticityOptimizer.h"
 
+#include "bmrWallMotionBasis.h"
 #include "itkGridGeometryConversion.h"
 #include "itkMultiThreaderBase.h"
 
@@ -169,15 +170,6 @@ FEMElasticityOptimizer::FineSolveThreads() const
   return std::min<unsigned int>(m_NumberOfFineSolveThreads, MultiThreaderBase::GetGlobalDefaultNumberOfThreads());
 }
 
-bmr::EstimatorSettings
-FEMElasticityOptimizer::EffectiveSettings() const
-{
-  bmr::EstimatorSettings s = m_EstimatorSettings;
-  // Levenberg-Marquardt needs one solve per parameter: only with the reduced wall basis.
-  s.levenbergMarquardtInner = m_WallLoadSettings.ReducedBasis();
-  return s;
-}
-
 std::vector<double>
 FEMElasticityOptimizer::WarmStartInOrder(const std::vector<bmr::UnknownModulus> & unknowns) const
 {
@@ -199,8 +191,13 @@ FEMElasticityOptimizer::MakeObjective(
   const bmr::TetrahedralMesh &                                                      mesh,
   const std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> & samplers) const
 {
+  std::vector<bmr::ObjectiveSurface> surfaces = bmr::SceneObjectiveSurfaces(m_Scene, mesh, samplers);
+  if (m_WallLoadSettings.trainedBasis)
+  {
+    return std::make_unique<bmr::SurfaceMatchingObjective>(mesh, m_Scene, std::move(surfaces), m_WallLoadSettings);
+  }
   std::unique_ptr<bmr::SurfaceMatchingObjective> objective(
-    new bmr::SurfaceMatchingObjective(mesh, m_Scene, bmr::SceneObjectiveSurfaces(m_Scene, mesh, samplers)));
+    new bmr::SurfaceMatchingObjective(mesh, m_Scene, std::move(surfaces)));
   objective->SetWallControlSpacing(m_WallLoadSettings.controlSpacing);
   objective->SetWallRegularization(m_WallLoadSettings.regularization);
   objective->SetWallMotion(m_WallLoadSettings.motion);
@@ -245,6 +242,13 @@ FEMElasticityOptimizer::Observe(bmr::ElasticityEstimator & estimator)
   });
 }
 
+std::unique_ptr<bmr::SurfaceMatchingObjective>
+FEMElasticityOptimizer::MakeObjective(const bmr::TetrahedralMesh & mesh) const
+{
+  this->VerifySceneAndSettings();
+  return this->MakeObjective(mesh, this->Samplers());
+}
+
 bmr::ModulusSweep
 FEMElasticityOptimizer::SweepCoarseMesh()
 {
@@ -262,7 +266,7 @@ FEMElasticityOptimizer::SweepCoarseMesh()
     this->MakeObjective(this->GetCoarseMesh()->Get(), this->Samplers());
   coarse->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
   // The coarse objective as the estimator's only one: Sweep() sweeps on it, as Run() would on the coarse one.
-  bmr::ElasticityEstimator estimator(*coarse, nullptr, unknowns, this->EffectiveSettings());
+  bmr::ElasticityEstimator estimator(*coarse, nullptr, unknowns, m_EstimatorSettings);
   this->Observe(estimator);
   return estimator.Sweep();
 }
@@ -292,7 +296,7 @@ FEMElasticityOptimizer::GenerateData()
     coarse = this->MakeObjective(this->GetCoarseMesh()->Get(), samplers);
     coarse->GetForwardModel().SetNumberOfSolveThreads(this->FineSolveThreads());
   }
-  bmr::ElasticityEstimator estimator(*fine, coarse.get(), unknowns, this->EffectiveSettings());
+  bmr::ElasticityEstimator estimator(*fine, coarse.get(), unknowns, m_EstimatorSettings);
   if (!m_WarmStartModuli.empty())
   {
     estimator.SetWarmStart(this->WarmStartInOrder(unknowns), m_WarmStartRelativeCurvature);
@@ -338,6 +342,12 @@ FEMElasticityOptimizer::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "WallControlSpacing: " << m_WallLoadSettings.controlSpacing << " mm" << std::endl;
   os << indent << "WallRegularization: " << m_WallLoadSettings.regularization << std::endl;
   os << indent << "WallMotion: " << m_WallLoadSettings.motion << std::endl;
+  if (m_WallLoadSettings.trainedBasis)
+  {
+    os << indent << "TrainedWallBasis: " << m_WallLoadSettings.trainedBasis->GetNumberOfModes() << " modes (using "
+       << m_WallLoadSettings.basisModes << ", 0: all), prior weight " << m_WallLoadSettings.basisPriorWeight << " mm^2"
+       << std::endl;
+  }
   os << indent << "GaugeLabel: " << m_GaugeLabel << std::endl;
   for (const auto & kv : m_EstimatedYoungsModuli)
   {

@@ -65,7 +65,7 @@ Units()
 }
 
 Json
-ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
+ModulusSection(const RegistrationResult & r, const bmr::WallLoadSettings & walls)
 {
   Json uncertainty = Json::object();
   for (const auto & kv : r.modulusUncertainty)
@@ -105,7 +105,7 @@ ModulusSection(const RegistrationResult & r, bmr::WallMotionEnum motion)
                             { "upper_end_determined", i.upperDetermined },
                             { "statement", ModulusIntervalText(kv.first, i) },
                             { "not_determined_reason", i.notDeterminedReason },
-                            { "assumes", WallLawCaveat(motion) },
+                            { "assumes", WallLawCaveat(walls) },
                             { "resamples_kPa", resamples } };
     if (i.method == "slice-calibration")
     {
@@ -124,7 +124,7 @@ RegistrationReportJson(const RegistrationResult &         r,
 {
   Json j;
   j["units"] = Units();
-  j.update(ModulusSection(r, settings.walls.motion));
+  j.update(ModulusSection(r, settings.walls));
   j["residual_standard_deviation_mm"] = r.estimation.residualStandardDeviation;
   j["final_phi_mm2"] = r.estimation.value;
   Json surfaces = Json::object();
@@ -359,9 +359,14 @@ StageTable(const std::vector<PipelineStage> & stages)
 }
 
 std::string
-WallLawCaveat(bmr::WallMotionEnum motion)
+WallLawCaveat(const bmr::WallLoadSettings & walls)
 {
-  switch (motion)
+  if (walls.trainedBasis)
+  {
+    return "the interval assumes walls that move in the trained basis (--wall-basis); its half-widths were calibrated "
+           "on walls that move along their normals, so its coverage in a trained basis is not calibrated";
+  }
+  switch (walls.motion)
   {
     case bmr::WallMotionEnum::AlongNormals:
       return "the interval assumes walls that move along their normals (--wall-motion normal) and does not contain "

@@ -245,6 +245,11 @@ struct EstimationSetup
   const SliceCalibration * sliceCalibration{ nullptr };
 };
 
+/** Refuses (itk::InvalidArgumentError naming RegisterSegmentedPair) a moving and a fixed image that do not overlap in
+ * physical space (a wrong origin, a wrong file): they cannot be registered. */
+void
+CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed);
+
 /** The objective organs' distance maps by name. */
 using DistanceMaps = std::map<std::string, Image<float, 3>::Pointer>;
 

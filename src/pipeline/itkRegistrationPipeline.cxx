@@ -64,25 +64,6 @@ PhysicalBounds(const ImageBase<3> * image)
   return b;
 }
 
-/** Images that do not overlap in physical space cannot be registered (wrong origin, wrong file). */
-void
-CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed)
-{
-  const auto movingBox = PhysicalBounds(moving);
-  const auto fixedBox = PhysicalBounds(fixed);
-  for (unsigned int a = 0; a < 3; ++a)
-  {
-    if (movingBox[a][1] <= fixedBox[a][0] || fixedBox[a][1] <= movingBox[a][0])
-    {
-      bmr::FailInput("RegisterSegmentedPair",
-                     "the moving and fixed label images do not overlap in physical space (axis " + std::to_string(a) +
-                       ": moving " + std::to_string(movingBox[a][0]) + " .. " + std::to_string(movingBox[a][1]) +
-                       " mm, fixed " + std::to_string(fixedBox[a][0]) + " .. " + std::to_string(fixedBox[a][1]) +
-                       " mm)");
-    }
-  }
-}
-
 /** The smallest and the largest voxel side [mm] of the moving and the fixed label images. */
 std::array<double, 2>
 VoxelRange(const ImageBase<3> * moving, const ImageBase<3> * fixed)
@@ -499,6 +480,27 @@ WarpAndEvaluate(RegistrationResult &                r,
 } // namespace
 
 namespace pipeline {
+void
+CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed)
+{
+  const auto movingBox = PhysicalBounds(moving);
+  const auto fixedBox = PhysicalBounds(fixed);
+  for (unsigned int a = 0; a < 3; ++a)
+  {
+    if (movingBox[a][1] <= fixedBox[a][0] || fixedBox[a][1] <= movingBox[a][0])
+    {
+      bmr::FailInput("RegisterSegmentedPair",
+                     "the moving and fixed label images do not overlap in physical space (axis " + std::to_string(a) +
+                       ": moving " + std::to_string(movingBox[a][0]) + " .. " + std::to_string(movingBox[a][1]) +
+                       " mm, fixed " + std::to_string(fixedBox[a][0]) + " .. " + std::to_string(fixedBox[a][1]) +
+                       " mm)");
+    }
+  }
+}
+
+} // namespace pipeline
+
+namespace pipeline {
 std::map<std::string, Image<float, 3>::Pointer>
 ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const OrganProbabilityImages &      probabilities,
@@ -590,7 +592,7 @@ CheckRegistrationInputs(const BiomechanicalLabelImageType * movingLabels,
   {
     bmr::FailInput("RegisterSegmentedPair", "the moving and the fixed label images are required");
   }
-  CheckOverlap(movingLabels, fixedLabels);
+  pipeline::CheckOverlap(movingLabels, fixedLabels);
   settings.Validate();
   if (settings.meshes != nullptr &&
       settings.meshes->fingerprint != pipeline::MovingAnatomyFingerprint(movingLabels, scene, settings))

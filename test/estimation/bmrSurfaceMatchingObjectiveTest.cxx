@@ -38,38 +38,6 @@ namespace {
 constexpr double InclusionRadius = 5.0, CavityRadius = 6.0;
 const double     CavityCenter[3] = { -6.0, 0.0, 0.0 };
 
-double
-Distance(const double c[3], double x, double y, double z)
-{
-  return std::sqrt((x - c[0]) * (x - c[0]) + (y - c[1]) * (y - c[1]) + (z - c[2]) * (z - c[2]));
-}
-
-/** Signed distance [mm] to a sphere of radius r around c, sampled on a 1 mm oblique grid. */
-std::shared_ptr<const bmr::SignedDistanceSampler>
-SphereMap(const double c[3], double r)
-{
-  bmr::GridGeometry g;
-  g.size = { { 48, 48, 48 } };
-  g.spacing = { { 1.0, 1.0, 1.1 } };
-  const double a = 0.3; // rotation about z: the sampler must honour direction cosines
-  g.direction = { { std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1 } };
-  g.origin = { { 0, 0, 0 } };
-  const auto center = g.IndexToPoint({ { 23.5, 23.5, 23.5 } });
-  for (int d = 0; d < 3; ++d)
-  {
-    g.origin[d] -= center[d];
-  }
-  std::vector<float> v(g.GetNumberOfVoxels());
-  for (std::size_t k = 0; k < g.size[2]; ++k)
-    for (std::size_t j = 0; j < g.size[1]; ++j)
-      for (std::size_t i = 0; i < g.size[0]; ++i)
-      {
-        const auto p = g.IndexToPoint({ { double(i), double(j), double(k) } });
-        v[i + g.size[0] * (j + g.size[1] * k)] = static_cast<float>(Distance(c, p[0], p[1], p[2]) - r);
-      }
-  return std::make_shared<bmr::SignedDistanceSampler>(g, v, "test map");
-}
-
 /** Taylor test of dPhi/dlog E [mm^2] at the loads \a p about E = 40 kPa (the objectives' modulus here). */
 bool
 CheckLogModulusTaylor(const std::string &             name,
@@ -218,7 +186,8 @@ bmrSurfaceMatchingObjectiveTest(int, char *[])
   // Fixed surfaces: the cavity grown by 1.5 mm, the inclusion shifted by 1 mm.
   const double                                                              movedInclusion[3] = { 7.0, 0.5, 0.0 };
   std::map<std::int32_t, std::shared_ptr<const bmr::SignedDistanceSampler>> maps{
-    { 2, SphereMap(movedInclusion, InclusionRadius) }, { 3, SphereMap(CavityCenter, CavityRadius + 1.5) }
+    { 2, bmr::test::SphereSampler(movedInclusion, InclusionRadius) },
+    { 3, bmr::test::SphereSampler(CavityCenter, CavityRadius + 1.5) }
   };
   bmr::SurfaceMatchingObjective objective(mesh, scene, bmr::SceneObjectiveSurfaces(scene, mesh, maps));
   std::cout << mesh.GetNumberOfTetrahedra() << " tetrahedra, " << objective.GetNumberOfParameters() << " parameters"
