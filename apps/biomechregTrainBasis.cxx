@@ -15,54 +15,94 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-// biomechreg train-basis: a basis of wall motion learned from one patient's daily scans (itk::TrainWallBasis).
+// biomechreg train-basis: a basis of wall motion learned from daily scans (itk::TrainWallBasis).
 #include "biomechregCommon.h"
 #include "itkWallBasisTraining.h"
 
+#include <fstream>
 #include <iomanip>
 
 namespace bmrcli {
+namespace {
+/** The training scans: --moving-labels FILE --fixed-labels FILE,... (one patient), or --patients CSV whose lines
+ * are "moving labels,fixed labels" (a header line "moving_labels,fixed_labels" allowed), one example each, grouped
+ * into patients by their moving labels in the order they first appear. */
+std::vector<std::pair<std::string, std::vector<std::string>>>
+TrainingScans(const Arguments & args)
+{
+  if (!args.Has("--patients"))
+  {
+    return { { args.Require("--moving-labels"), args.RequireList("--fixed-labels") } };
+  }
+  if (args.Has("--moving-labels") || args.Has("--fixed-labels"))
+  {
+    throw UsageError("--patients replaces --moving-labels and --fixed-labels");
+  }
+  const std::string path = args.Require("--patients");
+  std::ifstream     in(path);
+  if (!in)
+  {
+    throw UsageError("cannot read --patients " + path);
+  }
+  std::vector<std::pair<std::string, std::vector<std::string>>> patients;
+  for (std::string line; std::getline(in, line);)
+  {
+    const auto comma = line.find(',');
+    if (line.empty() || line == "moving_labels,fixed_labels")
+    {
+      continue;
+    }
+    if (comma == std::string::npos || comma == 0 || comma + 1 == line.size())
+    {
+      throw UsageError("--patients " + path + ": expected \"moving labels,fixed labels\" per line, got \"" + line +
+                       "\"");
+    }
+    const std::string moving = line.substr(0, comma), fixed = line.substr(comma + 1);
+    const auto        found =
+      std::find_if(patients.begin(), patients.end(), [&](const auto & p) { return p.first == moving; });
+    (found == patients.end() ? patients.emplace_back(moving, std::vector<std::string>()) : *found)
+      .second.push_back(fixed);
+  }
+  return patients;
+}
+} // namespace
 
 int
 TrainBasisCommand(const Arguments & args)
 {
-  const std::string              movingPath = args.Require("--moving-labels");
-  const std::vector<std::string> fixedPaths = args.RequireList("--fixed-labels");
-  const std::string              scenePath = args.Require("--scene");
-  const std::string              out = args.Require("--out");
-  const unsigned int             modes = args.Count("--modes", 1000000, 1, 1000000);
-  itk::RegistrationSettings      settings;
+  const auto                scans = TrainingScans(args);
+  const std::string         scenePath = args.Require("--scene");
+  const std::string         out = args.Require("--out");
+  const unsigned int        modes = args.Count("--modes", 1000000, 1, 1000000);
+  itk::RegistrationSettings settings;
   settings.meshScale = args.Number("--mesh-scale", settings.meshScale);
   settings.interpolateSlices = args.Choice("--slice-interpolation", { "off", "on" }) == "on";
   args.CheckAllUsed();
-  if (fixedPaths.size() < 2)
-  {
-    throw UsageError("--fixed-labels needs at least two label images (the examples)");
-  }
 
   StageTimer timer;
-  std::cout << "biomechreg train-basis: " << fixedPaths.size() << " examples -> " << out << std::endl;
+  std::cout << "biomechreg train-basis: " << scans.size() << " patient(s) -> " << out << std::endl;
   timer.Begin("read inputs");
-  const bmr::Scene                                      scene = bmr::ReadScene(scenePath);
-  const auto                                            moving = ReadImage<LabelImageType>(movingPath, "moving labels");
-  std::vector<LabelImageType::Pointer>                  fixed;
-  std::vector<const itk::BiomechanicalLabelImageType *> fixedImages;
-  for (const std::string & path : fixedPaths)
+  const bmr::Scene                           scene = bmr::ReadScene(scenePath);
+  std::vector<LabelImageType::Pointer>       images; // held while the patients point into them
+  std::vector<itk::WallBasisTrainingPatient> patients;
+  std::string                                training;
+  for (const auto & [moving, fixed] : scans)
   {
-    fixed.push_back(ReadImage<LabelImageType>(path, "fixed labels"));
-    fixedImages.push_back(fixed.back().GetPointer());
+    images.push_back(ReadImage<LabelImageType>(moving, "moving labels"));
+    patients.push_back({ images.back().GetPointer(), {} });
+    training += (training.empty() ? "" : "; ") + std::string("moving ") + moving + ", fixed";
+    for (const std::string & path : fixed)
+    {
+      images.push_back(ReadImage<LabelImageType>(path, "fixed labels"));
+      patients.back().fixedLabels.push_back(images.back().GetPointer());
+      training += " " + path;
+    }
   }
   timer.End();
   timer.Begin("mesh, surface matching, PCA");
-  std::string training = "moving " + movingPath + "; fixed";
-  for (const std::string & path : fixedPaths)
-  {
-    training += " " + path;
-  }
-  const bmr::WallMotionBasis basis =
-    itk::TrainWallBasis(moving.GetPointer(), fixedImages, scene, settings, modes, training);
-  timer.End(std::to_string(basis.GetNumberOfModes()) + " modes on " + std::to_string(basis.points.size()) +
-            " wall points");
+  const bmr::WallMotionBasis basis = itk::TrainWallBasis(patients, scene, settings, modes, training);
+  timer.End(std::to_string(basis.examples) + " examples, " + std::to_string(basis.GetNumberOfModes()) + " modes on " +
+            std::to_string(basis.points.size()) + " wall points");
   timer.Begin("write basis");
   bmr::WriteWallMotionBasis(basis, out);
   timer.End();

@@ -76,10 +76,13 @@ const std::pair<const char *, const char *> commands[] = {
     "    joint estimation of the wall loads and the unknown Young's moduli [kPa], with their interval;\n"
     "    writes field.nrrd (fixed -> moving, mm), warped images, report.json\n" },
   { "train-basis",
-    "  biomechreg train-basis --moving-labels FILE --fixed-labels FILE,FILE,... --scene FILE --out BASIS.json\n"
-    "                         [--modes K (all)] [--mesh-scale F] [--slice-interpolation off|on]\n"
-    "    a basis of wall motion from one patient's scans: the moving walls matched to each fixed scan's organs,\n"
-    "    their PCA (mean, modes, variances [mm^2]); register --wall-basis BASIS.json moves the walls in it\n" },
+    "  biomechreg train-basis (--moving-labels FILE --fixed-labels FILE,FILE,... | --patients CSV (lines\n"
+    "                         \"moving labels,fixed labels\", grouped into patients by their moving labels))\n"
+    "                         --scene FILE --out BASIS.json [--modes K (all)] [--mesh-scale F]\n"
+    "                         [--slice-interpolation off|on]\n"
+    "    a basis of wall motion from daily scans: the moving walls matched to each fixed scan's organs (other\n"
+    "    patients' walls through the first one's, fitted to theirs), their PCA (mean, modes, variances [mm^2]);\n"
+    "    register --wall-basis BASIS.json moves the walls in it\n" },
   { "warp",
     "  biomechreg warp --image FILE --field FILE --out DIR [--labels off|on (on: a label map, nearest neighbour)]\n"
     "                  [--outside V (-1000, labels 0)]\n"

@@ -26,7 +26,8 @@ namespace bmr {
 
 /** \brief Unknown wall motions in a basis learned from examples (dissertation ch. 5): the loaded walls' nodes are
  * prescribed \f$ d = \bar\mu + \sum_{k<K} p_k \bar\psi_k \f$, with \f$ \bar\mu, \bar\psi_k \f$ a WallMotionBasis's mean
- * and first K modes carried to this mesh's wall nodes (TransferWallMotionBasis()), and the prior
+ * and first K modes carried to this mesh's wall nodes through the atlas fitted to its walls (FitAtlasToWalls(),
+ * TransferWallMotionBasis()), and the prior
  * \f$ R(p) = \tfrac{w}{2} \sum_k p_k^2 / \lambda_k \f$ with the modes' variances \f$ \lambda_k \f$ [mm^2].
  *
  * The prior is the Gaussian the training examples describe; with the surface distances' noise \f$ \sigma \f$ [mm],

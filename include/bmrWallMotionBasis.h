@@ -93,10 +93,22 @@ WriteWallMotionBasis(const WallMotionBasis & basis, const std::string & path);
 BiomechanicalRegistration_EXPORT WallMotionBasis
 ReadWallMotionBasis(const std::string & path);
 
+/** The atlas of \a basis fitted to another mesh's walls \a walls (WallAtlas() of that mesh; the same walls by name, in
+ * the same order), dissertation section 5.3.2.3: per wall, the atlas moved so that its centroid is the wall's, then
+ * \a iterations rounds in which every atlas point moves towards its closest point on the wall, each move averaged with
+ * those of the point's neighbours on the atlas triangles (so that the atlas slides on as a sheet instead of bunching
+ * at the nearest nodes), and a last projection onto the wall. Few rounds: repeated, the averaged moves also slide
+ * the points along the wall, away from their correspondents (bmrWallMotionBasisTest measures both).
+ */
+BiomechanicalRegistration_EXPORT std::vector<double>
+FitAtlasToWalls(const WallMotionBasis & basis, const WallMotionBasis & walls, unsigned int iterations = 3);
+
 /** The first \a modes modes of \a basis at other points of the same walls: each point \a points[i] (3 per point) of
  * wall \a pointWalls[i] (index into basis.walls) is projected onto the closest atlas triangle of its wall, whose
  * corners' values it takes barycentrically. mean and modes as in WallMotionBasis, at the new points;
- * \a distances [mm], per point, how far it lay from the atlas surface. */
+ * \a distances [mm], per point, how far it lay from the atlas surface. With \a fittedAtlas (FitAtlasToWalls() of
+ * the points' walls), the points are located on the atlas where it was fitted, the values still the basis's: another
+ * patient's walls take the basis through the correspondence. */
 struct BiomechanicalRegistration_EXPORT TransferredWallBasis
 {
   std::vector<double>              mean;
@@ -108,7 +120,8 @@ BiomechanicalRegistration_EXPORT TransferredWallBasis
 TransferWallMotionBasis(const WallMotionBasis &           basis,
                         std::size_t                       modes,
                         const std::vector<double> &       points,
-                        const std::vector<std::int32_t> & pointWalls);
+                        const std::vector<std::int32_t> & pointWalls,
+                        const std::vector<double> *       fittedAtlas = nullptr);
 
 } // namespace bmr
 

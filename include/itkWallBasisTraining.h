@@ -23,8 +23,15 @@
 
 namespace itk {
 
-/** \brief A basis of wall motion trained from one patient's scans (dissertation section 5.3.2.2, one source surface
- * and several targets), for RegistrationSettings::walls.trainedBasis (`biomechreg register --wall-basis`).
+/** One patient of a wall basis's training: the planning scan's labels and the daily scans' (one example each). */
+struct WallBasisTrainingPatient
+{
+  const BiomechanicalLabelImageType *              movingLabels{ nullptr };
+  std::vector<const BiomechanicalLabelImageType *> fixedLabels;
+};
+
+/** \brief A basis of wall motion trained from patients' scans (dissertation sections 5.3.2.2-5.3.2.3), for
+ * RegistrationSettings::walls.trainedBasis (`biomechreg register --wall-basis`).
  *
  * The moving labels are meshed as RegisterSegmentedPair() meshes them (the scene's sizes times settings.meshScale, the
  * same mesher seeds, interpolated between thick slices when settings.interpolateSlices), and the atlas is that mesh's
@@ -33,12 +40,21 @@ namespace itk {
  * move in any direction). The basis is the examples' PCA (bmr::TrainWallMotionBasis(), at most \a maximumModes
  * modes); \a training says what it was trained on (the file names, say).
  *
- * A registration of the same moving labels with the same scene and mesh settings meshes the same walls, so the basis
- * applies to it exactly (bmr::TrainedWallLoads::GetTransferDistances() all 0); another mesh of the walls takes it by
- * projection onto the atlas. Throws itk::ExceptionObject for fewer than two fixed images, images that do not overlap
- * the moving one, or invalid settings.
+ * With several patients the first one's walls are the atlas; every other patient's walls are meshed the same way, the
+ * atlas fitted to them (bmr::FitAtlasToWalls(): the correspondence), and each of their examples taken at the fitted
+ * atlas's points. A registration of the first patient's moving labels with the same scene and mesh settings meshes
+ * the same walls, so the basis applies to it exactly (bmr::TrainedWallLoads::GetTransferDistances() all 0); another
+ * patient's walls take it through the atlas fitted to them. Throws itk::ExceptionObject for fewer than two examples
+ * in all, images that do not overlap their moving one, or invalid settings.
  * \ingroup BiomechanicalRegistration BiomechanicalRegistrationPipelines
  */
+BiomechanicalRegistration_EXPORT bmr::WallMotionBasis
+                                 TrainWallBasis(const std::vector<WallBasisTrainingPatient> & patients,
+                                                const bmr::Scene &                            scene,
+                                                const RegistrationSettings &                  settings,
+                                                std::size_t                                   maximumModes,
+                                                const std::string &                           training);
+/** One patient's scans (TrainWallBasis() above). */
 BiomechanicalRegistration_EXPORT bmr::WallMotionBasis
                                  TrainWallBasis(const BiomechanicalLabelImageType *                      movingLabels,
                                                 const std::vector<const BiomechanicalLabelImageType *> & fixedLabels,

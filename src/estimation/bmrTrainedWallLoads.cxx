@@ -92,6 +92,22 @@ ControlNodesOnBasis(const std::vector<LoadedWall> & walls,
     basisWalls.push_back(kv.second);
   }
 }
+/** \a walls in the order of \a basis's walls (each found by name; ControlNodesOnBasis() refuses a missing one). */
+std::vector<LoadedWall>
+InBasisOrder(const std::vector<LoadedWall> & walls, const WallMotionBasis & basis)
+{
+  std::vector<LoadedWall> ordered;
+  for (const std::string & name : basis.walls)
+  {
+    const auto it = std::find_if(walls.begin(), walls.end(), [&](const LoadedWall & w) { return w.name == name; });
+    if (it == walls.end())
+    {
+      FailInput("TrainedWallLoads", "the scene has no loaded wall \"" + name + "\" of the wall motion basis");
+    }
+    ordered.push_back(*it);
+  }
+  return ordered;
+}
 } // namespace
 
 TrainedWallLoads::TrainedWallLoads(const TetrahedralMesh &           mesh,
@@ -136,7 +152,9 @@ TrainedWallLoads::TrainedWallLoads(const TetrahedralMesh &           mesh,
   {
     points.insert(points.end(), &mesh.points[3 * static_cast<std::size_t>(n)], &mesh.points[3 * n + 3]);
   }
-  d.basis = TransferWallMotionBasis(basis, modes == 0 ? basis.GetNumberOfModes() : modes, points, basisWalls);
+  // The atlas fitted to this mesh's walls gives the correspondence (on the atlas's own mesh it stays put).
+  const std::vector<double> fitted = FitAtlasToWalls(basis, WallAtlas(mesh, InBasisOrder(walls, basis)));
+  d.basis = TransferWallMotionBasis(basis, modes == 0 ? basis.GetNumberOfModes() : modes, points, basisWalls, &fitted);
   std::set<std::int32_t> constrained(heldNodes.begin(), heldNodes.end());
   constrained.insert(d.controlNodes.begin(), d.controlNodes.end());
   d.constrainedNodes.assign(constrained.begin(), constrained.end());

@@ -28,6 +28,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace bmr {
@@ -103,53 +104,155 @@ ClosestOnTriangle(const Vector3 & p, const Vector3 & a, const Vector3 & b, const
 }
 
 Vector3
-PointOf(const WallMotionBasis & basis, std::int32_t i)
+PointOf(const WallMotionBasis & surface, std::int32_t i)
 {
-  return { basis.points[i][0], basis.points[i][1], basis.points[i][2] };
+  return { surface.points[i][0], surface.points[i][1], surface.points[i][2] };
 }
 
-/** Where point \a p of wall \a wall lies on the atlas: its three atlas points and their weights (the closest triangle
- * of the wall, or the closest point when the wall has no triangle), and the distance [mm]. */
+/** Where a point lies on a surface of walls: the three surface points of the closest triangle and their weights (or
+ * the closest point, thrice, on a wall without triangles), and the distance [mm]. */
 struct AtlasPosition
 {
   std::array<std::int32_t, 3> corners{ 0, 0, 0 };
   Vector3                     weights{ 1.0, 0.0, 0.0 };
   double                      distance{ std::numeric_limits<double>::infinity() };
+  std::size_t                 triangle{ std::numeric_limits<std::size_t>::max() };
 };
 
-AtlasPosition
-Locate(const WallMotionBasis &          basis,
-       const std::vector<std::size_t> & wallTriangles,
-       const Vector3 &                  p,
-       std::int32_t                     wall)
+/** \brief Finds the closest triangle of a wall of \a surface: the wall's triangles binned in a uniform grid of cells
+ * twice their median edge, searched in rings of cells around the point until no farther ring can hold a closer one.
+ * Ties go to the lowest triangle index, so the answer does not depend on the order the cells are visited in. */
+class SurfaceLocator
 {
-  AtlasPosition best;
-  for (std::size_t t : wallTriangles)
+public:
+  explicit SurfaceLocator(const WallMotionBasis & surface)
+    : m_Surface(surface)
+    , m_Walls(surface.walls.size())
   {
-    const auto & tri = basis.triangles[t];
-    Vector3      weights;
-    const double d =
-      (ClosestOnTriangle(p, PointOf(basis, tri[0]), PointOf(basis, tri[1]), PointOf(basis, tri[2]), weights) - p)
-        .norm();
-    if (d < best.distance)
+    std::vector<double> edges;
+    for (const auto & t : surface.triangles)
     {
-      best = { tri, weights, d };
+      edges.push_back((PointOf(surface, t[0]) - PointOf(surface, t[1])).norm());
+    }
+    std::sort(edges.begin(), edges.end());
+    m_Cell = std::max(0.5, edges.empty() ? 1.0 : 2.0 * edges[edges.size() / 2]);
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t)
+    {
+      Bin(m_Walls[surface.pointWalls[surface.triangles[t][0]]], t);
     }
   }
-  if (wallTriangles.empty())
+
+  AtlasPosition
+  Locate(const Vector3 & p, std::int32_t wall) const
   {
-    for (std::size_t i = 0; i < basis.points.size(); ++i)
+    const Wall & w = m_Walls[wall];
+    if (w.cells.empty())
     {
-      const double d = (PointOf(basis, static_cast<std::int32_t>(i)) - p).norm();
-      if (basis.pointWalls[i] == wall && d < best.distance)
+      return ClosestPoint(p, wall);
+    }
+    AtlasPosition        best;
+    const Eigen::Array3i home = CellOf(p);
+    const int            reach = (home - w.lo).abs().max((home - w.hi).abs()).maxCoeff();
+    for (int ring = 0; ring <= reach; ++ring)
+    {
+      VisitRing(w, home, ring, p, best);
+      if (best.distance <= double(ring) * m_Cell)
       {
-        best.corners = { static_cast<std::int32_t>(i), static_cast<std::int32_t>(i), static_cast<std::int32_t>(i) };
+        break; // a cell of the next ring lies at least ring cells away
+      }
+    }
+    return best;
+  }
+
+private:
+  struct Wall
+  {
+    std::map<std::array<int, 3>, std::vector<std::size_t>> cells;
+    Eigen::Array3i lo{ Eigen::Array3i::Constant(std::numeric_limits<int>::max()) };
+    Eigen::Array3i hi{ Eigen::Array3i::Constant(std::numeric_limits<int>::min()) };
+  };
+
+  Eigen::Array3i
+  CellOf(const Vector3 & p) const
+  {
+    return (p.array() / m_Cell).floor().cast<int>();
+  }
+  void
+  Bin(Wall & w, std::size_t t)
+  {
+    const auto & tri = m_Surface.triangles[t];
+    Vector3      lo = PointOf(m_Surface, tri[0]), hi = lo;
+    for (int j = 1; j < 3; ++j)
+    {
+      lo = lo.cwiseMin(PointOf(m_Surface, tri[j]));
+      hi = hi.cwiseMax(PointOf(m_Surface, tri[j]));
+    }
+    const Eigen::Array3i a = CellOf(lo), b = CellOf(hi);
+    w.lo = w.lo.min(a);
+    w.hi = w.hi.max(b);
+    for (int i = a[0]; i <= b[0]; ++i)
+      for (int j = a[1]; j <= b[1]; ++j)
+        for (int k = a[2]; k <= b[2]; ++k)
+          w.cells[{ i, j, k }].push_back(t);
+  }
+  /** The triangles in the cells at Chebyshev distance \a ring from \a home (within the wall's cells). */
+  void
+  VisitRing(const Wall & w, const Eigen::Array3i & home, int ring, const Vector3 & p, AtlasPosition & best) const
+  {
+    const Eigen::Array3i lo = (home - ring).max(w.lo), hi = (home + ring).min(w.hi);
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int k = lo[2]; k <= hi[2]; ++k)
+        {
+          const Eigen::Array3i c(i, j, k);
+          const auto           found = w.cells.find({ i, j, k });
+          if ((c - home).abs().maxCoeff() != ring || found == w.cells.end())
+          {
+            continue;
+          }
+          for (std::size_t t : found->second)
+          {
+            Consider(t, p, best);
+          }
+        }
+  }
+  void
+  Consider(std::size_t t, const Vector3 & p, AtlasPosition & best) const
+  {
+    const auto & tri = m_Surface.triangles[t];
+    Vector3      weights;
+    const double d =
+      (ClosestOnTriangle(
+         p, PointOf(m_Surface, tri[0]), PointOf(m_Surface, tri[1]), PointOf(m_Surface, tri[2]), weights) -
+       p)
+        .norm();
+    if (d < best.distance || (d == best.distance && t < best.triangle))
+    {
+      best = { tri, weights, d, t };
+    }
+  }
+  /** A wall without triangles: its closest point. */
+  AtlasPosition
+  ClosestPoint(const Vector3 & p, std::int32_t wall) const
+  {
+    AtlasPosition best;
+    for (std::size_t i = 0; i < m_Surface.points.size(); ++i)
+    {
+      const double d = (PointOf(m_Surface, static_cast<std::int32_t>(i)) - p).norm();
+      if (m_Surface.pointWalls[i] == wall && d < best.distance)
+      {
+        const auto index = static_cast<std::int32_t>(i);
+        best.corners = { index, index, index };
         best.distance = d;
       }
     }
+    return best;
   }
-  return best;
-}
+
+  const WallMotionBasis & m_Surface;
+  std::vector<Wall>       m_Walls;
+  double                  m_Cell{ 1.0 };
+};
 
 /** \a field (3 per atlas point) at \a position. */
 void
@@ -163,6 +266,66 @@ Interpolate(const std::vector<double> & field, const AtlasPosition & position, d
       out[c] += position.weights[j] * field[3 * static_cast<std::size_t>(position.corners[j]) + c];
     }
   }
+}
+/** The point \a position stands for on \a surface. */
+Vector3
+ClosestPointOn(const WallMotionBasis & surface, const AtlasPosition & position)
+{
+  Vector3 p = Vector3::Zero();
+  for (int j = 0; j < 3; ++j)
+  {
+    p += position.weights[j] * PointOf(surface, position.corners[j]);
+  }
+  return p;
+}
+
+/** Moves each wall's points \a x of \a atlas so that their centroid is that wall's in \a walls. */
+void
+MoveCentroids(const WallMotionBasis & atlas, const WallMotionBasis & walls, std::vector<Vector3> & x)
+{
+  const std::size_t    count = atlas.walls.size();
+  std::vector<Vector3> from(count, Vector3::Zero()), to(count, Vector3::Zero());
+  std::vector<double>  nFrom(count, 0.0), nTo(count, 0.0);
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    from[atlas.pointWalls[i]] += x[i];
+    nFrom[atlas.pointWalls[i]] += 1.0;
+  }
+  for (std::size_t i = 0; i < walls.points.size(); ++i)
+  {
+    to[walls.pointWalls[i]] += PointOf(walls, static_cast<std::int32_t>(i));
+    nTo[walls.pointWalls[i]] += 1.0;
+  }
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    const std::int32_t w = atlas.pointWalls[i];
+    if (nTo[w] == 0.0)
+    {
+      FailInput("FitAtlasToWalls", "the walls to fit have no point on \"" + atlas.walls[w] + "\"");
+    }
+    x[i] += to[w] / nTo[w] - from[w] / nFrom[w];
+  }
+}
+
+/** Each atlas point's neighbours on the atlas triangles, sorted. */
+std::vector<std::vector<std::int32_t>>
+Neighbours(const WallMotionBasis & atlas)
+{
+  std::vector<std::set<std::int32_t>> sets(atlas.points.size());
+  for (const auto & t : atlas.triangles)
+  {
+    for (int a = 0; a < 3; ++a)
+    {
+      sets[t[a]].insert(t[(a + 1) % 3]);
+      sets[t[a]].insert(t[(a + 2) % 3]);
+    }
+  }
+  std::vector<std::vector<std::int32_t>> lists;
+  for (const auto & set : sets)
+  {
+    lists.emplace_back(set.begin(), set.end());
+  }
+  return lists;
 }
 } // namespace
 
@@ -366,17 +529,30 @@ TransferredWallBasis
 TransferWallMotionBasis(const WallMotionBasis &           basis,
                         std::size_t                       modes,
                         const std::vector<double> &       points,
-                        const std::vector<std::int32_t> & pointWalls)
+                        const std::vector<std::int32_t> & pointWalls,
+                        const std::vector<double> *       fittedAtlas)
 {
   if (modes > basis.GetNumberOfModes() || points.size() != 3 * pointWalls.size())
   {
     FailInput("TransferWallMotionBasis", "more modes than the basis has, or not 3 coordinates per point");
   }
-  std::vector<std::vector<std::size_t>> trianglesOfWall(basis.walls.size());
-  for (std::size_t t = 0; t < basis.triangles.size(); ++t)
+  WallMotionBasis where; // the surface the points are located on: the atlas, or the atlas fitted (geometry only)
+  where.walls = basis.walls;
+  where.points = basis.points;
+  where.pointWalls = basis.pointWalls;
+  where.triangles = basis.triangles;
+  if (fittedAtlas != nullptr)
   {
-    trianglesOfWall[basis.pointWalls[basis.triangles[t][0]]].push_back(t);
+    if (fittedAtlas->size() != 3 * basis.points.size())
+    {
+      FailInput("TransferWallMotionBasis", "the fitted atlas does not have 3 coordinates per atlas point");
+    }
+    for (std::size_t i = 0; i < basis.points.size(); ++i)
+    {
+      where.points[i] = { (*fittedAtlas)[3 * i], (*fittedAtlas)[3 * i + 1], (*fittedAtlas)[3 * i + 2] };
+    }
   }
+  const SurfaceLocator locator(where);
   const std::size_t    n = pointWalls.size();
   TransferredWallBasis out;
   out.mean.resize(3 * n);
@@ -391,7 +567,7 @@ TransferWallMotionBasis(const WallMotionBasis &           basis,
       FailInput("TransferWallMotionBasis", "a point's wall is not one of the basis's walls");
     }
     const Vector3       p(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
-    const AtlasPosition at = Locate(basis, trianglesOfWall[wall], p, wall);
+    const AtlasPosition at = locator.Locate(p, wall);
     if (!std::isfinite(at.distance))
     {
       FailInput("TransferWallMotionBasis", "the basis has no point on the wall \"" + basis.walls[wall] + "\"");
@@ -404,6 +580,59 @@ TransferWallMotionBasis(const WallMotionBasis &           basis,
     }
   }
   return out;
+}
+
+std::vector<double>
+FitAtlasToWalls(const WallMotionBasis & basis, const WallMotionBasis & walls, unsigned int iterations)
+{
+  if (walls.walls != basis.walls)
+  {
+    FailInput("FitAtlasToWalls", "the walls to fit are not the atlas's walls (by name, in order)");
+  }
+  const std::size_t    n = basis.points.size();
+  std::vector<Vector3> x(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    x[i] = PointOf(basis, static_cast<std::int32_t>(i));
+  }
+  MoveCentroids(basis, walls, x);
+  const std::vector<std::vector<std::int32_t>> neighbours = Neighbours(basis);
+  const SurfaceLocator                         locator(walls);
+  for (unsigned int round = 0; round <= iterations; ++round)
+  {
+    std::vector<Vector3> towards(n);
+    double               largest = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      towards[i] = ClosestPointOn(walls, locator.Locate(x[i], basis.pointWalls[i])) - x[i];
+      largest = std::max(largest, towards[i].norm());
+    }
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      // The last round projects; the others slide the atlas as a sheet.
+      Vector3 move = towards[i];
+      if (round < iterations)
+      {
+        for (std::int32_t j : neighbours[i])
+        {
+          move += towards[j];
+        }
+        move /= double(neighbours[i].size() + 1);
+      }
+      x[i] += move;
+    }
+    if (largest == 0.0)
+    {
+      break; // on the walls already (an atlas fitted to its own walls)
+    }
+  }
+  std::vector<double> fitted;
+  fitted.reserve(3 * n);
+  for (const Vector3 & p : x)
+  {
+    fitted.insert(fitted.end(), { p[0], p[1], p[2] });
+  }
+  return fitted;
 }
 
 } // namespace bmr

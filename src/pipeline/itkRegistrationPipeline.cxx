@@ -498,9 +498,7 @@ CheckOverlap(const ImageBase<3> * moving, const ImageBase<3> * fixed)
   }
 }
 
-} // namespace pipeline
 
-namespace pipeline {
 std::map<std::string, Image<float, 3>::Pointer>
 ObjectiveDistanceMaps(const BiomechanicalLabelImageType * labels,
                       const OrganProbabilityImages &      probabilities,

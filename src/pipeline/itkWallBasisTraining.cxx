@@ -50,7 +50,68 @@ MatchedWalls(const bmr::TetrahedralMesh &        mesh,
   }
   return example;
 }
+/** A patient's walls: the moving labels meshed as a registration meshes them, and the walls' surface. */
+struct PatientWalls
+{
+  bmr::TetrahedralMesh      mesh;
+  bmr::WallMotionBasis      surface;
+  std::vector<std::int32_t> nodes; // the mesh node of each surface point
+};
+
+PatientWalls
+MeshWalls(const BiomechanicalLabelImageType * movingLabels, const bmr::Scene & scene, const RegistrationSettings & s)
+{
+  std::vector<PipelineStage> untimed;
+  pipeline::StageClock       quiet(nullptr, untimed);
+  PatientWalls               walls;
+  walls.mesh = pipeline::MeshLabelImage(pipeline::MeshedAnatomy(movingLabels, s), scene, quiet, "mesh");
+  walls.surface = bmr::WallAtlas(walls.mesh, bmr::SceneLoadedWalls(scene, walls.mesh), &walls.nodes);
+  return walls;
+}
 } // namespace
+
+bmr::WallMotionBasis
+TrainWallBasis(const std::vector<WallBasisTrainingPatient> & patients,
+               const bmr::Scene &                            scene,
+               const RegistrationSettings &                  settings,
+               std::size_t                                   maximumModes,
+               const std::string &                           training)
+{
+  std::size_t examples = 0;
+  for (const WallBasisTrainingPatient & patient : patients)
+  {
+    const auto & fixed = patient.fixedLabels;
+    if (patient.movingLabels == nullptr || std::find(fixed.begin(), fixed.end(), nullptr) != fixed.end())
+    {
+      bmr::FailInput("TrainWallBasis", "every patient needs its moving label image and fixed ones");
+    }
+    examples += fixed.size();
+  }
+  if (examples < 2)
+  {
+    bmr::FailInput("TrainWallBasis", "a basis needs at least two examples (fixed label images) in all");
+  }
+  settings.Validate();
+  const bmr::Scene scaled = ScaledMeshSizes(scene, settings.meshScale);
+  scaled.Validate();
+  const PatientWalls               atlas = MeshWalls(patients.front().movingLabels, scaled, settings);
+  std::vector<std::vector<double>> atAtlas;
+  for (const WallBasisTrainingPatient & patient : patients)
+  {
+    const PatientWalls walls =
+      &patient == &patients.front() ? atlas : MeshWalls(patient.movingLabels, scaled, settings);
+    // Where each atlas point lies on this patient's walls (on the atlas's own walls: where it is).
+    const std::vector<double> fitted = bmr::FitAtlasToWalls(atlas.surface, walls.surface);
+    for (const BiomechanicalLabelImageType * fixed : patient.fixedLabels)
+    {
+      pipeline::CheckOverlap(patient.movingLabels, fixed);
+      bmr::WallMotionBasis example = walls.surface; // the example as a field on the patient's walls
+      example.mean = MatchedWalls(walls.mesh, walls.nodes, fixed, scaled, settings);
+      atAtlas.push_back(bmr::TransferWallMotionBasis(example, 0, fitted, atlas.surface.pointWalls).mean);
+    }
+  }
+  return bmr::TrainWallMotionBasis(atlas.surface, atAtlas, maximumModes, training);
+}
 
 bmr::WallMotionBasis
 TrainWallBasis(const BiomechanicalLabelImageType *                      movingLabels,
@@ -60,27 +121,7 @@ TrainWallBasis(const BiomechanicalLabelImageType *                      movingLa
                std::size_t                                              maximumModes,
                const std::string &                                      training)
 {
-  if (movingLabels == nullptr || fixedLabels.size() < 2 ||
-      std::find(fixedLabels.begin(), fixedLabels.end(), nullptr) != fixedLabels.end())
-  {
-    bmr::FailInput("TrainWallBasis", "a moving label image and at least two fixed ones are required");
-  }
-  settings.Validate();
-  const bmr::Scene scaled = ScaledMeshSizes(scene, settings.meshScale);
-  scaled.Validate();
-  std::vector<PipelineStage> untimed;
-  pipeline::StageClock       quiet(nullptr, untimed);
-  const bmr::TetrahedralMesh mesh =
-    pipeline::MeshLabelImage(pipeline::MeshedAnatomy(movingLabels, settings), scaled, quiet, "mesh");
-  std::vector<std::int32_t>        atlasNodes;
-  bmr::WallMotionBasis             atlas = bmr::WallAtlas(mesh, bmr::SceneLoadedWalls(scaled, mesh), &atlasNodes);
-  std::vector<std::vector<double>> examples;
-  for (const BiomechanicalLabelImageType * fixed : fixedLabels)
-  {
-    pipeline::CheckOverlap(movingLabels, fixed);
-    examples.push_back(MatchedWalls(mesh, atlasNodes, fixed, scaled, settings));
-  }
-  return bmr::TrainWallMotionBasis(std::move(atlas), examples, maximumModes, training);
+  return TrainWallBasis({ { movingLabels, fixedLabels } }, scene, settings, maximumModes, training);
 }
 
 } // namespace itk
