@@ -9,7 +9,8 @@ one law. Test pairs never trained on: fillings (bladder, rectum) of (6, 3) and (
 the default) or walls moved along their normals (TEST_LOAD=normal), at true
 moduli 25, 50, 75, 150 and 300 kPa, each with SEEDS realizations (the fixed scan on its own grid shifted by a random
 sub-voxel offset, `--fixed-grid-shift-voxels 0.5 --seed S`). Every test pair is registered (point estimate,
-`--uncertainty none`) with the default walls and with the basis at K = 1, 2, 4 modes and all of them.
+`--uncertainty none`) with the default walls and with the basis at K = 1, 2, 4 modes and all of them
+(BASIS_MODES=1,2,4,all).
 
 Across patients (`cohort` as the first argument; dissertation section 5.3.2.3 and Table 5.1's unseen patients): a
 phantom cohort (`biomechreg phantom-cohort`, each patient its own anatomy and modulus) of TRAIN_PATIENTS + TEST_PATIENTS
@@ -39,7 +40,7 @@ CLI = pathlib.Path(os.environ.get("BUILD_DIR", ROOT / "build")) / "bin" / "biome
 OUT = ROOT / "benchmarks" / "results" / "trained_basis"
 MODULI = (25.0, 50.0, 75.0, 150.0, 300.0)
 TEST_FILLINGS = ((6.0, 3.0), (9.0, 5.0))
-MODES = ("1", "2", "4", "all")
+MODES = tuple(os.environ.get("BASIS_MODES", "1,2,4,all").split(","))  # the basis sizes compared
 TEST_LOAD = os.environ.get("TEST_LOAD", "point")
 
 

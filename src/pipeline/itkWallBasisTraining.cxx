@@ -98,8 +98,9 @@ TrainWallBasis(const std::vector<WallBasisTrainingPatient> & patients,
   std::vector<std::vector<double>> atAtlas;
   for (const WallBasisTrainingPatient & patient : patients)
   {
-    const PatientWalls walls =
-      &patient == &patients.front() ? atlas : MeshWalls(patient.movingLabels, scaled, settings);
+    PatientWalls         other; // the first patient's walls are the atlas's, meshed once
+    const PatientWalls & walls =
+      &patient == &patients.front() ? atlas : (other = MeshWalls(patient.movingLabels, scaled, settings));
     // Where each atlas point lies on this patient's walls (on the atlas's own walls: where it is).
     const std::vector<double> fitted = bmr::FitAtlasToWalls(atlas.surface, walls.surface);
     for (const BiomechanicalLabelImageType * fixed : patient.fixedLabels)
